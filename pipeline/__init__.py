@@ -1,0 +1,1 @@
+"""The offline build pipeline: models, transcriptions, solvers, sweeps and the command line."""

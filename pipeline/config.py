@@ -1,0 +1,304 @@
+"""Build configurations: TOML files read with tomllib, validated into frozen dataclasses.
+
+Every physical field carries its unit in its name. An unknown key, a wrong type or a value out
+of range raises :class:`ConfigError` naming the file, the dotted key and the allowed values.
+A config may start from another with ``extends = "other.toml"`` (path relative to the file);
+tables are merged key by key, the extending file winning.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import tomllib
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from skatelib.library.channels import LEGS
+from skatelib.library.errors import ConfigError
+
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
+DEFAULT_CONFIG = "cyberdog2.toml"
+
+
+def _f(lo: float | None = None, hi: float | None = None, doc: str = "", **kw: Any) -> Any:
+    """A dataclass field with an allowed range [lo, hi] and a one-line description."""
+    return field(metadata={"lo": lo, "hi": hi, "doc": doc}, **kw)
+
+
+@dataclass(frozen=True)
+class MetaConfig:
+    kind: str = _f(doc="Problem family: 'quadruped' (CyberDog2 skateboard) or 'humanoid' (GPM steps).")
+    name: str = _f(doc="Library name, stored in the file.")
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    urdf: str = _f(doc="URDF path, relative to the config file or absolute.")
+    foot_radius_m: float = _f(0.0, 0.2, "Foot sphere radius [m].")
+    friction_mu: float = _f(0.05, 2.0, "Coulomb friction coefficient of feet on deck and ground [-].")
+    gravity_mps2: float = _f(0.0, 30.0, "Gravity magnitude [m/s^2].")
+    torque_limit_Nm: float = _f(0.1, 500.0, "Joint torque limit, all joints [N m].")
+    joint_velocity_limit_radps: float = _f(0.1, 200.0, "Joint velocity limit [rad/s].")
+    joint_names: tuple[str, ...] = _f(
+        doc="URDF joint names in channel order FL FR RL RR x abad hip knee (12 names).",
+        default=tuple(f"{leg}_{j}" for leg in LEGS for j in ("abad", "hip", "knee")),
+    )
+    foot_frames: tuple[str, ...] = _f(
+        doc="URDF frames at the foot sphere centres, legs FL FR RL RR.",
+        default=tuple(f"{leg}_foot" for leg in LEGS),
+    )
+    source: str = _f(doc="Where the figures come from.", default="")
+
+
+@dataclass(frozen=True)
+class BoardConfig:
+    deck_length_m: float = _f(0.1, 2.0, "Deck length [m] (paper Sec. II-B: 0.74).")
+    deck_width_m: float = _f(0.05, 1.0, "Deck width [m] (paper: 0.265).")
+    deck_height_m: float = _f(0.0, 0.5, "Height of the deck's top surface above the ground [m].")
+    truck_distance_m: float = _f(0.05, 2.0, "Distance between front and rear truck pivots [m] (0.49).")
+    truck_width_m: float = _f(0.05, 1.0, "Truck (axle) width [m] (0.24).")
+    mass_kg: float = _f(0.1, 50.0, "Whole skateboard mass m_B of Eq. (9b) [kg].")
+    roll_inertia_kgm2: float = _f(1e-5, 10.0, "Deck roll inertia I_Bx of Eq. (7) [kg m^2].")
+    rake_front_rad: float = _f(0.05, 1.52, "Front truck rake angle gamma_f from horizontal, Eq. (11) [rad].")
+    rake_rear_rad: float = _f(0.05, 1.52, "Rear truck rake angle gamma_r from horizontal, Eq. (11) [rad].")
+    calibration_roll_rad: float = _f(
+        0.01, 0.5, "Steady roll [rad] when the robot's weight rests on one side's feet; K_B is set so."
+    )
+    roll_damping_ratio: float = _f(0.05, 10.0, "Damping ratio of the free deck roll; sets B_B of Eq. (6) [-].")
+    rolling_friction_coeff: float = _f(0.0, 0.2, "Rolling resistance f_fri / total weight, Eq. (9b) [-].")
+    tanh_scale_s_per_m: float = _f(1.0, 1e4, "Scale k of the tanh smoothing of sign(v), Eq. (10) [s/m].")
+    roll_limit_rad: float = _f(0.01, 0.6, "Largest allowed deck roll |phi_B| [rad].")
+    source: str = _f(doc="Where the figures come from.", default="")
+
+
+@dataclass(frozen=True)
+class StanceConfig:
+    base_height_above_deck_m: float = _f(0.05, 0.5, "Trunk origin height above the deck top [m].")
+    foot_x_front_m: float = _f(0.0, 0.5, "Front feet x in the board frame [m].")
+    foot_x_rear_m: float = _f(-0.5, 0.0, "Rear feet x in the board frame [m].")
+    foot_y_m: float = _f(0.01, 0.5, "Feet |y| in the board frame [m].")
+    base_x_offset_m: float = _f(-0.3, 0.3, "Trunk origin x in the board frame at rest [m].")
+    push_foot_y_m: float = _f(0.0, 0.6, "Pushing foot |y| from the board centre line on the ground [m].")
+    push_clearance_m: float = _f(0.0, 0.2, "Lateral clearance of the pushing foot from the deck edge [m].")
+    swing_height_m: float = _f(0.0, 0.2, "Least foot lift at mid-swing [m].")
+
+
+@dataclass(frozen=True)
+class ScheduleConfig:
+    period_s: float = _f(0.2, 5.0, "Push cycle period [s] (paper: 1.2).")
+    push_duty: float = _f(0.1, 0.9, "Fraction of a cycle the pushing foot is on the ground [-].")
+    push_leg: str = _f(doc="Leg that pushes on the ground: one of FL FR RL RR (paper: RL).")
+    balance_s: float = _f(0.0, 10.0, "Four-leg balancing before and after the pushes [s].", default=0.5)
+    transfer_s: float = _f(0.0, 5.0, "Three-leg phase moving the push leg board<->ground [s].", default=0.4)
+
+
+@dataclass(frozen=True)
+class WeightsConfig:
+    board_velocity: float = _f(0.0, 1e6, "Eq. (16a) weight on board velocity error [(m/s)^-2].")
+    board_roll: float = _f(0.0, 1e6, "Eq. (16a) weight on deck roll [rad^-2].")
+    base_position: float = _f(0.0, 1e6, "Eq. (16b) weight on trunk position error relative to the board [m^-2].")
+    base_orientation: float = _f(0.0, 1e6, "Eq. (16b) weight on trunk roll/pitch/yaw [rad^-2].")
+    base_velocity: float = _f(0.0, 1e6, "Eq. (16b) weight on trunk velocity relative to the board [(m/s)^-2].")
+    base_angular_velocity: float = _f(0.0, 1e6, "Eq. (16b) weight on trunk angular velocity [(rad/s)^-2].")
+    joint_position: float = _f(0.0, 1e6, "Eq. (16b) weight on joint angles from the stance [rad^-2].")
+    force: float = _f(0.0, 1e6, "Eq. (16c) weight on contact forces [N^-2].")
+    joint_velocity: float = _f(0.0, 1e6, "Eq. (16c) weight on joint velocities [(rad/s)^-2].")
+    force_rate: float = _f(0.0, 1e6, "Eq. (16d) weight on force changes between knots [N^-2].")
+    joint_velocity_rate: float = _f(0.0, 1e6, "Eq. (16d) weight on joint-velocity changes [(rad/s)^-2].")
+    terminal_velocity: float = _f(0.0, 1e9, "Weight on the final board speed error [(m/s)^-2].")
+
+
+@dataclass(frozen=True)
+class OptimizationConfig:
+    dt_s: float = _f(0.005, 0.1, "Shooting interval [s].")
+    rk4_substeps: int = _f(1, 20, "RK4 steps per shooting interval [-].")
+    max_iter: int = _f(1, 10000, "IPOPT iteration limit [-].")
+    tol: float = _f(1e-12, 1e-2, "IPOPT tolerance [-].")
+    final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
+    mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="adaptive")
+    compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
+    weights: WeightsConfig = _f(doc="Cost weights of Eq. (16).", default_factory=lambda: WeightsConfig(
+        **{f.name: 0.0 for f in dataclasses.fields(WeightsConfig)}))
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    velocities_mps: tuple[float, ...] = _f(0.05, 3.0, "Target board speeds [m/s].")
+    strides: tuple[int, ...] = _f(1, 20, "Stride counts [-].")
+    warm_start: bool = _f(doc="Warm-start each solve from the neighbouring velocity's.", default=True)
+
+
+@dataclass(frozen=True)
+class QuadrupedConfig:
+    """A complete quadruped motion-library build."""
+
+    path: Path
+    text: str
+    meta: MetaConfig
+    robot: RobotConfig
+    board: BoardConfig
+    stance: StanceConfig
+    schedule: ScheduleConfig
+    optimization: OptimizationConfig
+    sweep: SweepConfig
+
+    @property
+    def urdf_path(self) -> Path:
+        p = Path(self.robot.urdf)
+        return p if p.is_absolute() else (self.path.parent / p).resolve()
+
+    def resolved_json(self) -> str:
+        """The validated config as JSON (what the build used, after ``extends``)."""
+        d = dataclasses.asdict(self)
+        d.pop("path")
+        d.pop("text")
+        return json.dumps(d, sort_keys=True, default=str)
+
+
+_SECTIONS: dict[str, type] = {
+    "meta": MetaConfig, "robot": RobotConfig, "board": BoardConfig, "stance": StanceConfig,
+    "schedule": ScheduleConfig, "optimization": OptimizationConfig, "sweep": SweepConfig,
+}
+
+
+def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def read_toml(path: Path) -> tuple[dict[str, Any], str]:
+    """Read a TOML file, following ``extends`` chains; returns (merged table, own text).
+
+    Raises:
+        ConfigError: When the file is missing or not valid TOML.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise ConfigError(path, "-", f"cannot read the config file ({e.strerror}); "
+                          f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(path, "-", f"not valid TOML: {e}") from e
+    robot = data.get("robot")
+    if isinstance(robot, dict) and isinstance(robot.get("urdf"), str):
+        # Paths are relative to the file that names them, also through ``extends``.
+        robot["urdf"] = str((path.parent / robot["urdf"]).resolve())
+    parent = data.pop("extends", None)
+    if parent is not None:
+        if not isinstance(parent, str):
+            raise ConfigError(path, "extends", "must be a file name (string)")
+        base, _ = read_toml((path.parent / parent).resolve())
+        data = _merge(base, data)
+    return data, text
+
+
+def _convert(path: Path, key: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> Any:
+    origin = typing.get_origin(tp)
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, dict):
+            raise ConfigError(path, key, f"must be a table, got {value!r}")
+        return build_section(path, key, tp, value)
+    if origin is tuple:
+        if not isinstance(value, list):
+            raise ConfigError(path, key, f"must be a list, got {value!r}")
+        (inner,) = set(typing.get_args(tp)) - {Ellipsis}
+        return tuple(_convert(path, f"{key}[{i}]", inner, v, meta) for i, v in enumerate(value))
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ConfigError(path, key, f"must be a number, got {value!r}")
+        value = float(value)
+    elif tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(path, key, f"must be an integer, got {value!r}")
+    elif tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(path, key, f"must be true or false, got {value!r}")
+        return value
+    elif tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(path, key, f"must be a string, got {value!r}")
+        return value
+    lo, hi = meta.get("lo"), meta.get("hi")
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise ConfigError(path, key, f"{value!r} is out of range [{lo}, {hi}] ({meta.get('doc', '')})")
+    return value
+
+
+def build_section(path: Path, prefix: str, cls: type, data: dict[str, Any]) -> Any:
+    """Validate one TOML table into the frozen dataclass ``cls``.
+
+    Raises:
+        ConfigError: On unknown or missing keys, wrong types or values out of range.
+    """
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    hints = typing.get_type_hints(cls)
+    unknown = set(data) - set(fields)
+    if unknown:
+        raise ConfigError(path, f"{prefix}.{sorted(unknown)[0]}",
+                          f"unknown key; allowed keys in [{prefix}]: {', '.join(fields)}")
+    kwargs: dict[str, Any] = {}
+    for name, f in fields.items():
+        key = f"{prefix}.{name}"
+        if name not in data:
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+                raise ConfigError(path, key, f"missing; {f.metadata.get('doc', '')}")
+            continue
+        tp = hints[name]
+        if isinstance(tp, types.UnionType):
+            tp = typing.get_args(tp)[0]
+        kwargs[name] = _convert(path, key, tp, data[name], f.metadata)
+    return cls(**kwargs)
+
+
+def load_config(path: Path | str | None = None) -> QuadrupedConfig:
+    """Load and validate a quadruped build config (the shipped default when ``path`` is None).
+
+    Raises:
+        ConfigError: On any invalid field, naming the file and key.
+    """
+    path = Path(path) if path is not None else CONFIG_DIR / DEFAULT_CONFIG
+    data, text = read_toml(path)
+    meta = data.get("meta", {})
+    if meta.get("kind") != "quadruped":
+        raise ConfigError(path, "meta.kind", f"expected 'quadruped', got {meta.get('kind')!r}")
+    unknown = set(data) - set(_SECTIONS)
+    if unknown:
+        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join(_SECTIONS)}")
+    sections = {}
+    for name, cls in _SECTIONS.items():
+        if name not in data:
+            raise ConfigError(path, name, f"missing table [{name}]")
+        sections[name] = build_section(path, name, cls, data[name])
+    cfg = QuadrupedConfig(path=path.resolve(), text=text, **sections)
+    _check_cross_fields(cfg)
+    return cfg
+
+
+def _check_cross_fields(cfg: QuadrupedConfig) -> None:
+    p = cfg.path
+    if cfg.schedule.push_leg not in LEGS:
+        raise ConfigError(p, "schedule.push_leg", f"{cfg.schedule.push_leg!r} is not a leg; use one of {LEGS}")
+    if len(cfg.robot.joint_names) != 12:
+        raise ConfigError(p, "robot.joint_names", "needs 12 names (FL FR RL RR x abad hip knee)")
+    if len(cfg.robot.foot_frames) != 4:
+        raise ConfigError(p, "robot.foot_frames", "needs 4 frame names (FL FR RL RR)")
+    if cfg.meta.kind != "quadruped":
+        raise ConfigError(p, "meta.kind", "must be 'quadruped' here")
+    if cfg.optimization.mu_strategy not in ("monotone", "adaptive"):
+        raise ConfigError(p, "optimization.mu_strategy", "use 'monotone' or 'adaptive'")
+    if not cfg.urdf_path.is_file():
+        raise ConfigError(p, "robot.urdf", f"file {cfg.urdf_path} does not exist")
+    if not cfg.sweep.velocities_mps or not cfg.sweep.strides:
+        raise ConfigError(p, "sweep", "velocities_mps and strides must not be empty")
+    steps = cfg.schedule.period_s / cfg.optimization.dt_s
+    if abs(steps - round(steps)) > 1e-6:
+        raise ConfigError(p, "optimization.dt_s", f"must divide schedule.period_s ({cfg.schedule.period_s} s)")

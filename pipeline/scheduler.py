@@ -1,0 +1,116 @@
+"""Contact scheduler (Sec. IV-A): periodic push cycles of one leg, framed by balancing phases.
+
+The full timeline is: four-leg balancing -> three-leg transfer (push leg board -> ground) ->
+n strides of [push on the ground (duty x period), swing (rest of the period)] -> three-leg
+transfer (push leg back onto the board) -> four-leg balancing. The trajectory optimization
+covers the strides (the accelerating mode); the transfer swings follow a Bezier curve online.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.library.channels import BOARD, GROUND, LEGS, SWING
+from skatelib.pipeline.config import ScheduleConfig
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A stretch of time with constant contacts: mode name, start and end [s], contact per leg."""
+
+    mode: str
+    t0: float
+    t1: float
+    contact: tuple[int, int, int, int]
+
+
+@dataclass(frozen=True)
+class KnotSchedule:
+    """Contacts on a uniform grid of knots.
+
+    Attributes:
+        t: (K,) knot times [s], K = N + 1.
+        contact: (K, 4) int8 per knot and leg: the contact on [t_k, t_k+1) (the last knot repeats
+            the phase that ends there).
+        stride_index: (K,) which stride each knot belongs to.
+    """
+
+    t: np.ndarray
+    contact: np.ndarray
+    stride_index: np.ndarray
+
+    @property
+    def n_intervals(self) -> int:
+        return len(self.t) - 1
+
+    def stance_intervals(self, leg: int, code: int) -> list[tuple[int, int]]:
+        """Maximal runs [k0, k1) of intervals where ``leg`` has contact ``code``."""
+        mask = self.contact[:-1, leg] == code
+        runs, k = [], 0
+        while k < len(mask):
+            if mask[k]:
+                k0 = k
+                while k < len(mask) and mask[k]:
+                    k += 1
+                runs.append((k0, k))
+            else:
+                k += 1
+        return runs
+
+
+def push_phases(cfg: ScheduleConfig, n_strides: int, t0: float = 0.0) -> list[Phase]:
+    """The accelerating phases: per stride, push on the ground then swing."""
+    if n_strides < 1:
+        raise ValueError(f"n_strides must be >= 1, got {n_strides}")
+    p = LEGS.index(cfg.push_leg)
+    push = [BOARD] * 4
+    push[p] = GROUND
+    swing = [BOARD] * 4
+    swing[p] = SWING
+    phases = []
+    for s in range(n_strides):
+        ts = t0 + s * cfg.period_s
+        phases.append(Phase("accelerating", ts, ts + cfg.push_duty * cfg.period_s, tuple(push)))  # type: ignore[arg-type]
+        phases.append(Phase("accelerating", ts + cfg.push_duty * cfg.period_s, ts + cfg.period_s, tuple(swing)))  # type: ignore[arg-type]
+    return phases
+
+
+def full_timeline(cfg: ScheduleConfig, n_strides: int) -> list[Phase]:
+    """Balancing, transfer, strides, transfer, balancing; the strides start at t = 0."""
+    p = LEGS.index(cfg.push_leg)
+    lifted = [BOARD] * 4
+    lifted[p] = SWING
+    t_pre = -(cfg.balance_s + cfg.transfer_s)
+    end = n_strides * cfg.period_s
+    return [
+        Phase("four_leg", t_pre, t_pre + cfg.balance_s, (BOARD,) * 4),
+        Phase("three_leg", -cfg.transfer_s, 0.0, tuple(lifted)),  # type: ignore[arg-type]
+        *push_phases(cfg, n_strides),
+        Phase("three_leg", end, end + cfg.transfer_s, tuple(lifted)),  # type: ignore[arg-type]
+        Phase("four_leg", end + cfg.transfer_s, end + cfg.transfer_s + cfg.balance_s, (BOARD,) * 4),
+    ]
+
+
+def knot_schedule(cfg: ScheduleConfig, n_strides: int, dt: float) -> KnotSchedule:
+    """Contacts of the accelerating window on knots spaced ``dt`` apart.
+
+    Raises:
+        ValueError: When ``dt`` does not divide the period or the push time.
+    """
+    per = cfg.period_s / dt
+    n_push = cfg.push_duty * cfg.period_s / dt
+    if abs(per - round(per)) > 1e-6:
+        raise ValueError(f"dt {dt} s does not divide the period {cfg.period_s} s")
+    per_i, push_i = round(per), round(n_push)
+    if push_i < 1 or push_i >= per_i:
+        raise ValueError(f"push phase of {n_push:.2f} knots is empty or fills the period")
+    p = LEGS.index(cfg.push_leg)
+    n = n_strides * per_i
+    t = np.arange(n + 1) * dt
+    contact = np.full((n + 1, 4), BOARD, dtype=np.int8)
+    local = np.arange(n + 1) % per_i
+    contact[:, p] = np.where(local < push_i, GROUND, SWING)
+    contact[-1, p] = SWING  # the window ends at the end of the last swing
+    stride = np.minimum(np.arange(n + 1) // per_i, n_strides - 1)
+    return KnotSchedule(t=t, contact=contact, stride_index=stride)

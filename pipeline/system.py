@@ -1,0 +1,112 @@
+"""The robot-plus-board system of one build: robot description, single rigid body, board and
+nominal stance, all derived from a validated config."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from skatelib.library.channels import LEGS
+from skatelib.library.errors import ModelError
+from skatelib.pipeline.board import BoardModel
+from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.robot import Quadruped, SingleRigidBody
+
+
+@dataclass(frozen=True)
+class Stance:
+    """Nominal configuration on the board at rest.
+
+    Attributes:
+        q_board: Joint angles with all four feet on the deck (four-leg balancing) [rad].
+        q_push: Joint angles with the push foot on the ground beside the deck [rad].
+        cr: (2, 4) contact points x, y of the feet in the board frame (Eq. 8) [m].
+        trunk_height_m: Trunk origin height above the ground [m].
+        push_foot_board_xy: Push foot x, y in the board frame when on the ground [m].
+    """
+
+    q_board: np.ndarray
+    q_push: np.ndarray
+    cr: np.ndarray
+    trunk_height_m: float
+    push_foot_board_xy: np.ndarray
+
+
+@dataclass(frozen=True)
+class SkateSystem:
+    """Everything the dynamics, the TO and the checks need to know about robot and board."""
+
+    robot: Quadruped
+    srb: SingleRigidBody
+    board: BoardModel
+    stance: Stance
+    gravity_mps2: float
+    foot_radius_m: float
+    friction_mu: float
+    torque_limit_Nm: float
+    joint_velocity_limit_radps: float
+    push_leg: str
+    extra: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def push_index(self) -> int:
+        return LEGS.index(self.push_leg)
+
+    @staticmethod
+    def from_config(cfg: QuadrupedConfig) -> SkateSystem:
+        """Load the URDF, solve the nominal stance, compute the SRB and the board model."""
+        robot = Quadruped(cfg.urdf_path, cfg.robot.joint_names, cfg.robot.foot_frames)
+        st = cfg.stance
+        r = cfg.robot.foot_radius_m
+        xs = (st.foot_x_front_m, st.foot_x_front_m, st.foot_x_rear_m, st.foot_x_rear_m)
+        ys = (st.foot_y_m, -st.foot_y_m, st.foot_y_m, -st.foot_y_m)
+        cr = np.array([xs, ys], dtype=float)
+        h = st.base_height_above_deck_m
+        board_targets = np.array([[x - st.base_x_offset_m, y, -h + r] for x, y in zip(xs, ys, strict=True)])
+        q_board = solve_leg_ik(robot, board_targets)
+        push = LEGS.index(cfg.schedule.push_leg)
+        side = 1.0 if ys[push] > 0 else -1.0
+        push_xy = np.array([xs[push], side * st.push_foot_y_m])
+        push_targets = board_targets.copy()
+        push_targets[push] = [push_xy[0] - st.base_x_offset_m, push_xy[1], -h - cfg.board.deck_height_m + r]
+        q_push = solve_leg_ik(robot, push_targets, q0=q_board)
+        srb = robot.single_rigid_body(q_board)
+        board = BoardModel.from_config(cfg.board, srb.mass_kg, cfg.robot.gravity_mps2, st.foot_y_m)
+        stance = Stance(q_board=q_board, q_push=q_push, cr=cr,
+                        trunk_height_m=h + cfg.board.deck_height_m, push_foot_board_xy=push_xy)
+        return SkateSystem(
+            robot=robot, srb=srb, board=board, stance=stance, gravity_mps2=cfg.robot.gravity_mps2,
+            foot_radius_m=r, friction_mu=cfg.robot.friction_mu, torque_limit_Nm=cfg.robot.torque_limit_Nm,
+            joint_velocity_limit_radps=cfg.robot.joint_velocity_limit_radps, push_leg=cfg.schedule.push_leg,
+        )
+
+
+def solve_leg_ik(robot: Quadruped, targets: np.ndarray, q0: np.ndarray | None = None,
+                 tol: float = 1e-12, max_iter: int = 100) -> np.ndarray:
+    """Joint angles placing each foot centre at ``targets`` (4 x 3, trunk frame) by damped Newton.
+
+    Raises:
+        ModelError: When a target is out of reach or the solution violates joint limits.
+    """
+    q_sym = ca.SX.sym("q", 12)
+    p: Any = ca.vec(robot.foot_positions_body(q_sym))
+    fn = ca.Function("ik", [q_sym], [p, ca.jacobian(p, q_sym)])
+    q = np.tile([0.0, -0.8, 1.6], 4) if q0 is None else np.array(q0, dtype=float)
+    goal = np.asarray(targets, dtype=float).reshape(-1)
+    for _ in range(max_iter):
+        pv, J = (np.asarray(v) for v in fn(q))
+        err = goal - pv.reshape(-1)
+        if np.linalg.norm(err) < tol:
+            break
+        q = q + np.linalg.solve(J.T @ J + 1e-9 * np.eye(12), J.T @ err)
+    else:
+        raise ModelError(f"stance IK did not converge (residual {np.linalg.norm(err):.2e} m): "
+                         "a foot target is out of reach; check [stance] heights and foot positions")
+    lo, hi = robot.lower_limits, robot.upper_limits
+    bad = np.flatnonzero((q < lo - 1e-9) | (q > hi + 1e-9))
+    if bad.size:
+        raise ModelError(f"stance IK solution violates the limits of joints {[robot.joint_names[i] for i in bad]}; "
+                         "adjust the [stance] table")
+    return q

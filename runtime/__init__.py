@@ -1,0 +1,1 @@
+"""Runtime loader for motion libraries: numpy and h5py only, for the robot's onboard computer."""

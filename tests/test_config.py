@@ -1,0 +1,55 @@
+"""Config validation: errors name the file and key; extends merges tables."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from skatelib.library.errors import ConfigError
+from skatelib.pipeline.config import CONFIG_DIR, load_config
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "c.toml"
+    p.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n' + text)
+    return p
+
+
+def test_default_config_loads(cfg):
+    """The shipped default config validates and points at an existing URDF."""
+    assert cfg.urdf_path.is_file()
+    assert 0.3 in cfg.sweep.velocities_mps and 0.5 in cfg.sweep.velocities_mps and 0.7 in cfg.sweep.velocities_mps
+
+
+def test_extends_overrides_one_key(tmp_path):
+    """A config extending the default changes only what it sets."""
+    c = load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.4]\nstrides = [1]\n"))
+    assert c.sweep.velocities_mps == (0.4,)
+    assert c.board.mass_kg == load_config().board.mass_kg
+
+
+def test_unknown_key_names_file_key_and_allowed(tmp_path):
+    """A misspelt key is refused with the file, the dotted key and the allowed keys."""
+    p = _write(tmp_path, "[board]\nmass_kilo = 2.0\n")
+    with pytest.raises(ConfigError) as e:
+        load_config(p)
+    assert e.value.path == p and e.value.key == "board.mass_kilo"
+    assert "mass_kg" in str(e.value)
+
+
+def test_out_of_range_value_is_refused(tmp_path):
+    """A negative mass is out of range and the message gives the range."""
+    with pytest.raises(ConfigError, match=r"board\.mass_kg.*out of range"):
+        load_config(_write(tmp_path, "[board]\nmass_kg = -1.0\n"))
+
+
+def test_wrong_type_is_refused(tmp_path):
+    """A string where a number belongs is refused."""
+    with pytest.raises(ConfigError, match="must be a number"):
+        load_config(_write(tmp_path, '[robot]\nfriction_mu = "high"\n'))
+
+
+def test_missing_file_lists_shipped_configs(tmp_path):
+    """A config path that does not exist names the shipped configs."""
+    with pytest.raises(ConfigError, match=r"cyberdog2\.toml"):
+        load_config(tmp_path / "nope.toml")
