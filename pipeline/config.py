@@ -203,7 +203,7 @@ def read_toml(path: Path) -> tuple[dict[str, Any], str]:
 
 def _convert(path: Path, key: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> Any:
     origin = typing.get_origin(tp)
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
             raise ConfigError(path, key, f"must be a table, got {value!r}")
         return build_section(path, key, tp, value)

@@ -18,7 +18,7 @@ from tests import reference_model as ref
 
 def _random_state(system, rng):
     x = np.zeros(28)
-    x[0:3] = [*rng.uniform(-1, 1, 3), 0, 0, 0.3]
+    x[0:3] = rng.uniform(-1, 1, 3) + np.array([0.0, 0.0, 0.3])
     x[3:6] = rng.uniform([-0.4, -0.4, -np.pi], [0.4, 0.4, np.pi])
     x[6:12] = rng.uniform(-1, 1, 6)
     x[12:24] = rng.uniform(system.robot.lower_limits, system.robot.upper_limits)
