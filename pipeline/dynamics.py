@@ -12,6 +12,7 @@ Eq. 8, used only for feet on the board) and output ``xdot`` (28).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -137,17 +138,21 @@ def dynamics_function(system: SkateSystem, mode: Mode) -> ca.Function:
                        ["x", "u", "cr"], ["xdot"])
 
 
-def rk4_step(f: ca.Function, x: Any, u: Any, cr: Any, h: float, substeps: int = 1) -> Any:
-    """Classic fourth-order Runge-Kutta over one interval of ``h`` seconds in ``substeps`` steps,
-    control held constant."""
+def rk4(f: Callable[[Any], Any], x: Any, h: float, substeps: int = 1) -> Any:
+    """Classic fourth-order Runge-Kutta of ``dx/dt = f(x)`` over ``h`` seconds in ``substeps`` steps."""
     dt = h / substeps
     for _ in range(substeps):
-        k1 = f(x, u, cr)
-        k2 = f(x + dt / 2 * k1, u, cr)
-        k3 = f(x + dt / 2 * k2, u, cr)
-        k4 = f(x + dt * k3, u, cr)
+        k1 = f(x)
+        k2 = f(x + dt / 2 * k1)
+        k3 = f(x + dt / 2 * k2)
+        k4 = f(x + dt * k3)
         x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     return x
+
+
+def rk4_step(f: ca.Function, x: Any, u: Any, cr: Any, h: float, substeps: int = 1) -> Any:
+    """RK4 of one mode's dynamics over ``h`` seconds, control and contact points held."""
+    return rk4(lambda xx: f(xx, u, cr), x, h, substeps)
 
 
 def joint_torques(system: SkateSystem, x: Any, u: Any) -> Any:

@@ -1,0 +1,264 @@
+"""Cost (Eq. 16a-d) and constraint terms of the push-off trajectory optimization (Sec. IV-B).
+
+The transcription's state is the 28 channels plus the board position (board_x, board_y) [m],
+integrated from the board velocity, so that feet on the deck can be held to deck points
+(the position form of Eq. 15) without drift.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from skatelib.library.channels import (
+    GROUND,
+    I_BOARD_ROLL,
+    I_BOARD_ROLL_RATE,
+    NX,
+    S_BOARD_V,
+    S_OMEGA,
+    S_POS,
+    S_Q,
+    S_RPY,
+    S_VEL,
+    SWING,
+    U_F,
+    U_QD,
+)
+from skatelib.pipeline.config import StanceConfig, WeightsConfig
+from skatelib.pipeline.dynamics import board_rotation, foot_centres_world, joint_torques
+from skatelib.pipeline.ocp import Stage, fixed
+from skatelib.pipeline.scheduler import KnotSchedule
+from skatelib.pipeline.system import SkateSystem
+
+NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
+I_BOARD_XY = slice(NX, NX + 2)
+INF = np.inf
+
+# Stage parameters: desired board speed at knot k, terminal flag, rate flag, target speed.
+P_VDES, P_TERMINAL, P_RATE, P_TARGET = range(4)
+N_PARAMS = 4
+
+
+def board_origin(system: SkateSystem, x: Any) -> Any:
+    return ca.vertcat(x[I_BOARD_XY], system.board.deck_height_m)
+
+
+def forward_speed(x: Any) -> Any:
+    yaw = x[S_RPY][2]
+    return ca.cos(yaw) * x[S_BOARD_V][0] + ca.sin(yaw) * x[S_BOARD_V][1]
+
+
+@dataclass(frozen=True)
+class TrackingCost:
+    """Eq. (16a-b): board speed and roll, trunk pose and velocity relative to the board, joints."""
+
+    system: SkateSystem
+    w: WeightsConfig
+    com_rel0: np.ndarray  # centre of mass relative to the board origin at rest [m]
+    q_nominal: np.ndarray
+    name: str = "tracking"
+
+    def cost(self, s: Stage) -> Any:
+        x, w = s.x, self.w
+        board_v = ca.vertcat(x[S_BOARD_V], 0)
+        e_pos = x[S_POS] - board_origin(self.system, x) - ca.DM(self.com_rel0)
+        terms = (
+            w.board_velocity * (forward_speed(x) - s.p[P_VDES]) ** 2
+            + w.board_roll * x[I_BOARD_ROLL] ** 2
+            + w.base_position * ca.sumsqr(e_pos)
+            + w.base_orientation * ca.sumsqr(x[S_RPY])
+            + w.base_velocity * ca.sumsqr(x[S_VEL] - board_v)
+            + w.base_angular_velocity * ca.sumsqr(x[S_OMEGA])
+            + w.joint_position * ca.sumsqr(x[S_Q] - ca.DM(self.q_nominal))
+        )
+        return s.dt * terms
+
+
+@dataclass(frozen=True)
+class EffortCost:
+    """Eq. (16c-d): forces and joint velocities, and their changes between knots."""
+
+    w: WeightsConfig
+    name: str = "effort"
+
+    def cost(self, s: Stage) -> Any:
+        w = self.w
+        effort = w.force * ca.sumsqr(s.u[U_F]) + w.joint_velocity * ca.sumsqr(s.u[U_QD])
+        rate = w.force_rate * ca.sumsqr(s.u_next[U_F] - s.u[U_F]) + w.joint_velocity_rate * ca.sumsqr(
+            s.u_next[U_QD] - s.u[U_QD])
+        return s.dt * effort + s.p[P_RATE] * rate
+
+
+@dataclass(frozen=True)
+class TerminalSpeedCost:
+    """Final board speed error, added on the last stage."""
+
+    w: WeightsConfig
+    name: str = "terminal_speed"
+
+    def cost(self, s: Stage) -> Any:
+        return s.p[P_TERMINAL] * self.w.terminal_velocity * (forward_speed(s.x_next) - s.p[P_TARGET]) ** 2
+
+
+@dataclass(frozen=True)
+class DynamicsDefect:
+    """Multiple-shooting continuity: x_{k+1} = RK4(x_k, u_k) over dt in ``substeps`` steps."""
+
+    step: ca.Function  # (x, u) -> x_next on the transcription state
+    name: str = "dynamics"
+
+    def rows(self, s: Stage) -> Any:
+        return s.x_next - self.step(s.x, s.u)
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return fixed(n, NXA, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class FeetOnBoard:
+    """Feet on the deck stay on their deck points (position form of Eq. 15, with Eq. 8)."""
+
+    system: SkateSystem
+    legs: tuple[int, ...]
+    name: str = "feet_on_board"
+
+    def rows(self, s: Stage) -> Any:
+        x = s.x_next
+        centres = foot_centres_world(self.system, x[:NX])
+        R_B = board_rotation(x[I_BOARD_ROLL], x[S_RPY][2])
+        r = self.system.foot_radius_m
+        cr = self.system.stance.cr
+        return ca.vertcat(*[centres[:, i] - board_origin(self.system, x) - R_B @ ca.DM([cr[0, i], cr[1, i], r])
+                            for i in self.legs])
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return fixed(n, 3 * len(self.legs), 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class PushFoot:
+    """The pushing foot: put on the ground during stance, lifted and clear of the deck in swing.
+
+    Rows: foot displacement over the interval (3), foot height at k+1 (1), lateral distance of
+    the foot from the deck centre line at k+1 (1).
+    """
+
+    system: SkateSystem
+    schedule: KnotSchedule
+    stance: StanceConfig
+    name: str = "push_foot"
+
+    def rows(self, s: Stage) -> Any:
+        p = self.system.push_index
+        c0 = foot_centres_world(self.system, s.x[:NX])[:, p]
+        c1 = foot_centres_world(self.system, s.x_next[:NX])[:, p]
+        yaw = s.x_next[S_RPY][2]
+        rel = c1 - board_origin(self.system, s.x_next)
+        lateral = -ca.sin(yaw) * rel[0] + ca.cos(yaw) * rel[1]
+        side = float(np.sign(self.system.stance.push_foot_board_xy[1]))
+        return ca.vertcat(c1 - c0, c1[2], side * lateral)
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        p = self.system.push_index
+        r = self.system.foot_radius_m
+        contact = self.schedule.contact[:, p]
+        lo, hi = np.full((n, 5), -INF), np.full((n, 5), INF)
+        # Lift profile: a half sine over each swing run, at least r everywhere in the air.
+        lift = np.zeros(n + 1)
+        for k0, k1 in self.schedule.stance_intervals(p, SWING):
+            s = (np.arange(k0, k1 + 1) - k0) / max(k1 - k0, 1)
+            lift[k0:k1 + 1] = np.maximum(lift[k0:k1 + 1], self.stance.swing_height_m * np.sin(np.pi * s))
+        for k in range(n):
+            if contact[k] == GROUND:
+                lo[k, 0:3] = hi[k, 0:3] = 0.0  # no slip on the ground
+            if contact[k + 1] == GROUND and contact[k] != GROUND:
+                lo[k, 3] = hi[k, 3] = r  # touchdown
+            elif contact[k + 1] != GROUND and contact[k] != GROUND:
+                lo[k, 3] = r + lift[k + 1]
+        lo[:, 4] = self.system.board.deck_width_m / 2 + r + self.stance.push_clearance_m
+        return lo, hi
+
+
+@dataclass(frozen=True)
+class FrictionPyramids:
+    """Unilateral forces inside linearized friction cones (deck frame on the board, world on the
+    ground): mu f_n -+ f_t >= 0 and f_n >= 0; free rows where the foot swings."""
+
+    system: SkateSystem
+    schedule: KnotSchedule
+    board_legs: tuple[bool, ...]
+    name: str = "friction"
+
+    def rows(self, s: Stage) -> Any:
+        mu = self.system.friction_mu
+        R_B = board_rotation(s.x[I_BOARD_ROLL], s.x[S_RPY][2])
+        out = []
+        for i in range(4):
+            f = s.u[3 * i: 3 * i + 3]
+            fl = R_B.T @ f if self.board_legs[i] else f
+            out += [mu * fl[2] - fl[0], mu * fl[2] + fl[0], mu * fl[2] - fl[1], mu * fl[2] + fl[1], fl[2]]
+        return ca.vertcat(*out)
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = np.zeros((n, 20)), np.full((n, 20), INF)
+        for i in range(4):
+            swing = self.schedule.contact[:n, i] == SWING
+            lo[swing, 5 * i: 5 * i + 5] = -INF
+        return lo, hi
+
+
+@dataclass(frozen=True)
+class TorqueLimits:
+    """Joint torques through the foot Jacobians within +-limit."""
+
+    system: SkateSystem
+    name: str = "torque"
+
+    def rows(self, s: Stage) -> Any:
+        return joint_torques(self.system, s.x[:NX], s.u)
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        t = self.system.torque_limit_Nm
+        return fixed(n, 12, -t, t)
+
+
+@dataclass(frozen=True)
+class Steering:
+    """Eq. (14): the deck's roll and forward speed set its yaw rate."""
+
+    system: SkateSystem
+    name: str = "steering"
+
+    def rows(self, s: Stage) -> Any:
+        x = s.x_next
+        return self.system.board.steering_residual(x[I_BOARD_ROLL], forward_speed(x), x[S_OMEGA][2])
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return fixed(n, 1, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class FinalSpeed:
+    """The board's forward speed at the end within a relative tolerance of the target."""
+
+    target_mps: float
+    rel_tol: float
+    name: str = "final_speed"
+
+    def rows(self, s: Stage) -> Any:
+        return forward_speed(s.x_next)
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
+        lo[-1], hi[-1] = self.target_mps * (1 - self.rel_tol), self.target_mps * (1 + self.rel_tol)
+        return lo, hi
+
+
+__all__ = [
+    "I_BOARD_ROLL_RATE", "N_PARAMS", "NXA", "DynamicsDefect", "EffortCost", "FeetOnBoard", "FinalSpeed",
+    "FrictionPyramids", "PushFoot", "Steering", "TerminalSpeedCost", "TorqueLimits", "TrackingCost",
+]

@@ -1,0 +1,75 @@
+"""Direct multiple shooting (Bock and Plitt 1984): one stage per interval, RK4 inside.
+
+The decision vector is ``w = [x_0, u_0, x_1, u_1, ..., x_N, u_N]``; ``u_N`` exists only so every
+stage sees the same window ``[x_k, u_k, x_{k+1}, u_{k+1}]`` and is fixed to zero by its bounds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from skatelib.pipeline.dynamics import rk4
+from skatelib.pipeline.ocp import ConstraintTerm, CostTerm, Stage
+from skatelib.pipeline.stagewise import (
+    StagewiseNLP,
+    build_stagewise_nlp,
+    compile_stage_functions,
+    stage_functions,
+)
+
+
+@dataclass(frozen=True)
+class MultipleShooting:
+    """The transcription settings: number of intervals and their length."""
+
+    n_intervals: int
+    dt: float
+
+
+@dataclass(frozen=True)
+class Transcribed:
+    """A transcribed problem: the NLP, constraint bounds and the row layout of each term."""
+
+    nlp: StagewiseNLP
+    lbg: np.ndarray
+    ubg: np.ndarray
+    row_slices: dict[str, slice]
+    nx: int
+    nu: int
+    n_params: int
+
+
+def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs: Sequence[CostTerm],
+               constraints: Sequence[ConstraintTerm], compile_c: bool = False) -> Transcribed:
+    """Build the stage function from the terms and assemble the NLP over all intervals."""
+    n = nx + nu
+    z = ca.SX.sym("z", 2 * n)
+    p = ca.SX.sym("p", n_params)
+    stage = Stage(x=z[:nx], u=z[nx:n], x_next=z[n:n + nx], u_next=z[n + nx:], p=p, dt=method.dt)
+    cost = sum((c.cost(stage) for c in costs), ca.SX(0))
+    rows, slices, at = [], {}, 0
+    for term in constraints:
+        r = term.rows(stage)
+        rows.append(r)
+        slices[term.name] = slice(at, at + r.shape[0])
+        at += r.shape[0]
+    cons = ca.vertcat(*rows)
+    fns = stage_functions(z, p, cost, cons)
+    if compile_c:
+        fns = compile_stage_functions(fns)
+    N = method.n_intervals
+    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0])
+    lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
+    lbg = np.concatenate(lbs, axis=1).reshape(-1)
+    ubg = np.concatenate(ubs, axis=1).reshape(-1)
+    return Transcribed(nlp=nlp, lbg=lbg, ubg=ubg, row_slices=slices, nx=nx, nu=nu, n_params=n_params)
+
+
+def rk4_integrator(f: ca.Function, nx: int, nu: int, dt: float, substeps: int) -> ca.Function:
+    """``x_next = F(x, u)``: RK4 with ``substeps`` equal steps over ``dt``, control held."""
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    return ca.Function("rk4", [x, u], [rk4(lambda xx: f(xx, u), x, dt, substeps)])

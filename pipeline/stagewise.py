@@ -1,0 +1,170 @@
+"""A stage-wise NLP whose derivatives are assembled from per-stage derivative functions.
+
+Direct multiple shooting produces an NLP in which stage k's cost and constraints depend only on
+the window ``z_k = w[k n : k n + 2 n]`` (state and control of knots k and k+1). Building one flat
+expression graph and letting CasADi differentiate it costs tens of seconds; instead one SX
+function per stage is differentiated once (gradient, constraint Jacobian, Lagrangian Hessian),
+mapped over the stages, and the results are scattered into the global sparse matrices by
+constant index maps (SOLVER_NOTES: 0.5 s build instead of 29 s). The stage functions can be
+compiled to C once and cached on disk by content hash.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+CACHE_ENV = "SKATELIB_CACHE_DIR"
+
+
+def cache_dir() -> Path:
+    """Where compiled stage functions are kept (``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib)."""
+    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
+    return Path(base)
+
+
+@dataclass(frozen=True)
+class StageFunctions:
+    """The per-stage functions: value, gradient, Jacobian and Hessian of the Lagrangian."""
+
+    value: ca.Function  # (z, p) -> (l, g)
+    grad: ca.Function  # (z, p) -> dl/dz
+    jac: ca.Function  # (z, p) -> dg/dz (sparse)
+    hess: ca.Function  # (z, p, sigma, lam) -> triu hessian of sigma l + lam' g (sparse)
+
+
+def stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> StageFunctions:
+    """Differentiate one stage's cost and constraints symbolically (SX)."""
+    sigma = ca.SX.sym("sigma")
+    lam = ca.SX.sym("lam", cons.shape[0])
+    lag = sigma * cost + ca.dot(lam, cons)
+    H, _ = ca.hessian(lag, z)
+    return StageFunctions(
+        value=ca.Function("stage_value", [z, p], [cost, cons]),
+        grad=ca.Function("stage_grad", [z, p], [ca.gradient(cost, z)]),
+        jac=ca.Function("stage_jac", [z, p], [ca.jacobian(cons, z)]),
+        hess=ca.Function("stage_hess", [z, p, sigma, lam], [ca.triu(H)]),
+    )
+
+
+def compile_stage_functions(fns: StageFunctions, flags: str = "-O1") -> StageFunctions:
+    """C-compile the four stage functions into one shared library, cached by content hash.
+
+    Returns the loaded external functions; falls back to the given ones when no C compiler exists.
+    """
+    cc = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+    if cc is None:
+        return fns
+    gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
+    for f in (fns.value, fns.grad, fns.jac, fns.hess):
+        gen.add(f)
+    src = gen.dump()
+    key = hashlib.sha256((src + flags + ca.__version__).encode()).hexdigest()[:20]
+    lib = cache_dir() / f"stage_{key}.so"
+    if not lib.exists():
+        lib.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=lib.parent) as tmp:
+            c_file = Path(tmp) / "stage.c"
+            c_file.write_text(src)
+            so_tmp = Path(tmp) / "stage.so"
+            subprocess.run([cc, flags, "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)], check=True,
+                           capture_output=True)
+            os.replace(so_tmp, lib)  # atomic: parallel workers never load a half-written library
+    return StageFunctions(*(ca.external(name, str(lib)) for name in
+                            ("stage_value", "stage_grad", "stage_jac", "stage_hess")))
+
+
+def _scatter(block_sp: ca.Sparsity, n_stages: int, row_step: int, col_step: int, row_offset_fn: Any,
+             shape: tuple[int, int], triu: bool = False) -> tuple[ca.Sparsity, np.ndarray, bool]:
+    """Global sparsity and, for each stage-block nonzero, its global nonzero index.
+
+    Returns (sparsity, index, has_duplicates).
+    """
+    rows, cols = (np.asarray(a, dtype=np.int64) for a in block_sp.get_triplet())
+    k = np.repeat(np.arange(n_stages), len(rows))
+    R = np.tile(rows, n_stages) + k * row_step + row_offset_fn
+    C = np.tile(cols, n_stages) + k * col_step
+    keys = C * shape[0] + R  # column-major order, as CasADi stores nonzeros
+    uniq, inverse = np.unique(keys, return_inverse=True)
+    sp = ca.Sparsity.triplet(shape[0], shape[1], (uniq % shape[0]).tolist(), (uniq // shape[0]).tolist())
+    return sp, inverse, len(uniq) < len(keys)
+
+
+def _gather_sum(nz: ca.MX, index: np.ndarray, n_out: int, duplicates: bool) -> ca.MX:
+    """Global nonzeros from stacked stage nonzeros: a permutation, or a sum when windows overlap."""
+    if not duplicates:
+        perm = np.empty(len(index), dtype=np.int64)
+        perm[index] = np.arange(len(index))
+        return nz[perm.tolist()]
+    A = ca.DM(ca.Sparsity.triplet(n_out, len(index), index.tolist(), list(range(len(index)))), 1.0)
+    return ca.mtimes(A, nz)
+
+
+@dataclass(frozen=True)
+class StagewiseNLP:
+    """The NLP functions IPOPT needs, built from mapped stage functions.
+
+    Attributes:
+        nlp: ``{"x": w, "p": P, "f": f, "g": g}`` as MX.
+        options: nlpsol options carrying the assembled ``grad_f``, ``jac_g`` and ``hess_lag``.
+    """
+
+    nlp: dict[str, ca.MX]
+    options: dict[str, Any]
+    n_w: int
+    n_g: int
+
+
+def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_g_stage: int) -> StagewiseNLP:
+    """Assemble the NLP over ``w = [v_0, ..., v_N]`` (each v of size n) and stage windows
+    ``z_k = [v_k, v_{k+1}]``; the parameter is the (n_p x N) matrix of per-stage parameters."""
+    n_w = n * (n_stages + 1)
+    w = ca.MX.sym("w", n_w)
+    p = ca.MX.sym("p", n_p * n_stages)
+    P = ca.reshape(p, n_p, n_stages)
+    window = (np.arange(2 * n)[:, None] + n * np.arange(n_stages)[None, :]).flatten(order="F")
+    Z = ca.reshape(w[window.tolist()], 2 * n, n_stages)
+    mode = "serial"
+    value = fns.value.map(n_stages, mode)
+    L, G = value(Z, P)
+    f = ca.sum2(L)
+    g = ca.vec(G)
+    n_g = n_g_stage * n_stages
+
+    # Gradient: windows overlap, so contributions to shared knots add up.
+    GR = fns.grad.map(n_stages, mode)(Z, P)
+    g_sp, g_idx, _ = _scatter(ca.Sparsity.dense(2 * n, 1), n_stages, n, 0, 0, (n_w, 1))
+    grad = ca.MX(g_sp, _gather_sum(ca.vec(GR), g_idx, g_sp.nnz(), True))
+
+    # Constraint Jacobian: stage k's rows touch only its window; no overlap among rows.
+    J_blocks = fns.jac.map(n_stages, mode)(Z, P)
+    j_sp, j_idx, j_dup = _scatter(fns.jac.sparsity_out(0), n_stages, n_g_stage, n, 0, (n_g, n_w))
+    J = ca.MX(j_sp, _gather_sum(_nonzeros(J_blocks), j_idx, j_sp.nnz(), j_dup))
+
+    # Hessian of the Lagrangian (upper triangle): overlapping windows add up.
+    sigma = ca.MX.sym("lam_f")
+    lam = ca.MX.sym("lam_g", n_g)
+    H_blocks = fns.hess.map(n_stages, mode)(Z, P, sigma, ca.reshape(lam, n_g_stage, n_stages))
+    h_sp, h_idx, h_dup = _scatter(fns.hess.sparsity_out(0), n_stages, n, n, 0, (n_w, n_w))
+    H = ca.MX(h_sp, _gather_sum(_nonzeros(H_blocks), h_idx, h_sp.nnz(), h_dup))
+
+    grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
+    jac_g = ca.Function("nlp_jac_g", [w, p], [g, J], ["x", "p"], ["g", "jac_g_x"])
+    hess_lag = ca.Function("nlp_hess_l", [w, p, sigma, lam], [H],
+                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+    return StagewiseNLP(nlp={"x": w, "p": p, "f": f, "g": g},
+                        options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}, n_w=n_w, n_g=n_g)
+
+
+def _nonzeros(M: ca.MX) -> ca.MX:
+    """The nonzeros of a sparse MX as a column, in storage order."""
+    return M.nz[0:M.nnz()]
