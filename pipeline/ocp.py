@@ -28,7 +28,8 @@ class Stage:
 class CostTerm(Protocol):
     """A contribution to the stage cost (already multiplied by the stage length)."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def cost(self, s: Stage) -> Any: ...
 
@@ -39,7 +40,8 @@ class ConstraintTerm(Protocol):
     ``bounds`` returns two (n_stages, rows) arrays: lower and upper bounds per stage.
     """
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def rows(self, s: Stage) -> Any: ...
 

@@ -15,10 +15,10 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-
-from skatelib.library.channels import GROUND, LEGS, NU, NX, S_POS, S_Q, SWING, U_F
+from skatelib.library.channels import GROUND, NU, NX, S_POS, S_Q, SWING
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.ocp import ConstraintTerm, CostTerm
 from skatelib.pipeline.pushoff_terms import (
     N_PARAMS,
     NXA,
@@ -126,9 +126,9 @@ class PushoffProblem:
         q_nom = system.stance.q_board.copy()
         q_nom[3 * p: 3 * p + 3] = system.stance.q_push[3 * p: 3 * p + 3]
         w = opt.weights
-        costs = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
+        costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
         self.final_speed = FinalSpeed(0.0, opt.final_velocity_tol)
-        self.constraints = [
+        self.constraints: list[ConstraintTerm] = [
             DynamicsDefect(step), FeetOnBoard(system, board_legs),
             PushFoot(system, self.schedule, config.stance),
             FrictionPyramids(system, self.schedule, self.mode.board_legs),
@@ -157,7 +157,7 @@ class PushoffProblem:
     def solver(self, options: dict[str, Any]) -> ca.Function:
         key = tuple(sorted(options.items()))
         if key not in self._solvers:
-            opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+            opts = {"print_time": False, "calc_lam_p": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
                     **{f"ipopt.{k}": v for k, v in options.items()}, **self.tr.nlp.options}
             self._solvers[key] = ca.nlpsol("pushoff", "ipopt", self.tr.nlp.nlp, opts)
         return self._solvers[key]
@@ -292,6 +292,3 @@ def solve(spec: PushoffSpec) -> SolveResult:
         warm=WarmStart(w=w, lam_g=np.asarray(sol["lam_g"]).reshape(-1), lam_x=np.asarray(sol["lam_x"]).reshape(-1)),
         ipopt_options=options, **arrays,
     )
-
-
-__all__ = ["GROUND", "LEGS", "U_F", "PushoffProblem", "PushoffSpec", "SolveResult", "WarmStart", "problem_for", "solve"]

@@ -12,11 +12,9 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-
 from skatelib.library.channels import (
     GROUND,
     I_BOARD_ROLL,
-    I_BOARD_ROLL_RATE,
     NX,
     S_BOARD_V,
     S_OMEGA,
@@ -256,9 +254,3 @@ class FinalSpeed:
         lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
         lo[-1], hi[-1] = self.target_mps * (1 - self.rel_tol), self.target_mps * (1 + self.rel_tol)
         return lo, hi
-
-
-__all__ = [
-    "I_BOARD_ROLL_RATE", "N_PARAMS", "NXA", "DynamicsDefect", "EffortCost", "FeetOnBoard", "FinalSpeed",
-    "FrictionPyramids", "PushFoot", "Steering", "TerminalSpeedCost", "TorqueLimits", "TrackingCost",
-]

@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-
 from skatelib.pipeline.dynamics import rk4
 from skatelib.pipeline.ocp import ConstraintTerm, CostTerm, Stage
 from skatelib.pipeline.stagewise import (
@@ -58,11 +57,10 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
         slices[term.name] = slice(at, at + r.shape[0])
         at += r.shape[0]
     cons = ca.vertcat(*rows)
-    fns = stage_functions(z, p, cost, cons)
-    if compile_c:
-        fns = compile_stage_functions(fns)
+    symbolic = stage_functions(z, p, cost, cons)
+    fns = compile_stage_functions(symbolic) if compile_c else symbolic
     N = method.n_intervals
-    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0])
+    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=symbolic.value)
     lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)

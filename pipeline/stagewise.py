@@ -68,7 +68,7 @@ def compile_stage_functions(fns: StageFunctions, flags: str = "-O1") -> StageFun
     for f in (fns.value, fns.grad, fns.jac, fns.hess):
         gen.add(f)
     src = gen.dump()
-    key = hashlib.sha256((src + flags + ca.__version__).encode()).hexdigest()[:20]
+    key = hashlib.sha256((src + flags + ca.CasadiMeta.version()).encode()).hexdigest()[:20]
     lib = cache_dir() / f"stage_{key}.so"
     if not lib.exists():
         lib.parent.mkdir(parents=True, exist_ok=True)
@@ -124,9 +124,15 @@ class StagewiseNLP:
     n_g: int
 
 
-def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_g_stage: int) -> StagewiseNLP:
+def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_g_stage: int,
+                        oracle_value: ca.Function | None = None) -> StagewiseNLP:
     """Assemble the NLP over ``w = [v_0, ..., v_N]`` (each v of size n) and stage windows
-    ``z_k = [v_k, v_{k+1}]``; the parameter is the (n_p x N) matrix of per-stage parameters."""
+    ``z_k = [v_k, v_{k+1}]``; the parameter is the (n_p x N) matrix of per-stage parameters.
+
+    ``oracle_value`` is a differentiable (SX) version of ``fns.value`` for the NLP's f and g:
+    the solver interface differentiates those once at set-up (for the final multipliers), which
+    compiled external functions cannot be.
+    """
     n_w = n * (n_stages + 1)
     w = ca.MX.sym("w", n_w)
     p = ca.MX.sym("p", n_p * n_stages)
@@ -134,7 +140,7 @@ def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_
     window = (np.arange(2 * n)[:, None] + n * np.arange(n_stages)[None, :]).flatten(order="F")
     Z = ca.reshape(w[window.tolist()], 2 * n, n_stages)
     mode = "serial"
-    value = fns.value.map(n_stages, mode)
+    value = (oracle_value or fns.value).map(n_stages, mode)
     L, G = value(Z, P)
     f = ca.sum2(L)
     g = ca.vec(G)

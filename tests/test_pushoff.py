@@ -1,0 +1,80 @@
+"""Push-off TO end to end: a small problem really solved, then checked by independent code."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from skatelib.library.channels import GROUND, LEGS
+from skatelib.pipeline.pushoff import PushoffSpec, solve
+from skatelib.pipeline.verify import check_trajectory
+
+from tests import reference_model as ref
+
+
+@pytest.fixture(scope="module")
+def small_cfg(cfg):
+    # One stride at the default step; C compilation off so the test needs no cache warm-up.
+    return dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
+
+
+@pytest.fixture(scope="module")
+def solved(small_cfg):
+    return solve(PushoffSpec(small_cfg, 0.3, 1))
+
+
+def test_solve_converges_to_target_speed(solved):
+    """IPOPT converges and the board ends within 2 % of the target speed."""
+    assert solved.success, solved.status
+    assert solved.status == "Solve_Succeeded"
+    assert solved.final_velocity_error < 0.02
+    assert solved.max_constraint_violation < 1e-6
+    assert solved.state.shape == (41, 28) and solved.control.shape == (40, 24)
+
+
+def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
+    """Re-integrating each shooting interval with a 20-step RK4 of the numpy reference model
+    (pinocchio kinematics) lands within 5e-3 of the next knot (largest: the stiff deck roll rate)."""
+    from skatelib.pipeline.dynamics import modes_for
+
+    mode = modes_for(system.push_leg)["accelerating"]
+    worst = 0.0
+    for k in range(len(solved.t) - 1):
+        x, u = solved.state[k].copy(), solved.control[k]
+        h = (solved.t[k + 1] - solved.t[k]) / 20
+        for _ in range(20):
+            k1 = ref.xdot(system, mode, x, u, system.stance.cr)
+            k2 = ref.xdot(system, mode, x + h / 2 * k1, u, system.stance.cr)
+            k3 = ref.xdot(system, mode, x + h / 2 * k2, u, system.stance.cr)
+            k4 = ref.xdot(system, mode, x + h * k3, u, system.stance.cr)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        worst = max(worst, float(np.abs(x - solved.state[k + 1]).max()))
+    assert worst < 5e-3, worst
+
+
+def test_solved_trajectory_respects_contact_and_limits(solved, system):
+    """Friction, no slip on ground or deck, joint/torque/speed limits, all measured on the arrays."""
+    rep = check_trajectory(system, solved.t, solved.state, solved.control, solved.contact,
+                           solved.foot_pos, solved.board_pos)
+    assert rep.failures(system) == [], rep.as_dict()
+    assert rep.max_defect < 5e-3
+
+
+def test_push_foot_really_pushes(solved, system):
+    """The board gains speed only while the push foot is on the ground and pushes backward on it."""
+    p = LEGS.index(system.push_leg)
+    on_ground = solved.contact[:-1, p] == GROUND
+    fx = solved.control[:, 3 * p]
+    assert on_ground.sum() == 18
+    assert fx[on_ground].mean() > 0.5  # the ground pushes the foot forward
+    assert np.all(solved.control[~on_ground, 3 * p: 3 * p + 3] == 0.0)
+
+
+def test_warm_start_cuts_iterations(small_cfg, solved):
+    """A solve warm-started from the 0.3 m/s solution needs at most 2/3 of a cold solve's iterations."""
+    cold = solve(PushoffSpec(small_cfg, 0.35, 1))
+    warm = solve(PushoffSpec(small_cfg, 0.35, 1, warm=solved.warm))
+    assert cold.success and warm.success
+    assert warm.iterations <= (2 * cold.iterations) // 3, (warm.iterations, cold.iterations)
+    assert abs(warm.final_velocity_mps - cold.final_velocity_mps) < 0.01
