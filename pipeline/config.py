@@ -115,7 +115,8 @@ class WeightsConfig:
 @dataclass(frozen=True)
 class OptimizationConfig:
     dt_s: float = _f(0.005, 0.1, "Shooting interval [s].")
-    rk4_substeps: int = _f(1, 20, "RK4 steps per shooting interval [-].")
+    integrator: str = _f(doc="Integrator per shooting interval: 'etdrk4' (exact for the deck roll) or 'rk4'.")
+    substeps: int = _f(1, 20, "Integrator steps per shooting interval [-].")
     max_iter: int = _f(1, 10000, "IPOPT iteration limit [-].")
     tol: float = _f(1e-12, 1e-2, "IPOPT tolerance [-].")
     final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
@@ -293,6 +294,8 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
         raise ConfigError(p, "robot.foot_frames", "needs 4 frame names (FL FR RL RR)")
     if cfg.meta.kind != "quadruped":
         raise ConfigError(p, "meta.kind", "must be 'quadruped' here")
+    if cfg.optimization.integrator not in ("etdrk4", "rk4"):
+        raise ConfigError(p, "optimization.integrator", f"{cfg.optimization.integrator!r}: use 'etdrk4' or 'rk4'")
     if cfg.optimization.mu_strategy not in ("monotone", "adaptive"):
         raise ConfigError(p, "optimization.mu_strategy", "use 'monotone' or 'adaptive'")
     if not cfg.urdf_path.is_file():

@@ -38,7 +38,8 @@ from skatelib.pipeline.pushoff_terms import (
     TrackingCost,
 )
 from skatelib.pipeline.scheduler import KnotSchedule, knot_schedule
-from skatelib.pipeline.shooting import MultipleShooting, Transcribed, rk4_integrator, transcribe
+from skatelib.pipeline.integrators import integrator
+from skatelib.pipeline.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.system import SkateSystem
 
 
@@ -118,7 +119,7 @@ class PushoffProblem:
         xa, ua = ca.SX.sym("x", NXA), ca.SX.sym("u", NU)
         cr = ca.DM(system.stance.cr)
         f_aug = ca.Function("f_aug", [xa, ua], [ca.vertcat(f(xa[:NX], ua, cr), xa[24:26])])
-        step = rk4_integrator(f_aug, NXA, NU, opt.dt_s, opt.rk4_substeps)
+        step = integrator(opt.integrator, f_aug, NXA, NU, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
         p = system.push_index
         board_legs = tuple(i for i in range(4) if i != p)
         self.x0 = self._initial_state()

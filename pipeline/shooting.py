@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from skatelib.pipeline.dynamics import rk4
 from skatelib.pipeline.ocp import ConstraintTerm, CostTerm, Stage
 from skatelib.pipeline.stagewise import (
     StagewiseNLP,
@@ -65,9 +64,3 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     return Transcribed(nlp=nlp, lbg=lbg, ubg=ubg, row_slices=slices, nx=nx, nu=nu, n_params=n_params)
-
-
-def rk4_integrator(f: ca.Function, nx: int, nu: int, dt: float, substeps: int) -> ca.Function:
-    """``x_next = F(x, u)``: RK4 with ``substeps`` equal steps over ``dt``, control held."""
-    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
-    return ca.Function("rk4", [x, u], [rk4(lambda xx: f(xx, u), x, dt, substeps)])

@@ -54,6 +54,15 @@ class SkateSystem:
     def push_index(self) -> int:
         return LEGS.index(self.push_leg)
 
+    def stiff_linear_part(self, nx: int) -> np.ndarray:
+        """``L`` with the deck's roll spring-damper (Eq. 6-7) on rows 26-27, zero elsewhere."""
+        L = np.zeros((nx, nx))
+        b = self.board
+        L[26, 27] = 1.0
+        L[27, 26] = -b.roll_stiffness_Nm_per_rad / b.roll_inertia_kgm2
+        L[27, 27] = -b.roll_damping_Nms_per_rad / b.roll_inertia_kgm2
+        return L
+
     @staticmethod
     def from_config(cfg: QuadrupedConfig) -> SkateSystem:
         """Load the URDF, solve the nominal stance, compute the SRB and the board model."""

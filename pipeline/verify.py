@@ -45,7 +45,7 @@ class PhysicsReport:
     def as_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in asdict(self).items()}
 
-    def failures(self, system: SkateSystem, defect_tol: float = 5e-3, force_tol: float = 1e-4,
+    def failures(self, system: SkateSystem, defect_tol: float = 1e-3, force_tol: float = 1e-4,
                  slip_tol: float = 1e-5, angle_tol: float = 1e-6) -> list[str]:
         """Human-readable list of the checks that fail; empty when the trajectory is valid."""
         out = []

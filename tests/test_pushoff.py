@@ -35,7 +35,7 @@ def test_solve_converges_to_target_speed(solved):
 
 def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
     """Re-integrating each shooting interval with a 20-step RK4 of the numpy reference model
-    (pinocchio kinematics) lands within 5e-3 of the next knot (largest: the stiff deck roll rate)."""
+    (pinocchio kinematics) lands within 1e-3 of the next knot."""
     from skatelib.pipeline.dynamics import modes_for
 
     mode = modes_for(system.push_leg)["accelerating"]
@@ -50,7 +50,7 @@ def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
             k4 = ref.xdot(system, mode, x + h * k3, u, system.stance.cr)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         worst = max(worst, float(np.abs(x - solved.state[k + 1]).max()))
-    assert worst < 5e-3, worst
+    assert worst < 1e-3, worst
 
 
 def test_solved_trajectory_respects_contact_and_limits(solved, system):
@@ -58,7 +58,7 @@ def test_solved_trajectory_respects_contact_and_limits(solved, system):
     rep = check_trajectory(system, solved.t, solved.state, solved.control, solved.contact,
                            solved.foot_pos, solved.board_pos)
     assert rep.failures(system) == [], rep.as_dict()
-    assert rep.max_defect < 5e-3
+    assert rep.max_defect < 1e-3
 
 
 def test_push_foot_really_pushes(solved, system):

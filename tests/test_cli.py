@@ -1,0 +1,33 @@
+"""Command line: the model summary and error handling, run as a user would."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from skatelib.pipeline.config import CONFIG_DIR
+
+SKATELIB = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+
+
+def test_model_prints_srb_beside_vendor_figures():
+    """`skatelib model` prints the URDF-derived SRB mass next to the vendor's 8.3644 kg."""
+    out = subprocess.run([*SKATELIB, "model"], capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "200"}).stdout
+    assert "8.5184" in out and "8.3644" in out and "mass [kg]" in out
+
+
+@pytest.mark.parametrize("bad", ["missing.toml", "bad_key.toml"])
+def test_bad_config_exits_nonzero_with_file_and_key(tmp_path: Path, bad: str):
+    """A missing file or an unknown key exits with code 2 and a message naming the file."""
+    path = tmp_path / bad
+    if bad == "bad_key.toml":
+        path.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[board]\nmass_kilo = 1\n')
+    r = subprocess.run([*SKATELIB, "model", str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
+    assert r.returncode == 2
+    assert bad in r.stdout
+    if bad == "bad_key.toml":
+        assert "board.mass_kilo" in r.stdout
