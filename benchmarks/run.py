@@ -17,8 +17,8 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from skatelib.pipeline import pushoff  # noqa: E402
-from skatelib.pipeline.config import load_config  # noqa: E402
+from skatelib.pipeline import pushoff
+from skatelib.pipeline.config import load_config
 
 
 def _build_and_solve(cfg, v: float, strides: int, warm=None) -> tuple[float, pushoff.SolveResult]:
@@ -54,7 +54,7 @@ def bench_pushoff(repeats: int = 3) -> None:
         wi.append(r.iterations)
     rows["compiled, warm from 0.45 m/s (solve only)"] = (statistics.median(wt), statistics.median(wi))
     base = rows["baseline (VM)"][0]
-    print("push-off TO, 0.5 m/s, 2 strides, dt 0.03 s (median of %d)" % repeats)
+    print(f"push-off TO, 0.5 m/s, 2 strides, dt 0.03 s (median of {repeats})")
     print(f"{'variant':45s} {'build+solve [s]':>16s} {'IPOPT iter':>10s} {'speed-up':>9s}")
     for name, (t, it) in rows.items():
         print(f"{name:45s} {t:16.2f} {it:10.0f} {base / t:8.1f}x")

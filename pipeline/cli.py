@@ -10,7 +10,6 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
-
 from skatelib.library.errors import SkatelibError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,

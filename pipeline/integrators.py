@@ -16,7 +16,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 import scipy.linalg
-
 from skatelib.pipeline.dynamics import rk4
 
 
@@ -40,22 +39,22 @@ def _const(M: np.ndarray) -> ca.DM:
 
 def etdrk4_step(f: Callable[[Any], Any], L: np.ndarray, x: Any, h: float) -> Any:
     """One ETDRK4 step of ``dx/dt = f(x)`` over ``h``, treating ``L x`` exactly."""
-    E, P1, P2, P3 = phi_functions(h * L)
-    E2, Q1, _, _ = phi_functions(h / 2 * L)
+    e_full, P1, P2, P3 = phi_functions(h * L)
+    e_half, q_half, _, _ = phi_functions(h / 2 * L)
     Lc = _const(L)
 
-    def N(v: Any) -> Any:
+    def nonlinear(v: Any) -> Any:
         return f(v) - Lc @ v
 
-    E, E2, Q1 = _const(E), _const(E2), _const(Q1)
+    E, E2, Q1 = _const(e_full), _const(e_half), _const(q_half)
     B1, B2, B4 = _const(P1 - 3 * P2 + 4 * P3), _const(2 * P2 - 4 * P3), _const(4 * P3 - P2)
-    Nx = N(x)
+    Nx = nonlinear(x)
     a = E2 @ x + h / 2 * (Q1 @ Nx)
-    Na = N(a)
+    Na = nonlinear(a)
     b = E2 @ x + h / 2 * (Q1 @ Na)
-    Nb = N(b)
+    Nb = nonlinear(b)
     c = E2 @ a + h / 2 * (Q1 @ (2 * Nb - Nx))
-    Nc = N(c)
+    Nc = nonlinear(c)
     return E @ x + h * (B1 @ Nx + B2 @ (Na + Nb) + B4 @ Nc)
 
 

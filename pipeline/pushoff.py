@@ -18,6 +18,7 @@ import numpy as np
 from skatelib.library.channels import GROUND, NU, NX, S_POS, S_Q, SWING
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.integrators import integrator
 from skatelib.pipeline.ocp import ConstraintTerm, CostTerm
 from skatelib.pipeline.pushoff_terms import (
     N_PARAMS,
@@ -38,7 +39,6 @@ from skatelib.pipeline.pushoff_terms import (
     TrackingCost,
 )
 from skatelib.pipeline.scheduler import KnotSchedule, knot_schedule
-from skatelib.pipeline.integrators import integrator
 from skatelib.pipeline.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.system import SkateSystem
 

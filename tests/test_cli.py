@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from skatelib.pipeline.config import CONFIG_DIR
 
 SKATELIB = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
@@ -16,7 +15,8 @@ SKATELIB = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main(
 
 def test_model_prints_srb_beside_vendor_figures():
     """`skatelib model` prints the URDF-derived SRB mass next to the vendor's 8.3644 kg."""
-    out = subprocess.run([*SKATELIB, "model"], capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "200"}).stdout
+    env = {**os.environ, "COLUMNS": "200"}
+    out = subprocess.run([*SKATELIB, "model"], capture_output=True, text=True, check=True, env=env).stdout
     assert "8.5184" in out and "8.3644" in out and "mass [kg]" in out
 
 
@@ -26,7 +26,8 @@ def test_bad_config_exits_nonzero_with_file_and_key(tmp_path: Path, bad: str):
     path = tmp_path / bad
     if bad == "bad_key.toml":
         path.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[board]\nmass_kilo = 1\n')
-    r = subprocess.run([*SKATELIB, "model", str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
+    env = {**os.environ, "COLUMNS": "300"}
+    r = subprocess.run([*SKATELIB, "model", str(path)], capture_output=True, text=True, env=env)
     assert r.returncode == 2
     assert bad in r.stdout
     if bad == "bad_key.toml":

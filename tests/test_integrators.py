@@ -7,7 +7,6 @@ import casadi as ca
 import numpy as np
 import pytest
 import scipy.linalg
-
 from skatelib.pipeline.dynamics import dynamics_function, modes_for, rk4_step
 from skatelib.pipeline.integrators import integrator, phi_functions
 
