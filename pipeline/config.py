@@ -120,7 +120,8 @@ class OptimizationConfig:
     max_iter: int = _f(1, 10000, "IPOPT iteration limit [-].")
     tol: float = _f(1e-12, 1e-2, "IPOPT tolerance [-].")
     final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
-    mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="adaptive")
+    mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="monotone")
+    mu_init: float = _f(1e-9, 1e3, "IPOPT initial barrier parameter [-].", default=0.01)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
     weights: WeightsConfig = _f(doc="Cost weights of Eq. (16).", default_factory=lambda: WeightsConfig(
         **{f.name: 0.0 for f in dataclasses.fields(WeightsConfig)}))

@@ -133,7 +133,7 @@ class PushoffProblem:
             DynamicsDefect(step), FeetOnBoard(system, board_legs),
             PushFoot(system, self.schedule, config.stance),
             FrictionPyramids(system, self.schedule, self.mode.board_legs),
-            TorqueLimits(system), Steering(system), self.final_speed,
+            TorqueLimits(system, self.schedule), Steering(system), self.final_speed,
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), NXA, NU, N_PARAMS, costs,
                                           self.constraints, compile_c=opt.compile)
@@ -189,11 +189,9 @@ class PushoffProblem:
         lbx[0, :NXA] = ubx[0, :NXA] = self.x0
         lbx[N, NXA:] = ubx[N, NXA:] = 0.0  # u_N is a placeholder
         lbg, ubg = self.tr.lbg.copy(), self.tr.ubg.copy()
-        sl = self.tr.row_slices["final_speed"]
-        m = len(lbg) // N
-        last = (N - 1) * m
+        i = self.tr.row(N - 1, "final_speed")
         tol = self.config.optimization.final_velocity_tol
-        lbg[last + sl.start], ubg[last + sl.start] = v_target * (1 - tol), v_target * (1 + tol)
+        lbg[i], ubg[i] = v_target * (1 - tol), v_target * (1 + tol)
         return lbx.reshape(-1), ubx.reshape(-1), lbg, ubg
 
     def initial_guess(self, v_target: float, kind: str) -> np.ndarray:
@@ -261,7 +259,8 @@ def solve(spec: PushoffSpec) -> SolveResult:
     build_time = 0.0 if built_before else time.perf_counter() - t_build
     v = spec.target_velocity_mps
     opt = spec.config.optimization
-    options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy}
+    options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
+                               "mu_init": opt.mu_init}
     if spec.warm is not None:
         options.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
                         "warm_start_mult_bound_push": 1e-6})

@@ -184,7 +184,8 @@ class PushFoot:
 @dataclass(frozen=True)
 class FrictionPyramids:
     """Unilateral forces inside linearized friction cones (deck frame on the board, world on the
-    ground): mu f_n -+ f_t >= 0 and f_n >= 0; free rows where the foot swings."""
+    ground): mu f_n -+ f_t >= 0 per tangent axis, which also implies f_n >= 0; free rows where the
+    foot swings (its force is fixed to zero)."""
 
     system: SkateSystem
     schedule: KnotSchedule
@@ -198,22 +199,24 @@ class FrictionPyramids:
         for i in range(4):
             f = s.u[3 * i: 3 * i + 3]
             fl = R_B.T @ f if self.board_legs[i] else f
-            out += [mu * fl[2] - fl[0], mu * fl[2] + fl[0], mu * fl[2] - fl[1], mu * fl[2] + fl[1], fl[2]]
+            out += [mu * fl[2] - fl[0], mu * fl[2] + fl[0], mu * fl[2] - fl[1], mu * fl[2] + fl[1]]
         return ca.vertcat(*out)
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = np.zeros((n, 20)), np.full((n, 20), INF)
+        lo, hi = np.zeros((n, 16)), np.full((n, 16), INF)
         for i in range(4):
             swing = self.schedule.contact[:n, i] == SWING
-            lo[swing, 5 * i: 5 * i + 5] = -INF
+            lo[swing, 4 * i: 4 * i + 4] = -INF
         return lo, hi
 
 
 @dataclass(frozen=True)
 class TorqueLimits:
-    """Joint torques through the foot Jacobians within +-limit."""
+    """Joint torques through the foot Jacobians within +-limit (free for a swinging leg, whose
+    force and so whose torques are zero)."""
 
     system: SkateSystem
+    schedule: KnotSchedule
     name: str = "torque"
 
     def rows(self, s: Stage) -> Any:
@@ -221,7 +224,11 @@ class TorqueLimits:
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         t = self.system.torque_limit_Nm
-        return fixed(n, 12, -t, t)
+        lo, hi = fixed(n, 12, -t, t)
+        for i in range(4):
+            swing = self.schedule.contact[:n, i] == SWING
+            lo[swing, 3 * i: 3 * i + 3], hi[swing, 3 * i: 3 * i + 3] = -INF, INF
+        return lo, hi
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from skatelib.pipeline.ocp import ConstraintTerm, CostTerm, Stage
 from skatelib.pipeline.stagewise import (
     StagewiseNLP,
     build_stagewise_nlp,
-    compile_stage_functions,
+    compiled_stage_functions,
     stage_functions,
 )
 
@@ -39,6 +39,19 @@ class Transcribed:
     nx: int
     nu: int
     n_params: int
+    rows_per_stage: int
+
+    def row(self, stage: int, term: str, offset: int = 0) -> int:
+        """Index into g (and lbg/ubg) of one row of a term at a stage.
+
+        Raises:
+            KeyError: When that row was left out as free.
+        """
+        full = stage * self.rows_per_stage + self.row_slices[term].start + offset
+        pos = int(np.searchsorted(self.nlp.kept_rows, full))
+        if pos >= len(self.nlp.kept_rows) or self.nlp.kept_rows[pos] != full:
+            raise KeyError(f"row {term}[{offset}] of stage {stage} is free and not in the NLP")
+        return pos
 
 
 def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs: Sequence[CostTerm],
@@ -56,11 +69,14 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
         slices[term.name] = slice(at, at + r.shape[0])
         at += r.shape[0]
     cons = ca.vertcat(*rows)
-    symbolic = stage_functions(z, p, cost, cons)
-    fns = compile_stage_functions(symbolic) if compile_c else symbolic
+    fns = compiled_stage_functions(z, p, cost, cons) if compile_c else stage_functions(z, p, cost, cons)
     N = method.n_intervals
-    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=symbolic.value)
     lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
-    return Transcribed(nlp=nlp, lbg=lbg, ubg=ubg, row_slices=slices, nx=nx, nu=nu, n_params=n_params)
+    keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
+    oracle = ca.Function("stage_value", [z, p], [cost, cons])
+    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=oracle, keep=keep)
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices, nx=nx, nu=nu,
+                       n_params=n_params, rows_per_stage=cons.shape[0])
+

@@ -56,57 +56,72 @@ def stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> StageFuncti
     )
 
 
-def compile_stage_functions(fns: StageFunctions, flags: str = "-O1") -> StageFunctions:
-    """C-compile the four stage functions into one shared library, cached by content hash.
+# Bump when stage_functions changes how derivatives are formed: it is part of the cache key.
+_DERIVATIVES_VERSION = "1"
+_NAMES = ("stage_value", "stage_grad", "stage_jac", "stage_hess")
 
-    Returns the loaded external functions; falls back to the given ones when no C compiler exists.
+
+def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: str = "-O1") -> StageFunctions:
+    """The four stage functions compiled to C in one shared library, cached by content hash.
+
+    The key is the serialized stage value function (derivatives follow from it), so a cache hit
+    costs neither differentiation nor code generation. Without a C compiler, returns the
+    symbolic functions.
     """
     cc = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
     if cc is None:
-        return fns
-    gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
-    for f in (fns.value, fns.grad, fns.jac, fns.hess):
-        gen.add(f)
-    src = gen.dump()
-    key = hashlib.sha256((src + flags + ca.CasadiMeta.version()).encode()).hexdigest()[:20]
-    lib = cache_dir() / f"stage_{key}.so"
+        return stage_functions(z, p, cost, cons)
+    value = ca.Function("stage_value", [z, p], [cost, cons])
+    key_src = value.serialize() + flags + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
+    lib = cache_dir() / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
     if not lib.exists():
+        fns = stage_functions(z, p, cost, cons)
+        gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
+        for f in (fns.value, fns.grad, fns.jac, fns.hess):
+            gen.add(f)
         lib.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=lib.parent) as tmp:
             c_file = Path(tmp) / "stage.c"
-            c_file.write_text(src)
+            c_file.write_text(gen.dump())
             so_tmp = Path(tmp) / "stage.so"
             subprocess.run([cc, flags, "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)], check=True,
                            capture_output=True)
             os.replace(so_tmp, lib)  # atomic: parallel workers never load a half-written library
-    return StageFunctions(*(ca.external(name, str(lib)) for name in
-                            ("stage_value", "stage_grad", "stage_jac", "stage_hess")))
+    return StageFunctions(*(ca.external(name, str(lib)) for name in _NAMES))
 
 
-def _scatter(block_sp: ca.Sparsity, n_stages: int, row_step: int, col_step: int, row_offset_fn: Any,
-             shape: tuple[int, int], triu: bool = False) -> tuple[ca.Sparsity, np.ndarray, bool]:
-    """Global sparsity and, for each stage-block nonzero, its global nonzero index.
+def _scatter(block_sp: ca.Sparsity, n_stages: int, row_step: int, col_step: int, shape: tuple[int, int],
+             row_map: np.ndarray | None = None) -> tuple[ca.Sparsity, np.ndarray, np.ndarray]:
+    """Global sparsity of stacked stage blocks and where each block nonzero goes.
 
-    Returns (sparsity, index, has_duplicates).
+    ``row_map`` maps full rows to kept rows (-1: dropped). Returns (sparsity, kept, index):
+    ``kept`` marks block nonzeros that survive, ``index`` their global nonzero positions.
     """
     rows, cols = (np.asarray(a, dtype=np.int64) for a in block_sp.get_triplet())
     k = np.repeat(np.arange(n_stages), len(rows))
-    R = np.tile(rows, n_stages) + k * row_step + row_offset_fn
+    R = np.tile(rows, n_stages) + k * row_step
     C = np.tile(cols, n_stages) + k * col_step
-    keys = C * shape[0] + R  # column-major order, as CasADi stores nonzeros
-    uniq, inverse = np.unique(keys, return_inverse=True)
+    kept = np.ones(len(R), dtype=bool)
+    if row_map is not None:
+        R = row_map[R]
+        kept = R >= 0
+    keys = C[kept] * shape[0] + R[kept]  # column-major order, as CasADi stores nonzeros
+    uniq, index = np.unique(keys, return_inverse=True)
     sp = ca.Sparsity.triplet(shape[0], shape[1], (uniq % shape[0]).tolist(), (uniq // shape[0]).tolist())
-    return sp, inverse, len(uniq) < len(keys)
+    return sp, kept, index
 
 
-def _gather_sum(nz: ca.MX, index: np.ndarray, n_out: int, duplicates: bool) -> ca.MX:
-    """Global nonzeros from stacked stage nonzeros: a permutation, or a sum when windows overlap."""
-    if not duplicates:
+def _assemble(sp: ca.Sparsity, nz: ca.MX, kept: np.ndarray, index: np.ndarray) -> ca.MX:
+    """A global sparse matrix from stacked stage nonzeros: dropped entries removed, overlapping
+    entries (shared knots of neighbouring windows) summed."""
+    if not kept.all():
+        nz = nz[np.flatnonzero(kept).tolist()]
+    if len(np.unique(index)) == len(index):
         perm = np.empty(len(index), dtype=np.int64)
         perm[index] = np.arange(len(index))
-        return nz[perm.tolist()]
-    A = ca.DM(ca.Sparsity.triplet(n_out, len(index), index.tolist(), list(range(len(index)))), 1.0)
-    return ca.mtimes(A, nz)
+        return ca.MX(sp, nz[perm.tolist()])
+    A = ca.DM(ca.Sparsity.triplet(sp.nnz(), len(index), index.tolist(), list(range(len(index)))), 1.0)
+    return ca.MX(sp, ca.mtimes(A, nz))
 
 
 @dataclass(frozen=True)
@@ -114,61 +129,73 @@ class StagewiseNLP:
     """The NLP functions IPOPT needs, built from mapped stage functions.
 
     Attributes:
-        nlp: ``{"x": w, "p": P, "f": f, "g": g}`` as MX.
+        nlp: ``{"x": w, "p": P, "f": f, "g": g}`` as MX (g holds the kept rows only).
         options: nlpsol options carrying the assembled ``grad_f``, ``jac_g`` and ``hess_lag``.
+        kept_rows: Indices of the stage rows (stage-major) that are in g.
     """
 
     nlp: dict[str, ca.MX]
     options: dict[str, Any]
     n_w: int
     n_g: int
+    kept_rows: np.ndarray
 
 
 def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_g_stage: int,
-                        oracle_value: ca.Function | None = None) -> StagewiseNLP:
+                        oracle_value: ca.Function | None = None, keep: np.ndarray | None = None) -> StagewiseNLP:
     """Assemble the NLP over ``w = [v_0, ..., v_N]`` (each v of size n) and stage windows
     ``z_k = [v_k, v_{k+1}]``; the parameter is the (n_p x N) matrix of per-stage parameters.
 
-    ``oracle_value`` is a differentiable (SX) version of ``fns.value`` for the NLP's f and g:
-    the solver interface differentiates those once at set-up (for the final multipliers), which
-    compiled external functions cannot be.
+    Args:
+        oracle_value: A differentiable (SX) version of ``fns.value`` for the NLP's f and g: the
+            solver interface differentiates those once at set-up, which compiled functions cannot be.
+        keep: Boolean mask over all stage rows (stage-major); rows left out (free rows with
+            infinite bounds on both sides) never reach the solver.
     """
     n_w = n * (n_stages + 1)
+    n_full = n_g_stage * n_stages
+    keep = np.ones(n_full, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
+    kept_rows = np.flatnonzero(keep)
+    n_g = len(kept_rows)
+    row_map = np.full(n_full, -1, dtype=np.int64)
+    row_map[kept_rows] = np.arange(n_g)
+
     w = ca.MX.sym("w", n_w)
     p = ca.MX.sym("p", n_p * n_stages)
     P = ca.reshape(p, n_p, n_stages)
     window = (np.arange(2 * n)[:, None] + n * np.arange(n_stages)[None, :]).flatten(order="F")
     Z = ca.reshape(w[window.tolist()], 2 * n, n_stages)
     mode = "serial"
-    value = (oracle_value or fns.value).map(n_stages, mode)
-    L, G = value(Z, P)
+    L, G = (oracle_value or fns.value).map(n_stages, mode)(Z, P)
     f = ca.sum2(L)
-    g = ca.vec(G)
-    n_g = n_g_stage * n_stages
+    g = ca.vec(G)[kept_rows.tolist()]
 
     # Gradient: windows overlap, so contributions to shared knots add up.
     GR = fns.grad.map(n_stages, mode)(Z, P)
-    g_sp, g_idx, _ = _scatter(ca.Sparsity.dense(2 * n, 1), n_stages, n, 0, 0, (n_w, 1))
-    grad = ca.MX(g_sp, _gather_sum(ca.vec(GR), g_idx, g_sp.nnz(), True))
+    g_sp, g_kept, g_idx = _scatter(ca.Sparsity.dense(2 * n, 1), n_stages, n, 0, (n_w, 1))
+    grad = _assemble(g_sp, ca.vec(GR), g_kept, g_idx)
 
-    # Constraint Jacobian: stage k's rows touch only its window; no overlap among rows.
+    # Constraint Jacobian: stage k's rows touch only its window; dropped rows are left out.
     J_blocks = fns.jac.map(n_stages, mode)(Z, P)
-    j_sp, j_idx, j_dup = _scatter(fns.jac.sparsity_out(0), n_stages, n_g_stage, n, 0, (n_g, n_w))
-    J = ca.MX(j_sp, _gather_sum(_nonzeros(J_blocks), j_idx, j_sp.nnz(), j_dup))
+    j_sp, j_kept, j_idx = _scatter(fns.jac.sparsity_out(0), n_stages, n_g_stage, n, (n_g, n_w), row_map)
+    J = _assemble(j_sp, _nonzeros(J_blocks), j_kept, j_idx)
 
-    # Hessian of the Lagrangian (upper triangle): overlapping windows add up.
+    # Hessian of the Lagrangian (upper triangle): dropped rows get zero multipliers.
     sigma = ca.MX.sym("lam_f")
     lam = ca.MX.sym("lam_g", n_g)
-    H_blocks = fns.hess.map(n_stages, mode)(Z, P, sigma, ca.reshape(lam, n_g_stage, n_stages))
-    h_sp, h_idx, h_dup = _scatter(fns.hess.sparsity_out(0), n_stages, n, n, 0, (n_w, n_w))
-    H = ca.MX(h_sp, _gather_sum(_nonzeros(H_blocks), h_idx, h_sp.nnz(), h_dup))
+    S = ca.DM(ca.Sparsity.triplet(n_full, n_g, kept_rows.tolist(), list(range(n_g))), 1.0)
+    lam_full = ca.reshape(ca.mtimes(S, lam), n_g_stage, n_stages)
+    H_blocks = fns.hess.map(n_stages, mode)(Z, P, sigma, lam_full)
+    h_sp, h_kept, h_idx = _scatter(fns.hess.sparsity_out(0), n_stages, n, n, (n_w, n_w))
+    H = _assemble(h_sp, _nonzeros(H_blocks), h_kept, h_idx)
 
     grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
     jac_g = ca.Function("nlp_jac_g", [w, p], [g, J], ["x", "p"], ["g", "jac_g_x"])
     hess_lag = ca.Function("nlp_hess_l", [w, p, sigma, lam], [H],
                            ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
     return StagewiseNLP(nlp={"x": w, "p": p, "f": f, "g": g},
-                        options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}, n_w=n_w, n_g=n_g)
+                        options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag},
+                        n_w=n_w, n_g=n_g, kept_rows=kept_rows)
 
 
 def _nonzeros(M: ca.MX) -> ca.MX:

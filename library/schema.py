@@ -1,0 +1,74 @@
+"""Motion-library file format, version 1: every HDF5 path and attribute name in one place.
+
+See ``docs/library-format.md`` for the full description. The format version (major.minor) is
+separate from the package version: a reader refuses a newer or older major version and warns on
+a different minor version.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+FORMAT_NAME: Final = "skatelib.motion-library"
+FORMAT_VERSION: Final = (1, 0)
+FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
+
+# Root attributes.
+A_FORMAT: Final = "format"
+A_FORMAT_VERSION: Final = "format_version"
+A_KIND: Final = "kind"  # "quadruped" or "humanoid"
+A_NAME: Final = "name"
+A_SKATELIB_VERSION: Final = "skatelib_version"
+A_CREATED: Final = "created_utc"
+A_GIT_COMMIT: Final = "git_commit"
+A_GIT_DIRTY: Final = "git_dirty"
+A_CONFIG_TOML: Final = "config_toml"
+A_CONFIG_RESOLVED: Final = "config_resolved_json"
+A_CASADI: Final = "casadi_version"
+A_IPOPT: Final = "ipopt_version"
+A_PINOCCHIO: Final = "pinocchio_version"
+A_CHECKSUM: Final = "content_sha256"
+A_SOLVER_OPTIONS: Final = "solver_options_json"
+ROOT_REQUIRED: Final = (A_FORMAT, A_FORMAT_VERSION, A_KIND, A_SKATELIB_VERSION, A_CREATED, A_GIT_COMMIT,
+                        A_GIT_DIRTY, A_CONFIG_TOML, A_CASADI, A_IPOPT, A_PINOCCHIO, A_CHECKSUM)
+
+# Model group.
+G_MODEL: Final = "model"
+D_ROBOT_INERTIA: Final = "robot_inertia_kgm2"
+D_ROBOT_URDF: Final = "robot_urdf"
+QUADRUPED_MODEL_ATTRS: Final = (
+    "robot_mass_kg", "friction_mu", "gravity_mps2", "board_mass_kg", "board_roll_stiffness_Nm_per_rad",
+    "board_roll_damping_Nms_per_rad", "board_roll_inertia_kgm2", "board_rolling_friction_N", "board_K_board_m",
+)
+D_JOINT_LOWER: Final = "joint_lower_rad"
+D_JOINT_UPPER: Final = "joint_upper_rad"
+
+# Entries.
+G_ENTRIES: Final = "entries"
+D_T: Final = "t"
+D_STATE: Final = "state"
+D_CONTROL: Final = "control"
+D_CONTACT: Final = "contact"
+D_FOOT_POS: Final = "foot_pos"
+D_BOARD_POS: Final = "board_pos"
+A_COLUMNS: Final = "columns"
+A_UNITS: Final = "units"
+ENTRY_ATTRS: Final = ("target_velocity_mps", "n_strides", "success", "status", "iterations", "solve_time_s",
+                      "objective", "max_constraint_violation")
+ENTRY_DATASETS: Final = {
+    "quadruped": (D_T, D_STATE, D_CONTROL, D_CONTACT, D_FOOT_POS, D_BOARD_POS),
+    "humanoid": (D_T, D_STATE, D_CONTROL),
+}
+
+
+def model_path(name: str) -> str:
+    return f"/{G_MODEL}/{name}"
+
+
+def entry_path(key: str, name: str | None = None) -> str:
+    return f"/{G_ENTRIES}/{key}" + (f"/{name}" if name else "")
+
+
+def entry_key(target_velocity_mps: float, n_strides: int) -> str:
+    """Canonical entry name, e.g. ``v0.50_s2``."""
+    return f"v{target_velocity_mps:.2f}_s{n_strides}"
