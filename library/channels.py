@@ -34,10 +34,18 @@ GROUND: Final = 2
 CONTACT_NAMES: Final = {SWING: "swing", BOARD: "board", GROUND: "ground"}
 
 BASE_CHANNELS: Final = (
-    "base_x", "base_y", "base_z",
-    "base_roll", "base_pitch", "base_yaw",
-    "base_vx", "base_vy", "base_vz",
-    "base_wx", "base_wy", "base_wz",
+    "base_x",
+    "base_y",
+    "base_z",
+    "base_roll",
+    "base_pitch",
+    "base_yaw",
+    "base_vx",
+    "base_vy",
+    "base_vz",
+    "base_wx",
+    "base_wy",
+    "base_wz",
 )
 JOINT_CHANNELS: Final = tuple(f"q_{leg}_{joint}" for leg in LEGS for joint in JOINTS)
 BOARD_CHANNELS: Final = ("board_vx", "board_vy", "board_roll", "board_roll_rate")
@@ -47,8 +55,7 @@ CONTROL_NAMES: Final = tuple(f"f_{leg}_{ax}" for leg in LEGS for ax in "xyz") + 
 )
 
 STATE_UNITS: Final = (
-    ("m",) * 3 + ("rad",) * 3 + ("m/s",) * 3 + ("rad/s",) * 3 + ("rad",) * 12
-    + ("m/s", "m/s", "rad", "rad/s")
+    ("m",) * 3 + ("rad",) * 3 + ("m/s",) * 3 + ("rad/s",) * 3 + ("rad",) * 12 + ("m/s", "m/s", "rad", "rad/s")
 )
 CONTROL_UNITS: Final = ("N",) * 12 + ("rad/s",) * 12
 

@@ -61,16 +61,24 @@ def check_version(path: Path, version: str) -> None:
         raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", f"{version!r} is not 'major.minor'") from None
     ours = schema.FORMAT_VERSION
     if major > ours[0]:
-        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}",
-                                 f"format {version} is newer than this skatelib reads ({schema.FORMAT_VERSION_STR}); "
-                                 "update skatelib (pip install -U skatelib) to read it")
+        raise LibraryFormatError(
+            path,
+            f"/@{schema.A_FORMAT_VERSION}",
+            f"format {version} is newer than this skatelib reads ({schema.FORMAT_VERSION_STR}); "
+            "update skatelib (pip install -U skatelib) to read it",
+        )
     if major < ours[0]:
-        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}",
-                                 f"format {version} is older than {schema.FORMAT_VERSION_STR}; rebuild the library with "
-                                 "'skatelib build' from the config stored in its config_toml attribute")
+        raise LibraryFormatError(
+            path,
+            f"/@{schema.A_FORMAT_VERSION}",
+            f"format {version} is older than {schema.FORMAT_VERSION_STR}; rebuild the library with "
+            "'skatelib build' from the config stored in its config_toml attribute",
+        )
     if minor != ours[1]:
-        warnings.warn(f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; "
-                      "reading what it knows", stacklevel=3)
+        warnings.warn(
+            f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; reading what it knows",
+            stacklevel=3,
+        )
 
 
 def read_library(path: Path | str, verify_checksum: bool = True) -> LibraryData:
@@ -87,16 +95,18 @@ def read_library(path: Path | str, verify_checksum: bool = True) -> LibraryData:
         with h5py.File(path, "r") as f:
             fmt = f.attrs.get(schema.A_FORMAT)
             if fmt is None or _str(fmt) != schema.FORMAT_NAME:
-                raise LibraryFormatError(path, f"/@{schema.A_FORMAT}",
-                                         f"not a skatelib motion library (format={fmt!r})")
+                raise LibraryFormatError(
+                    path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})"
+                )
             version = f.attrs.get(schema.A_FORMAT_VERSION)
             if version is None:
                 raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
             check_version(path, _str(version))
             arrays, attrs = read_all(f)
     except OSError as e:
-        raise LibraryFormatError(path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); "
-                                 "rebuild it with 'skatelib build'") from e
+        raise LibraryFormatError(
+            path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); rebuild it with 'skatelib build'"
+        ) from e
     root = attrs[""]
     for key in schema.ROOT_REQUIRED:
         if key not in root:
@@ -104,18 +114,24 @@ def read_library(path: Path | str, verify_checksum: bool = True) -> LibraryData:
     if verify_checksum:
         stored = _str(root[schema.A_CHECKSUM])
         if digest(arrays, attrs) != stored:
-            raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}",
-                                     "content does not match its checksum: the file is corrupt; rebuild it")
+            raise LibraryFormatError(
+                path, f"/@{schema.A_CHECKSUM}", "content does not match its checksum: the file is corrupt; rebuild it"
+            )
     kind = _str(root[schema.A_KIND])
     if kind not in schema.ENTRY_DATASETS:
-        raise LibraryFormatError(path, f"/@{schema.A_KIND}", f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}")
+        raise LibraryFormatError(
+            path, f"/@{schema.A_KIND}", f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}"
+        )
     for arr in arrays.values():
         if isinstance(arr, np.ndarray):
             arr.setflags(write=False)
     return LibraryData(
-        path=path, attrs={k: (_str(v) if isinstance(v, bytes) else v) for k, v in root.items()},
-        model_attrs=_model_attrs(path, kind, attrs), model_arrays=_model_arrays(arrays),
-        model_text=_model_text(arrays), entries=_entries(path, kind, arrays, attrs),
+        path=path,
+        attrs={k: (_str(v) if isinstance(v, bytes) else v) for k, v in root.items()},
+        model_attrs=_model_attrs(path, kind, attrs),
+        model_arrays=_model_arrays(arrays),
+        model_text=_model_text(arrays),
+        entries=_entries(path, kind, arrays, attrs),
     )
 
 
@@ -132,19 +148,23 @@ def _model_attrs(path: Path, kind: str, attrs: dict[str, dict[str, Any]]) -> dic
 
 def _model_arrays(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     prefix = schema.G_MODEL + "/"
-    return {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix) and v.dtype != np.uint8}
+    return {k[len(prefix) :]: v for k, v in arrays.items() if k.startswith(prefix) and v.dtype != np.uint8}
 
 
 def _model_text(arrays: dict[str, np.ndarray]) -> dict[str, str]:
     prefix = schema.G_MODEL + "/"
-    return {k[len(prefix):]: v.tobytes().decode() for k, v in arrays.items()
-            if k.startswith(prefix) and v.dtype == np.uint8}
+    return {
+        k[len(prefix) :]: v.tobytes().decode()
+        for k, v in arrays.items()
+        if k.startswith(prefix) and v.dtype == np.uint8
+    }
 
 
-def _entries(path: Path, kind: str, arrays: dict[str, np.ndarray],
-             attrs: dict[str, dict[str, Any]]) -> dict[str, EntryRecord]:
+def _entries(
+    path: Path, kind: str, arrays: dict[str, np.ndarray], attrs: dict[str, dict[str, Any]]
+) -> dict[str, EntryRecord]:
     prefix = schema.G_ENTRIES + "/"
-    keys = sorted({name[len(prefix):].split("/")[0] for name in attrs if name.startswith(prefix)})
+    keys = sorted({name[len(prefix) :].split("/")[0] for name in attrs if name.startswith(prefix)})
     out = {}
     for key in keys:
         base = f"{schema.G_ENTRIES}/{key}"
@@ -160,7 +180,7 @@ def _entries(path: Path, kind: str, arrays: dict[str, np.ndarray],
             data[d] = arrays[name]
         for name, arr in arrays.items():
             if name.startswith(base + "/"):
-                d = name[len(base) + 1:]
+                d = name[len(base) + 1 :]
                 data[d] = arr
                 if schema.A_COLUMNS in attrs[name]:
                     cols[d] = _names(attrs[name][schema.A_COLUMNS])
@@ -169,9 +189,17 @@ def _entries(path: Path, kind: str, arrays: dict[str, np.ndarray],
             if d not in cols:
                 raise LibraryFormatError(path, f"/{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
             if len(cols[d]) != data[d].shape[-1]:
-                raise LibraryFormatError(path, f"/{base}/{d}@{schema.A_COLUMNS}",
-                                         f"{len(cols[d])} names for {data[d].shape[-1]} columns")
-        out[key] = EntryRecord(key=key, attrs={k: (v.item() if isinstance(v, np.generic) else _str(v)
-                                                   if isinstance(v, bytes) else v) for k, v in eattrs.items()},
-                               arrays=data, columns=cols, units=units)
+                raise LibraryFormatError(
+                    path, f"/{base}/{d}@{schema.A_COLUMNS}", f"{len(cols[d])} names for {data[d].shape[-1]} columns"
+                )
+        out[key] = EntryRecord(
+            key=key,
+            attrs={
+                k: (v.item() if isinstance(v, np.generic) else _str(v) if isinstance(v, bytes) else v)
+                for k, v in eattrs.items()
+            },
+            arrays=data,
+            columns=cols,
+            units=units,
+        )
     return out

@@ -29,16 +29,35 @@ A_IPOPT: Final = "ipopt_version"
 A_PINOCCHIO: Final = "pinocchio_version"
 A_CHECKSUM: Final = "content_sha256"
 A_SOLVER_OPTIONS: Final = "solver_options_json"
-ROOT_REQUIRED: Final = (A_FORMAT, A_FORMAT_VERSION, A_KIND, A_SKATELIB_VERSION, A_CREATED, A_GIT_COMMIT,
-                        A_GIT_DIRTY, A_CONFIG_TOML, A_CASADI, A_IPOPT, A_PINOCCHIO, A_CHECKSUM)
+ROOT_REQUIRED: Final = (
+    A_FORMAT,
+    A_FORMAT_VERSION,
+    A_KIND,
+    A_SKATELIB_VERSION,
+    A_CREATED,
+    A_GIT_COMMIT,
+    A_GIT_DIRTY,
+    A_CONFIG_TOML,
+    A_CASADI,
+    A_IPOPT,
+    A_PINOCCHIO,
+    A_CHECKSUM,
+)
 
 # Model group.
 G_MODEL: Final = "model"
 D_ROBOT_INERTIA: Final = "robot_inertia_kgm2"
 D_ROBOT_URDF: Final = "robot_urdf"
 QUADRUPED_MODEL_ATTRS: Final = (
-    "robot_mass_kg", "friction_mu", "gravity_mps2", "board_mass_kg", "board_roll_stiffness_Nm_per_rad",
-    "board_roll_damping_Nms_per_rad", "board_roll_inertia_kgm2", "board_rolling_friction_N", "board_K_board_m",
+    "robot_mass_kg",
+    "friction_mu",
+    "gravity_mps2",
+    "board_mass_kg",
+    "board_roll_stiffness_Nm_per_rad",
+    "board_roll_damping_Nms_per_rad",
+    "board_roll_inertia_kgm2",
+    "board_rolling_friction_N",
+    "board_K_board_m",
 )
 D_JOINT_LOWER: Final = "joint_lower_rad"
 D_JOINT_UPPER: Final = "joint_upper_rad"
@@ -53,8 +72,16 @@ D_FOOT_POS: Final = "foot_pos"
 D_BOARD_POS: Final = "board_pos"
 A_COLUMNS: Final = "columns"
 A_UNITS: Final = "units"
-ENTRY_ATTRS: Final = ("target_velocity_mps", "n_strides", "success", "status", "iterations", "solve_time_s",
-                      "objective", "max_constraint_violation")
+ENTRY_ATTRS: Final = (
+    "target_velocity_mps",
+    "n_strides",
+    "success",
+    "status",
+    "iterations",
+    "solve_time_s",
+    "objective",
+    "max_constraint_violation",
+)
 ENTRY_DATASETS: Final = {
     "quadruped": (D_T, D_STATE, D_CONTROL, D_CONTACT, D_FOOT_POS, D_BOARD_POS),
     "humanoid": (D_T, D_STATE, D_CONTROL),

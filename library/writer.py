@@ -49,8 +49,9 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
-def _dataset(group: h5py.Group, name: str, data: np.ndarray, columns: Sequence[str] | None,
-             units: Sequence[str] | None) -> None:
+def _dataset(
+    group: h5py.Group, name: str, data: np.ndarray, columns: Sequence[str] | None, units: Sequence[str] | None
+) -> None:
     arr = np.asarray(data)
     # fletcher32 needs chunked storage; one chunk per dataset keeps reads to one call.
     d = group.create_dataset(name, data=arr, fletcher32=True, chunks=arr.shape if arr.ndim else None)
@@ -60,9 +61,14 @@ def _dataset(group: h5py.Group, name: str, data: np.ndarray, columns: Sequence[s
         d.attrs[schema.A_UNITS] = np.array(list(units), dtype=h5py.string_dtype())
 
 
-def write_library(path: Path | str, root_attrs: Mapping[str, Any], model_attrs: Mapping[str, Any],
-                  model_arrays: Mapping[str, np.ndarray], model_text: Mapping[str, str],
-                  entries: Sequence[EntryData]) -> Path:
+def write_library(
+    path: Path | str,
+    root_attrs: Mapping[str, Any],
+    model_attrs: Mapping[str, Any],
+    model_arrays: Mapping[str, np.ndarray],
+    model_text: Mapping[str, str],
+    entries: Sequence[EntryData],
+) -> Path:
     """Write a complete library file; a reader never sees a half-written one.
 
     Returns:
