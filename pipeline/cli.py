@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -62,6 +63,132 @@ def model(config: ConfigArg = None) -> None:
     console.print(bt)
     q = np.round(s.stance.q_board, 3)
     console.print(escape(f"nominal stance q [rad] (FL FR RL RR x abad hip knee): {q.tolist()}"))
+
+
+OutOpt = Annotated[Path | None, typer.Option("-o", "--out", help="Library file to write (.h5).")]
+
+
+@app.command()
+def build(
+    config: ConfigArg = None,
+    out: OutOpt = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
+    backend: Annotated[str, typer.Option(help="'loky' (this machine) or 'dask' (a cluster).")] = "loky",
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, tcp://HOST:PORT.")] = None,
+    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
+    allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
+    cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
+) -> None:
+    """Build a motion library: sweep target speeds x stride counts through the push-off TO."""
+    from skatelib.pipeline.build import build_library, default_output
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.sweep import chains_for
+
+    cfg = load_config(config)
+    if backend == "dask" and scheduler is None:
+        raise typer.BadParameter("--backend dask needs --scheduler tcp://HOST:PORT")
+    total = sum(len(c.velocities) for c in chains_for(cfg))
+    target = out or default_output(cfg)
+    console.print(f"building {total} entries of {escape(str(cfg.path))} -> {escape(str(target))}")
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console, disable=not progress) as bar:
+        task = bar.add_task("solving", total=total)
+
+        def on_entry(key: str, outcome: Any) -> None:
+            r = outcome.result
+            bar.update(task, advance=1, description=f"{key}: {r.status}")
+
+        report = build_library(cfg, target, jobs=jobs, backend=backend, scheduler=scheduler, use_cache=cache,
+                               on_entry=on_entry)
+    _summary(report.outcomes)
+    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
+    if report.failed and not allow_failures:
+        console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept in the file with success=false); "
+                      "rerun with --allow-failures to accept")
+        raise typer.Exit(1)
+
+
+def _summary(outcomes: list[Any]) -> None:
+    t = Table(title="entries")
+    for col in ("entry", "status", "iter", "tries", "time [s]", "v end [m/s]", "v err", "defect"):
+        t.add_column(escape(col), justify="left" if col in ("entry", "status") else "right")
+    from skatelib.library.schema import entry_key
+
+    for o in outcomes:
+        r = o.result
+        status = r.status.replace("Solve_Succeeded", "ok")
+        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), status, str(r.iterations), str(o.attempts),
+                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
+                  f"{100 * r.final_velocity_error:.2f}%", _defect(o.physics))
+    console.print(t)
+
+
+def _defect(physics: dict[str, float]) -> str:
+    return f"{physics['max_defect']:.1e}" if physics else "-"
+
+
+@app.command()
+def solve(
+    velocity: Annotated[float, typer.Option(min=0.01, max=5.0, help="Target board speed [m/s].")],
+    strides: Annotated[int, typer.Option(min=1, max=20, help="Number of push strides.")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="One-entry library to write (.h5).")],
+    config: Annotated[Path | None, typer.Option(help="Build config (TOML); default when omitted.")] = None,
+) -> None:
+    """Solve one push-off and write it as a one-entry motion library."""
+    from skatelib.pipeline.build import build_library
+    from skatelib.pipeline.config import load_config
+
+    cfg = load_config(config)
+    cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
+    report = build_library(cfg, out, jobs=1, use_cache=False)
+    _summary(report.outcomes)
+    console.print(f"wrote {escape(str(report.path))}")
+    if report.failed:
+        raise typer.Exit(1)
+
+
+LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
+
+
+@app.command()
+def info(library: LibArg) -> None:
+    """Summarize a motion library: provenance, model and entries."""
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(library)
+    a = lib.attrs
+    console.print(escape(f"{library}: {a.get('name', '?')} ({lib.kind}), format {a['format_version']}, "
+                         f"skatelib {a['skatelib_version']}, created {a['created_utc']}"))
+    console.print(escape(f"git {a['git_commit'][:12]}{' (dirty)' if a['git_dirty'] else ''}; casadi "
+                         f"{a['casadi_version']}, ipopt {a['ipopt_version']}, pinocchio {a['pinocchio_version']}"))
+    m = Table(title="model")
+    m.add_column("parameter")
+    m.add_column("value", justify="right")
+    for k, v in sorted(lib.model.items()):
+        if not str(k).endswith("_source"):
+            m.add_row(escape(str(k)), escape(f"{v:.6g}" if isinstance(v, float) else str(v)))
+    console.print(m)
+    t = Table(title=f"{len(lib)} entries")
+    for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]"):
+        t.add_column(escape(col))
+    for e in lib:
+        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success), str(e.attrs["status"]),
+                  str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}")
+    console.print(t)
+
+
+@app.command()
+def validate(library: LibArg) -> None:
+    """Re-check a library's integrity (checksum, fields) and every entry's physics."""
+    from skatelib.pipeline.validate import validate_library
+
+    problems = validate_library(library, lambda key, msg: console.print(escape(f"{key}: {msg}")))
+    if problems:
+        console.print(f"[bold red]{problems} entries failed validation[/]")
+        raise typer.Exit(1)
+    console.print("[green]all entries valid[/]")
 
 
 def main() -> None:

@@ -285,6 +285,17 @@ def load_config(path: Path | str | None = None) -> QuadrupedConfig:
     return cfg
 
 
+def config_from_json(text: str, origin: Path, urdf: Path) -> QuadrupedConfig:
+    """Rebuild a config from ``QuadrupedConfig.resolved_json()`` (as stored in a library), with
+    the robot description at ``urdf``. Errors name ``origin``."""
+    data = json.loads(text)
+    data["robot"]["urdf"] = str(urdf)
+    sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _SECTIONS.items()}
+    cfg = QuadrupedConfig(path=Path(origin), text="", **sections)
+    _check_cross_fields(cfg)
+    return cfg
+
+
 def _check_cross_fields(cfg: QuadrupedConfig) -> None:
     p = cfg.path
     if cfg.schedule.push_leg not in LEGS:

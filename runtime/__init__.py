@@ -1,1 +1,10 @@
-"""Runtime loader for motion libraries: numpy and h5py only, for the robot's onboard computer."""
+"""Runtime loader for motion libraries: numpy and h5py only, for the robot's onboard computer.
+
+>>> from skatelib.runtime import MotionLibrary
+>>> lib = MotionLibrary.open("out/cyberdog2-default.h5")   # doctest: +SKIP
+>>> ref = lib.select(0.5, strides=2).sample(0.6)            # doctest: +SKIP
+"""
+
+from skatelib.runtime.motion_library import BlendCheck, Entry, EntryNotFound, MotionLibrary, Sample
+
+__all__ = ["BlendCheck", "Entry", "EntryNotFound", "MotionLibrary", "Sample"]

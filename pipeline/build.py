@@ -1,0 +1,46 @@
+"""``skatelib build``: config -> parallel sweep -> verified, atomically written motion library."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
+from skatelib.pipeline.system import SkateSystem
+from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
+
+
+@dataclass(frozen=True)
+class BuildReport:
+    """What a build produced: the file, its entries' outcomes and the wall time."""
+
+    path: Path
+    outcomes: list[EntryOutcome]
+    wall_time_s: float
+
+    @property
+    def failed(self) -> list[EntryOutcome]:
+        return [o for o in self.outcomes if not o.result.success]
+
+
+def default_output(config: QuadrupedConfig) -> Path:
+    return Path("out") / f"{config.meta.name}.h5"
+
+
+def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
+                  scheduler: Any = None, use_cache: bool = True,
+                  on_entry: Callable[[str, EntryOutcome], None] | None = None) -> BuildReport:
+    """Solve every entry of ``config.sweep`` and write the library (failed entries included,
+    marked ``success = false`` with their IPOPT status)."""
+    t0 = time.perf_counter()
+    out = out or default_output(config)
+    outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry))
+    system = SkateSystem.from_config(config)
+    entries = [entry_from_result(o.result, o.attempts, o.physics) for o in outcomes]
+    options = outcomes[0].result.ipopt_options if outcomes else {}
+    path = write_quadruped_library(out, config, system, entries, options)
+    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0)

@@ -1,0 +1,121 @@
+"""Turn push-off solve results into a motion-library file with full provenance."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import re
+import subprocess
+from collections.abc import Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from skatelib.library import schema
+from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
+from skatelib.library.writer import EntryData, write_library
+from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.pushoff import SolveResult
+from skatelib.pipeline.system import SkateSystem
+
+BOARD_POS_COLUMNS = ("board_x", "board_y", "board_z", "board_yaw")
+BOARD_POS_UNITS = ("m", "m", "m", "rad")
+
+
+def ipopt_version() -> str:
+    """Version of the IPOPT library bundled with CasADi (from its file name)."""
+    folder = Path(ca.__file__).parent
+    versions = sorted(m.group(1) for p in folder.glob("libipopt*.so.*")
+                      if (m := re.search(r"libipopt\.so\.(\d+\.\d+\.\d+)$", p.name)))
+    return versions[-1] if versions else "unknown"
+
+
+def git_provenance() -> tuple[str, bool]:
+    """(commit, dirty) of the skatelib source checkout, or ("unknown", False) outside git."""
+    src = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                check=True, timeout=10).stdout.strip()
+        dirty = bool(subprocess.run(["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no"],
+                                    capture_output=True, text=True, check=True, timeout=10).stdout.strip())
+        return commit, dirty
+    except (OSError, subprocess.SubprocessError):
+        return "unknown", False
+
+
+def root_attributes(kind: str, name: str, config_text: str, config_json: str,
+                    solver_options: dict[str, Any]) -> dict[str, Any]:
+    commit, dirty = git_provenance()
+    return {
+        schema.A_KIND: kind, schema.A_NAME: name,
+        schema.A_SKATELIB_VERSION: metadata.version("skatelib"),
+        schema.A_CREATED: dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        schema.A_GIT_COMMIT: commit, schema.A_GIT_DIRTY: dirty,
+        schema.A_CONFIG_TOML: config_text, schema.A_CONFIG_RESOLVED: config_json,
+        schema.A_CASADI: ca.CasadiMeta.version(), schema.A_IPOPT: ipopt_version(),
+        schema.A_PINOCCHIO: pin.__version__,
+        schema.A_SOLVER_OPTIONS: json.dumps(solver_options, sort_keys=True, default=str),
+    }
+
+
+def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Every physical parameter the build used: /model attributes and arrays."""
+    b, s = system.board, system
+    attrs = {
+        "robot_mass_kg": s.srb.mass_kg, "friction_mu": s.friction_mu, "gravity_mps2": s.gravity_mps2,
+        "foot_radius_m": s.foot_radius_m, "torque_limit_Nm": s.torque_limit_Nm,
+        "joint_velocity_limit_radps": s.joint_velocity_limit_radps, "push_leg": s.push_leg,
+        "board_mass_kg": b.mass_kg, "board_roll_stiffness_Nm_per_rad": b.roll_stiffness_Nm_per_rad,
+        "board_roll_damping_Nms_per_rad": b.roll_damping_Nms_per_rad, "board_roll_inertia_kgm2": b.roll_inertia_kgm2,
+        "board_rolling_friction_N": b.rolling_friction_N, "board_K_board_m": b.K_board_m,
+        "board_tanh_scale_s_per_m": b.tanh_scale_s_per_m, "board_rake_front_rad": b.rake_front_rad,
+        "board_rake_rear_rad": b.rake_rear_rad, "board_l_front_m": b.l_front_m, "board_l_rear_m": b.l_rear_m,
+        "board_deck_height_m": b.deck_height_m, "board_deck_length_m": b.deck_length_m,
+        "board_deck_width_m": b.deck_width_m, "board_truck_width_m": b.truck_width_m,
+        "board_roll_limit_rad": b.roll_limit_rad, "schedule_period_s": config.schedule.period_s,
+        "schedule_push_duty": config.schedule.push_duty, "dt_s": config.optimization.dt_s,
+        "integrator": config.optimization.integrator, "robot_source": config.robot.source,
+        "board_source": config.board.source,
+    }
+    arrays = {
+        schema.D_ROBOT_INERTIA: s.srb.inertia_kgm2, "robot_com_offset_m": s.srb.com_offset_m,
+        schema.D_JOINT_LOWER: s.robot.lower_limits, schema.D_JOINT_UPPER: s.robot.upper_limits,
+        "stance_q_board_rad": s.stance.q_board, "stance_q_push_rad": s.stance.q_push,
+        "stance_deck_points_m": s.stance.cr,
+    }
+    return attrs, arrays
+
+
+def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None) -> EntryData:
+    attrs = {
+        "target_velocity_mps": r.target_velocity_mps, "n_strides": r.n_strides, "success": r.success,
+        "status": r.status, "iterations": r.iterations, "solve_time_s": r.solve_time_s,
+        "build_time_s": r.build_time_s, "objective": r.objective,
+        "max_constraint_violation": r.max_constraint_violation, "final_velocity_mps": r.final_velocity_mps,
+        "final_velocity_error": r.final_velocity_error, "attempts": attempts,
+        "ipopt_options_json": json.dumps(r.ipopt_options, sort_keys=True, default=str),
+        "physics_json": json.dumps(physics or {}, sort_keys=True),
+    }
+    arrays = {schema.D_T: r.t, schema.D_STATE: r.state, schema.D_CONTROL: r.control,
+              schema.D_CONTACT: r.contact.astype(np.int8), schema.D_FOOT_POS: r.foot_pos,
+              schema.D_BOARD_POS: r.board_pos}
+    columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
+               schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: BOARD_POS_COLUMNS}
+    units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS,
+             schema.D_CONTACT: ("0 swing, 1 board, 2 ground",) * 4, schema.D_FOOT_POS: ("m",) * 4,
+             schema.D_BOARD_POS: BOARD_POS_UNITS}
+    return EntryData(key=schema.entry_key(r.target_velocity_mps, r.n_strides), attrs=attrs, arrays=arrays,
+                     columns=columns, units=units)
+
+
+def write_quadruped_library(path: Path | str, config: QuadrupedConfig, system: SkateSystem,
+                            entries: Sequence[EntryData], solver_options: dict[str, Any]) -> Path:
+    """Write a quadruped motion library atomically."""
+    model_attrs, model_arrays = quadruped_model(config, system)
+    root = root_attributes("quadruped", config.meta.name, config.text, config.resolved_json(), solver_options)
+    return write_library(path, root, model_attrs, model_arrays, {schema.D_ROBOT_URDF: system.robot.urdf_text},
+                         entries)

@@ -1,0 +1,231 @@
+"""Parallel sweeps of push-off solves into a motion library.
+
+Entries of one stride count form a warm-start chain along velocity; chains run in separate
+processes (joblib/loky by default, or an existing dask cluster), one IPOPT per process with BLAS
+and OpenMP threads at 1. Every finished entry is cached on disk under a hash of its full spec, so
+an interrupted build resumes without redoing it; the library file itself is written only at the
+end, atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+import threading
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from skatelib.library import schema
+from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, problem_for, solve
+from skatelib.pipeline.stagewise import cache_dir
+from skatelib.pipeline.verify import check_trajectory
+
+THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@dataclass(frozen=True)
+class EntryOutcome:
+    """A finished sweep entry: the result (without warm-start data), attempts and cache origin."""
+
+    result: SolveResult
+    attempts: int
+    cached: bool
+    physics: dict[str, float]
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Entries of one stride count, solved in order of increasing velocity."""
+
+    config: QuadrupedConfig
+    n_strides: int
+    velocities: tuple[float, ...]
+
+
+def chains_for(config: QuadrupedConfig) -> list[Chain]:
+    """One chain per stride count, longest-running (most strides) first for load balance."""
+    v = tuple(sorted(config.sweep.velocities_mps))
+    return [Chain(config, s, v) for s in sorted(config.sweep.strides, reverse=True)]
+
+
+def entry_hash(config: QuadrupedConfig, v: float, strides: int) -> str:
+    """Cache key of an entry: config as used, target, strides and the format version."""
+    src = json.dumps([config.resolved_json(), round(v, 9), strides, schema.FORMAT_VERSION_STR])
+    return hashlib.sha256(src.encode()).hexdigest()[:24]
+
+
+def _cache_file(config: QuadrupedConfig, v: float, strides: int) -> Path:
+    return cache_dir() / "entries" / f"{entry_hash(config, v, strides)}.pkl"
+
+
+def _load_cached(path: Path) -> tuple[SolveResult, int, dict[str, float]] | None:
+    try:
+        with path.open("rb") as f:
+            obj = pickle.load(f)
+        return obj["result"], obj["attempts"], obj["physics"]
+    except (OSError, pickle.UnpicklingError, EOFError, KeyError, AttributeError):
+        return None  # unreadable or from another version: solve again
+
+
+def _store(path: Path, result: SolveResult, attempts: int, physics: dict[str, float]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    with tmp.open("wb") as f:
+        pickle.dump({"result": result, "attempts": attempts, "physics": physics}, f)
+    os.replace(tmp, path)
+
+
+def physics_of(config: QuadrupedConfig, r: SolveResult) -> dict[str, float]:
+    """The independent physics checks of a result (empty for a failed solve)."""
+    if not r.success:
+        return {}
+    system = problem_for(config, r.n_strides).system
+    return check_trajectory(system, r.t, r.state, r.control, r.contact, r.foot_pos, r.board_pos).as_dict()
+
+
+def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
+    """The specs tried in order when a solve fails: as given, cold ramp, cold hold, then a longer
+    adaptive-barrier run."""
+    cold = replace(spec, warm=None)
+    ladder = [spec] if spec.warm is None else [spec, cold]
+    ladder.append(replace(cold, guess="hold"))
+    ladder.append(replace(cold, ipopt=(*spec.ipopt, ("mu_strategy", "adaptive"),
+                                       ("max_iter", 2 * spec.config.optimization.max_iter))))
+    return ladder
+
+
+def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
+    """Solve, walking the retry ladder until one converges; the last failure is returned as is."""
+    result = None
+    ladder = retry_ladder(spec)
+    for attempt, s in enumerate(ladder, 1):
+        result = solve(s)
+        if result.success:
+            return result, attempt
+    assert result is not None  # noqa: S101 - the ladder is never empty
+    return result, len(ladder)
+
+
+def run_chain(chain: Chain, use_cache: bool = True, events: Any = None) -> list[EntryOutcome]:
+    """Solve one warm-start chain (a module-level function, so worker processes can import it).
+
+    ``events`` is an optional queue that receives one ``(key, outcome)`` per finished entry.
+    """
+    for var in THREAD_VARS:
+        os.environ[var] = "1"
+    out: list[EntryOutcome] = []
+    warm = None
+    for v in chain.velocities:
+        path = _cache_file(chain.config, v, chain.n_strides)
+        hit = _load_cached(path) if use_cache else None
+        if hit is not None:
+            result, attempts, physics = hit
+            cached = True
+        else:
+            use_warm = warm if chain.config.sweep.warm_start else None
+            result, attempts = solve_with_retries(PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm))
+            physics = physics_of(chain.config, result)
+            cached = False
+            if use_cache:
+                _store(path, result, attempts, physics)
+        warm = result.warm if result.success else warm
+        outcome = EntryOutcome(replace(result, warm=None), attempts, cached, physics)
+        out.append(outcome)
+        if events is not None:
+            events.put((schema.entry_key(v, chain.n_strides), outcome))
+    return out
+
+
+def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", scheduler: str | None = None,
+              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome], None] | None = None
+              ) -> list[EntryOutcome]:
+    """Solve every (velocity, strides) of ``config.sweep`` and return the outcomes.
+
+    Args:
+        jobs: Worker processes (loky backend).
+        backend: ``"loky"`` (this machine) or ``"dask"`` (an existing cluster at ``scheduler``).
+        scheduler: Dask scheduler address (``tcp://host:port``), or a ``distributed.Client``.
+        on_entry: Called in the main process as each entry finishes.
+    """
+    for var in THREAD_VARS:
+        os.environ.setdefault(var, "1")
+    chains = chains_for(config)
+    if backend == "dask":
+        return _run_dask(chains, scheduler, use_cache, on_entry)
+    if backend != "loky":
+        raise ValueError(f"unknown backend {backend!r}; use 'loky' or 'dask'")
+    if jobs <= 1:
+        outcomes = []
+        for c in chains:
+            for o in run_chain(c, use_cache):
+                outcomes.append(o)
+                if on_entry:
+                    on_entry(schema.entry_key(o.result.target_velocity_mps, o.result.n_strides), o)
+        return outcomes
+    return _run_loky(chains, jobs, use_cache, on_entry)
+
+
+def _drain(events: Any, on_entry: Callable[[str, EntryOutcome], None] | None, stop: threading.Event) -> None:
+    import queue
+
+    while not stop.is_set() or not events.empty():
+        try:
+            key, outcome = events.get(timeout=0.1)
+        except (queue.Empty, EOFError, OSError):
+            continue
+        if on_entry:
+            on_entry(key, outcome)
+
+
+def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
+              on_entry: Callable[[str, EntryOutcome], None] | None) -> list[EntryOutcome]:
+    import multiprocessing
+
+    from joblib import Parallel, delayed
+
+    with multiprocessing.Manager() as manager:
+        events = manager.Queue()
+        stop = threading.Event()
+        drain = threading.Thread(target=_drain, args=(events, on_entry, stop), daemon=True)
+        drain.start()
+        try:
+            results = Parallel(n_jobs=min(jobs, len(chains)), backend="loky", return_as="generator_unordered")(
+                delayed(run_chain)(c, use_cache, events) for c in chains)
+            outcomes = [o for chain_out in results for o in chain_out]
+        finally:
+            stop.set()
+            drain.join(timeout=5)
+    return outcomes
+
+
+def _run_dask(chains: list[Chain], scheduler: Any, use_cache: bool,
+              on_entry: Callable[[str, EntryOutcome], None] | None) -> list[EntryOutcome]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as e:
+        raise ImportError("the dask backend needs dask.distributed: pip install 'skatelib[dask]'") from e
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler) if own else scheduler
+    try:
+        futures = [client.submit(run_chain, c, use_cache, None, pure=False) for c in chains]
+        outcomes: list[EntryOutcome] = []
+        for fut in as_completed(futures):
+            chain_out = fut.result()
+            for o in chain_out:
+                if on_entry:
+                    on_entry(schema.entry_key(o.result.target_velocity_mps, o.result.n_strides), o)
+            outcomes.extend(chain_out)
+        return outcomes
+    finally:
+        if own:
+            client.close()
+
+
+def ordered(outcomes: Iterable[EntryOutcome]) -> list[EntryOutcome]:
+    """Outcomes sorted by strides, then velocity (the library's entry order)."""
+    return sorted(outcomes, key=lambda o: (o.result.n_strides, o.result.target_velocity_mps))

@@ -1,0 +1,257 @@
+"""Serve a motion library to a controller: numpy and h5py only, for the robot's computer.
+
+Times outside an entry clamp to its ends: before the start the first state and control, after
+the end the last state and the last control. States are interpolated linearly between knots;
+controls are held (control k acts on [t_k, t_{k+1}), as the optimization used them). Every
+array handed out is read-only.
+"""
+
+from __future__ import annotations
+
+import bisect
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from skatelib.library import schema
+from skatelib.library.channels import BOARD, GROUND
+from skatelib.library.errors import SkatelibError
+from skatelib.library.reader import EntryRecord, LibraryData, read_library
+
+
+class Sample(NamedTuple):
+    """The reference at one time: state (28,), control (24,), contact codes (4,)."""
+
+    state: np.ndarray
+    control: np.ndarray
+    contact: np.ndarray
+
+
+@dataclass(frozen=True)
+class BlendCheck:
+    """Margins of a blended entry: smallest friction margin [N] and joint-limit slack [rad]."""
+
+    min_friction_margin_N: float
+    min_joint_limit_slack_rad: float
+
+    @property
+    def ok(self) -> bool:
+        return self.min_friction_margin_N >= -1e-6 and self.min_joint_limit_slack_rad >= -1e-9
+
+
+class EntryNotFound(SkatelibError):
+    """No entry matches a key or a request."""
+
+
+class Entry:
+    """One trajectory of a library (read-only arrays)."""
+
+    def __init__(self, key: str, attrs: dict[str, Any], arrays: dict[str, np.ndarray],
+                 columns: dict[str, tuple[str, ...]], check: BlendCheck | None = None):
+        self.key = key
+        self.attrs = attrs
+        self.columns = columns
+        self.check = check
+        self.t = _ro(arrays[schema.D_T])
+        self.state = _ro(arrays[schema.D_STATE])
+        self.control = _ro(arrays[schema.D_CONTROL])
+        self.contact = _ro(arrays[schema.D_CONTACT]) if schema.D_CONTACT in arrays else None
+        self.foot_pos = _ro(arrays[schema.D_FOOT_POS]) if schema.D_FOOT_POS in arrays else None
+        self.board_pos = _ro(arrays[schema.D_BOARD_POS]) if schema.D_BOARD_POS in arrays else None
+        t = self.t
+        dt = np.diff(t)
+        self._t0, self._tend, self._n = float(t[0]), float(t[-1]), len(t)
+        self._uniform = bool(len(dt) and np.allclose(dt, dt[0], rtol=1e-9, atol=1e-12))
+        self._inv_dt = 1.0 / float(dt[0]) if len(dt) else 0.0
+        self._tlist = t.tolist()
+        # Slopes between knots, so an interpolated sample is one multiply-add.
+        self._dstate = _ro(np.vstack([np.diff(self.state, axis=0), np.zeros((1, self.state.shape[1]))]))
+        self._no_contact = _ro(np.zeros(4, dtype=np.int8))
+
+    @property
+    def target_velocity_mps(self) -> float:
+        return float(self.attrs["target_velocity_mps"])
+
+    @property
+    def n_strides(self) -> int:
+        return int(self.attrs["n_strides"])
+
+    @property
+    def success(self) -> bool:
+        return bool(self.attrs["success"])
+
+    @property
+    def duration_s(self) -> float:
+        return self._tend - self._t0
+
+    def channel(self, name: str) -> np.ndarray:
+        """One named state or control channel over the knots (read-only)."""
+        for d, arr in ((schema.D_STATE, self.state), (schema.D_CONTROL, self.control)):
+            if name in self.columns[d]:
+                return arr[:, self.columns[d].index(name)]
+        raise KeyError(f"no channel {name!r}; state: {', '.join(self.columns[schema.D_STATE])}; "
+                       f"control: {', '.join(self.columns[schema.D_CONTROL])}")
+
+    def _locate(self, t: float) -> tuple[int, float]:
+        """Knot index i and fraction a with t = t_i + a (t_{i+1} - t_i), clamped to the entry."""
+        if t <= self._t0:
+            return 0, 0.0
+        if t >= self._tend:
+            return self._n - 1, 0.0
+        if self._uniform:
+            u = (t - self._t0) * self._inv_dt
+            i = int(u)
+            if i >= self._n - 1:
+                return self._n - 1, 0.0
+            return i, u - i
+        i = bisect.bisect_right(self._tlist, t) - 1
+        return i, (t - self._tlist[i]) / (self._tlist[i + 1] - self._tlist[i])
+
+    def sample(self, t: float) -> Sample:
+        """State (linear), control (held) and contacts at time ``t`` [s], clamped to the entry."""
+        i, a = self._locate(t)
+        x = self.state[i] + a * self._dstate[i]
+        x.flags.writeable = False
+        j = i if i < self._n - 1 else self._n - 2
+        c = self.contact[i] if self.contact is not None else self._no_contact
+        return Sample(x, self.control[j], c)
+
+    def window(self, t0: float, n: int, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Reference arrays for an MPC horizon: states (n, 28) and controls (n, 24) at t0 + k dt."""
+        times = t0 + dt * np.arange(n)
+        if self._uniform:
+            u = np.clip((times - self._t0) * self._inv_dt, 0.0, self._n - 1)
+            i = np.minimum(u.astype(np.int64), self._n - 1)
+        else:
+            tc = np.clip(times, self._t0, self._tend)
+            i = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._n - 1)
+            nxt = np.minimum(i + 1, self._n - 1)
+            span = np.where(nxt > i, self.t[nxt] - self.t[i], 1.0)
+            u = i + (tc - self.t[i]) / span
+        a = (u - i)[:, None]
+        xs = self.state[i] + a * self._dstate[i]
+        us = self.control[np.minimum(i, self._n - 2)]
+        xs.flags.writeable = False
+        us.flags.writeable = False
+        return xs, us
+
+    def __repr__(self) -> str:
+        return (f"Entry({self.key!r}, v={self.target_velocity_mps} m/s, strides={self.n_strides}, "
+                f"success={self.success}, {self._n} knots over {self.duration_s:.2f} s)")
+
+
+class MotionLibrary:
+    """A motion library loaded into memory (``MotionLibrary.open(path)``)."""
+
+    def __init__(self, data: LibraryData):
+        self.path = data.path
+        self.attrs = data.attrs
+        self.model = data.model_attrs
+        self.model_arrays = data.model_arrays
+        self.urdf = data.model_text.get(schema.D_ROBOT_URDF, "")
+        self._entries = {k: _entry(r) for k, r in data.entries.items()}
+
+    @classmethod
+    def open(cls, path: Path | str) -> MotionLibrary:
+        """Load and verify a library file (see :func:`skatelib.library.reader.read_library`)."""
+        return cls(read_library(path))
+
+    @property
+    def kind(self) -> str:
+        return str(self.attrs[schema.A_KIND])
+
+    def keys(self) -> list[str]:
+        return list(self._entries)
+
+    def __getitem__(self, key: str) -> Entry:
+        try:
+            return self._entries[key]
+        except KeyError:
+            raise EntryNotFound(f"{self.path}: no entry {key!r}; entries: {', '.join(self._entries)}") from None
+
+    def __iter__(self) -> Iterator[Entry]:
+        return iter(self._entries.values())
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def _candidates(self, strides: int | None) -> list[Entry]:
+        c = [e for e in self if e.success and (strides is None or e.n_strides == strides)]
+        if not c:
+            have = sorted({e.n_strides for e in self if e.success})
+            raise EntryNotFound(f"{self.path}: no successful entry with strides={strides}; strides available: {have}")
+        return c
+
+    def select(self, velocity: float, strides: int | None = None) -> Entry:
+        """The successful entry whose target speed is nearest ``velocity`` (fewest strides on ties)."""
+        return min(self._candidates(strides), key=lambda e: (abs(e.target_velocity_mps - velocity), e.n_strides))
+
+    def blend(self, velocity: float, strides: int, strict: bool = True) -> Entry:
+        """Linear blend of the two successful entries around ``velocity`` with the same strides.
+
+        Both entries share the contact schedule (same period and duty), so phases align knot by
+        knot. The blend is checked against friction cones and joint limits (``Entry.check``).
+
+        Raises:
+            EntryNotFound: When ``velocity`` is outside the stored range for ``strides``.
+            SkatelibError: When ``strict`` and the blend violates friction or joint limits.
+        """
+        c = sorted(self._candidates(strides), key=lambda e: e.target_velocity_mps)
+        lo = [e for e in c if e.target_velocity_mps <= velocity]
+        hi = [e for e in c if e.target_velocity_mps >= velocity]
+        if not lo or not hi:
+            raise EntryNotFound(f"{velocity} m/s is outside the {strides}-stride range "
+                                f"[{c[0].target_velocity_mps}, {c[-1].target_velocity_mps}] m/s")
+        a, b = lo[-1], hi[0]
+        w = 0.0 if b is a else (velocity - a.target_velocity_mps) / (b.target_velocity_mps - a.target_velocity_mps)
+        if a.contact is not None and b.contact is not None and not np.array_equal(a.contact, b.contact):
+            raise SkatelibError(f"entries {a.key} and {b.key} have different contact schedules; cannot blend")
+        arrays = {schema.D_T: a.t}
+        for name in (schema.D_STATE, schema.D_CONTROL, schema.D_FOOT_POS, schema.D_BOARD_POS):
+            xa, xb = getattr(a, name), getattr(b, name)
+            if xa is not None and xb is not None:
+                arrays[name] = (1 - w) * xa + w * xb
+        if a.contact is not None:
+            arrays[schema.D_CONTACT] = a.contact
+        check = self._check(arrays)
+        attrs = {**a.attrs, "target_velocity_mps": velocity, "status": f"blend of {a.key} and {b.key} (w={w:.3f})"}
+        e = Entry(f"blend_v{velocity:.3f}_s{strides}", attrs, arrays, a.columns, check)
+        if strict and not check.ok:
+            raise SkatelibError(f"blend at {velocity} m/s violates limits: {check}")
+        return e
+
+    def _check(self, arrays: dict[str, np.ndarray]) -> BlendCheck:
+        mu = float(self.model["friction_mu"])
+        state, control = arrays[schema.D_STATE], arrays[schema.D_CONTROL]
+        contact = arrays.get(schema.D_CONTACT)
+        margin = np.inf
+        if contact is not None:
+            for k in range(len(control)):
+                yaw, roll = state[k, 5], state[k, 26]
+                cy, sy, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(roll), np.sin(roll)
+                R_B = np.array([[cy, -sy * cr, sy * sr], [sy, cy * cr, -cy * sr], [0.0, sr, cr]])
+                for i in range(4):
+                    if contact[k, i] in (BOARD, GROUND):
+                        f = control[k, 3 * i: 3 * i + 3]
+                        fl = R_B.T @ f if contact[k, i] == BOARD else f
+                        margin = min(margin, mu * fl[2] - abs(fl[0]), mu * fl[2] - abs(fl[1]))
+        q = state[:, 12:24]
+        lo = self.model_arrays.get(schema.D_JOINT_LOWER)
+        hi = self.model_arrays.get(schema.D_JOINT_UPPER)
+        slack = np.inf if lo is None or hi is None else float(min(np.min(q - lo), np.min(hi - q)))
+        return BlendCheck(min_friction_margin_N=float(margin), min_joint_limit_slack_rad=slack)
+
+
+def _ro(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    if a.flags.writeable:
+        a = a.copy() if a.base is not None else a
+        a.flags.writeable = False
+    return a
+
+
+def _entry(r: EntryRecord) -> Entry:
+    return Entry(r.key, r.attrs, r.arrays, r.columns)
