@@ -1,53 +1,48 @@
-"""Read a whole HDF5 file into memory and fingerprint it (SHA-256 of datasets and attributes).
+"""Whole-file checksum of a library: SHA-256 of every byte with the checksum field zeroed.
 
-Writer and reader use the same two functions, so a library's ``content_sha256`` root attribute
-catches any change of a byte of data or metadata (h5py alone reads a zeroed block back silently).
+The writer stores a fixed-length placeholder in the root attribute ``content_sha256``, hashes
+the finished file with those 64 bytes set to ASCII zeros, then writes the digest over the
+placeholder in place. Any changed byte anywhere (data, metadata or HDF5 bookkeeping) changes
+the digest; h5py alone reads a zeroed block back silently.
 """
 
 from __future__ import annotations
 
 import hashlib
-from typing import Any
+import secrets
+from pathlib import Path
 
-import h5py
-import numpy as np
-from skatelib.library import schema
-
-
-def read_all(f: h5py.File) -> tuple[dict[str, np.ndarray], dict[str, dict[str, Any]]]:
-    """Every dataset (by path) and every object's attributes (by path; root is ``""``)."""
-    arrays: dict[str, np.ndarray] = {}
-    attrs: dict[str, dict[str, Any]] = {"": dict(f.attrs)}
-
-    def visit(name: str, obj: Any) -> None:
-        attrs[name] = dict(obj.attrs)
-        if isinstance(obj, h5py.Dataset):
-            arrays[name] = obj[()]
-
-    f.visititems(visit)
-    return arrays, attrs
+DIGEST_LEN = 64
+_ZEROS = b"0" * DIGEST_LEN
 
 
-def _canonical(value: Any) -> bytes:
-    if isinstance(value, np.ndarray):
-        if value.dtype.kind in "OSU":
-            return repr([v.decode() if isinstance(v, bytes) else str(v) for v in value.reshape(-1)]).encode()
-        return value.dtype.str.encode() + str(value.shape).encode() + np.ascontiguousarray(value).tobytes()
-    if isinstance(value, bytes):
-        return value
-    if isinstance(value, np.generic):
-        return repr(value.item()).encode()
-    return repr(value).encode()
+def placeholder() -> bytes:
+    """A random 64-byte marker, unique in the file with overwhelming probability."""
+    return secrets.token_hex(DIGEST_LEN // 2).encode()
 
 
-def digest(arrays: dict[str, np.ndarray], attrs: dict[str, dict[str, Any]]) -> str:
-    """SHA-256 over sorted dataset paths and bytes, then sorted attributes (the checksum excluded)."""
+def file_digest(raw: bytes | bytearray | memoryview, field: bytes) -> str | None:
+    """SHA-256 of ``raw`` with the one occurrence of ``field`` zeroed; None when ``field`` does
+    not occur exactly once."""
+    mv = memoryview(raw)
+    b = raw if isinstance(raw, bytes) else bytes(mv)
+    pos = b.find(field)
+    if pos < 0 or b.find(field, pos + 1) >= 0:
+        return None
     h = hashlib.sha256()
-    for name in sorted(arrays):
-        h.update(name.encode() + b"\0" + _canonical(np.asarray(arrays[name])))
-    for name in sorted(attrs):
-        for key in sorted(attrs[name]):
-            if name == "" and key == schema.A_CHECKSUM:
-                continue
-            h.update(f"{name}@{key}".encode() + b"\0" + _canonical(attrs[name][key]))
+    h.update(mv[:pos])
+    h.update(_ZEROS)
+    h.update(mv[pos + DIGEST_LEN:])
     return h.hexdigest()
+
+
+def seal(path: Path, marker: bytes) -> str:
+    """Replace ``marker`` in the file at ``path`` by the file's digest; returns the digest."""
+    raw = bytearray(path.read_bytes())
+    d = file_digest(raw, marker)
+    if d is None:
+        raise RuntimeError(f"{path}: checksum placeholder not found exactly once")
+    pos = bytes(raw).find(marker)
+    raw[pos:pos + DIGEST_LEN] = d.encode()
+    path.write_bytes(bytes(raw))
+    return d

@@ -1,11 +1,16 @@
 """Read and verify motion libraries: format and version, checksum, required fields.
 
-Every failure raises :class:`LibraryFormatError` naming the file and the field, and saying what
-to do. Arrays handed out are read-only.
+The default read loads the file's bytes once, checks their SHA-256 against ``content_sha256``
+(every byte counts), then opens only the stored datasets under /model and /packed (a few reads)
+and takes every attribute from the index.
+``full=True`` (``skatelib validate``) also reads every HDF5 attribute and every per-entry view
+and checks that they agree with the index. Every failure raises :class:`LibraryFormatError`
+naming the file and the field, and saying what to do. Arrays handed out are read-only.
 """
 
 from __future__ import annotations
 
+import json
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,8 +19,11 @@ from typing import Any
 import h5py
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.digest import digest, read_all
+from skatelib.library.digest import file_digest
 from skatelib.library.errors import LibraryFormatError
+from skatelib.library.writer import jsonable
+
+_H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError)  # what h5py raises on damaged files
 
 
 @dataclass(frozen=True)
@@ -49,40 +57,31 @@ def _str(v: Any) -> str:
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
-def _names(v: Any) -> tuple[str, ...]:
-    return tuple(_str(x) for x in np.asarray(v).reshape(-1))
-
-
 def check_version(path: Path, version: str) -> None:
     """Refuse other major versions (with what to do); warn on another minor version."""
+    field = f"/@{schema.A_FORMAT_VERSION}"
     try:
         major, minor = (int(p) for p in version.split("."))
     except ValueError:
-        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", f"{version!r} is not 'major.minor'") from None
+        raise LibraryFormatError(path, field, f"{version!r} is not 'major.minor'") from None
     ours = schema.FORMAT_VERSION
     if major > ours[0]:
-        raise LibraryFormatError(
-            path,
-            f"/@{schema.A_FORMAT_VERSION}",
-            f"format {version} is newer than this skatelib reads ({schema.FORMAT_VERSION_STR}); "
-            "update skatelib (pip install -U skatelib) to read it",
-        )
+        raise LibraryFormatError(path, field, f"format {version} is newer than this skatelib reads "
+                                 f"({schema.FORMAT_VERSION_STR}); update skatelib (pip install -U skatelib)")
     if major < ours[0]:
-        raise LibraryFormatError(
-            path,
-            f"/@{schema.A_FORMAT_VERSION}",
-            f"format {version} is older than {schema.FORMAT_VERSION_STR}; rebuild the library with "
-            "'skatelib build' from the config stored in its config_toml attribute",
-        )
+        raise LibraryFormatError(path, field, f"format {version} is older than {schema.FORMAT_VERSION_STR}; "
+                                 "rebuild the library with 'skatelib build' from the config in its config_toml")
     if minor != ours[1]:
-        warnings.warn(
-            f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; reading what it knows",
-            stacklevel=3,
-        )
+        warnings.warn(f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; "
+                      "reading what it knows", stacklevel=3)
 
 
-def read_library(path: Path | str, verify_checksum: bool = True) -> LibraryData:
+def read_library(path: Path | str, verify_checksum: bool = True, full: bool = False) -> LibraryData:
     """Load a library file completely, verifying it.
+
+    Args:
+        verify_checksum: Compare the content with ``content_sha256`` (on by default).
+        full: Also check every HDF5 attribute and per-entry view against the index.
 
     Raises:
         LibraryFormatError: Not HDF5, truncated or corrupt, wrong format or version, checksum
@@ -91,115 +90,133 @@ def read_library(path: Path | str, verify_checksum: bool = True) -> LibraryData:
     path = Path(path)
     if not path.is_file():
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
+    raw = path.read_bytes()
     try:
-        with h5py.File(path, "r") as f:
+        with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
             fmt = f.attrs.get(schema.A_FORMAT)
             if fmt is None or _str(fmt) != schema.FORMAT_NAME:
-                raise LibraryFormatError(
-                    path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})"
-                )
+                raise LibraryFormatError(path, f"/@{schema.A_FORMAT}",
+                                         f"not a skatelib motion library (format={fmt!r})")
             version = f.attrs.get(schema.A_FORMAT_VERSION)
             if version is None:
                 raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
             check_version(path, _str(version))
-            arrays, attrs = read_all(f)
-    except OSError as e:
-        raise LibraryFormatError(
-            path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); rebuild it with 'skatelib build'"
-        ) from e
-    root = attrs[""]
-    for key in schema.ROOT_REQUIRED:
-        if key not in root:
-            raise LibraryFormatError(path, f"/@{key}", "required root attribute missing")
-    if verify_checksum:
-        stored = _str(root[schema.A_CHECKSUM])
-        if digest(arrays, attrs) != stored:
-            raise LibraryFormatError(
-                path, f"/@{schema.A_CHECKSUM}", "content does not match its checksum: the file is corrupt; rebuild it"
-            )
-    kind = _str(root[schema.A_KIND])
-    if kind not in schema.ENTRY_DATASETS:
-        raise LibraryFormatError(
-            path, f"/@{schema.A_KIND}", f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}"
-        )
+            stored_sum = f.attrs.get(schema.A_CHECKSUM)
+            arrays: dict[str, np.ndarray] = {}
+            for gname in (schema.G_MODEL, schema.G_PACKED):
+                if gname not in f:
+                    raise LibraryFormatError(path, f"/{gname}", "required group missing")
+                for name, obj in f[gname].items():
+                    if not isinstance(obj, h5py.Dataset):
+                        raise LibraryFormatError(path, f"/{gname}/{name}", "damaged or unexpected object; rebuild it")
+                    arrays[f"{gname}/{name}"] = obj[()]
+            index_key = f"{schema.G_PACKED}/{schema.D_INDEX}"
+            if index_key not in arrays:
+                raise LibraryFormatError(path, f"/{index_key}", "required dataset missing")
+            if verify_checksum:
+                if stored_sum is None:
+                    raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
+                field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
+                if file_digest(raw, field) != field.decode(errors="replace"):
+                    raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}",
+                                             "the file does not match its checksum: it is corrupt; rebuild it")
+            index = _parse_index(path, arrays[index_key])
+            if full:
+                _check_against_index(path, f, index, arrays)
+    except _H5_ERRORS as e:
+        raise LibraryFormatError(path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); "
+                                 "rebuild it with 'skatelib build'") from e
     for arr in arrays.values():
-        if isinstance(arr, np.ndarray):
-            arr.setflags(write=False)
-    return LibraryData(
-        path=path,
-        attrs={k: (_str(v) if isinstance(v, bytes) else v) for k, v in root.items()},
-        model_attrs=_model_attrs(path, kind, attrs),
-        model_arrays=_model_arrays(arrays),
-        model_text=_model_text(arrays),
-        entries=_entries(path, kind, arrays, attrs),
-    )
-
-
-def _model_attrs(path: Path, kind: str, attrs: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    if schema.G_MODEL not in attrs:
-        raise LibraryFormatError(path, f"/{schema.G_MODEL}", "required group missing")
-    model = attrs[schema.G_MODEL]
+        arr.setflags(write=False)
+    root = index["root"]
+    for key in schema.ROOT_REQUIRED:
+        if key not in root and key != schema.A_CHECKSUM:
+            raise LibraryFormatError(path, f"/@{key}", "required root attribute missing")
+    kind = str(root[schema.A_KIND])
+    if kind not in schema.ENTRY_DATASETS:
+        raise LibraryFormatError(path, f"/@{schema.A_KIND}",
+                                 f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}")
+    model = index["model"]
     if kind == "quadruped":
         for key in schema.QUADRUPED_MODEL_ATTRS:
             if key not in model:
                 raise LibraryFormatError(path, f"/{schema.G_MODEL}@{key}", "required model parameter missing")
-    return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in model.items()}
-
-
-def _model_arrays(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     prefix = schema.G_MODEL + "/"
-    return {k[len(prefix) :]: v for k, v in arrays.items() if k.startswith(prefix) and v.dtype != np.uint8}
+    model_arrays = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix) and v.dtype != np.uint8}
+    model_text = {k[len(prefix):]: v.tobytes().decode() for k, v in arrays.items()
+                  if k.startswith(prefix) and v.dtype == np.uint8}
+    return LibraryData(path=path, attrs=root, model_attrs=model, model_arrays=model_arrays, model_text=model_text,
+                       entries=_entries(path, kind, index, arrays))
 
 
-def _model_text(arrays: dict[str, np.ndarray]) -> dict[str, str]:
-    prefix = schema.G_MODEL + "/"
-    return {
-        k[len(prefix) :]: v.tobytes().decode()
-        for k, v in arrays.items()
-        if k.startswith(prefix) and v.dtype == np.uint8
-    }
+def _parse_index(path: Path, blob: np.ndarray) -> dict[str, Any]:
+    field = f"/{schema.G_PACKED}/{schema.D_INDEX}"
+    try:
+        index = json.loads(blob.tobytes().decode())
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise LibraryFormatError(path, field, f"index is not valid JSON ({e}); rebuild the library") from e
+    for key in ("root", "model", "entries"):
+        if key not in index:
+            raise LibraryFormatError(path, field, f"index lacks {key!r}")
+    return index
 
 
-def _entries(
-    path: Path, kind: str, arrays: dict[str, np.ndarray], attrs: dict[str, dict[str, Any]]
-) -> dict[str, EntryRecord]:
-    prefix = schema.G_ENTRIES + "/"
-    keys = sorted({name[len(prefix) :].split("/")[0] for name in attrs if name.startswith(prefix)})
+def _entries(path: Path, kind: str, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> dict[str, EntryRecord]:
     out = {}
-    for key in keys:
-        base = f"{schema.G_ENTRIES}/{key}"
-        eattrs = attrs[base]
+    for meta in index["entries"]:
+        key = meta["key"]
+        base = f"/{schema.G_ENTRIES}/{key}"
         for a in schema.ENTRY_ATTRS:
-            if a not in eattrs:
-                raise LibraryFormatError(path, f"/{base}@{a}", "required entry attribute missing")
-        data, cols, units = {}, {}, {}
+            if a not in meta["attrs"]:
+                raise LibraryFormatError(path, f"{base}@{a}", "required entry attribute missing")
+        data = {}
         for d in schema.ENTRY_DATASETS[kind]:
-            name = f"{base}/{d}"
-            if name not in arrays:
-                raise LibraryFormatError(path, f"/{name}", "required dataset missing")
-            data[d] = arrays[name]
-        for name, arr in arrays.items():
-            if name.startswith(base + "/"):
-                d = name[len(base) + 1 :]
-                data[d] = arr
-                if schema.A_COLUMNS in attrs[name]:
-                    cols[d] = _names(attrs[name][schema.A_COLUMNS])
-                    units[d] = _names(attrs[name].get(schema.A_UNITS, []))
+            if d not in meta["rows"] or f"{schema.G_PACKED}/{d}" not in arrays:
+                raise LibraryFormatError(path, f"{base}/{d}", "required dataset missing")
+        for d, (a, b) in meta["rows"].items():
+            src = arrays.get(f"{schema.G_PACKED}/{d}")
+            if src is None or b > len(src) or a < 0 or a > b:
+                raise LibraryFormatError(path, f"{base}/{d}", "rows outside the packed data; rebuild the library")
+            data[d] = src[a:b]
+        cols = {k: tuple(v) for k, v in meta["columns"].items()}
         for d in (schema.D_STATE, schema.D_CONTROL):
             if d not in cols:
-                raise LibraryFormatError(path, f"/{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
+                raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
             if len(cols[d]) != data[d].shape[-1]:
-                raise LibraryFormatError(
-                    path, f"/{base}/{d}@{schema.A_COLUMNS}", f"{len(cols[d])} names for {data[d].shape[-1]} columns"
-                )
-        out[key] = EntryRecord(
-            key=key,
-            attrs={
-                k: (v.item() if isinstance(v, np.generic) else _str(v) if isinstance(v, bytes) else v)
-                for k, v in eattrs.items()
-            },
-            arrays=data,
-            columns=cols,
-            units=units,
-        )
+                raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}",
+                                         f"{len(cols[d])} names for {data[d].shape[-1]} columns")
+        out[key] = EntryRecord(key=key, attrs=meta["attrs"], arrays=data, columns=cols,
+                               units={k: tuple(v) for k, v in meta["units"].items()})
     return out
+
+
+def _same(a: Any, b: Any) -> bool:
+    a, b = jsonable(a), jsonable(b)
+    if isinstance(a, float) or isinstance(b, float):
+        return bool(np.isclose(a, b, rtol=0, atol=0) or (np.isnan(a) and np.isnan(b)))
+    return bool(a == b)
+
+
+def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    """Every HDF5 attribute and per-entry view equals what the checksummed index says."""
+    def compare(where: str, attrs: Any, expected: dict[str, Any], skip: tuple[str, ...] = ()) -> None:
+        for k, v in attrs.items():
+            if k in skip:
+                continue
+            if k not in expected or not _same(v, expected[k]):
+                raise LibraryFormatError(path, f"{where}@{k}", "attribute differs from the checksummed index")
+
+    compare("/", f.attrs, index["root"], skip=(schema.A_CHECKSUM,))
+    compare(f"/{schema.G_MODEL}", f[schema.G_MODEL].attrs, index["model"])
+    for meta in index["entries"]:
+        base = f"{schema.G_ENTRIES}/{meta['key']}"
+        compare(f"/{base}", f[base].attrs, meta["attrs"])
+        for d, (a, b) in meta["rows"].items():
+            view = f[f"{base}/{d}"]
+            if not np.array_equal(view[()], arrays[f"{schema.G_PACKED}/{d}"][a:b]):
+                raise LibraryFormatError(path, f"/{base}/{d}", "view differs from the packed data")
+            for attr, expected in ((schema.A_COLUMNS, meta["columns"].get(d)), (schema.A_UNITS, meta["units"].get(d))):
+                got = view.attrs.get(attr)
+                if (got is None) != (expected is None) or (
+                        got is not None and [_str(x) for x in got] != list(expected or [])):
+                    raise LibraryFormatError(path, f"/{base}/{d}@{attr}", "differs from the checksummed index")

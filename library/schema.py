@@ -62,6 +62,11 @@ QUADRUPED_MODEL_ATTRS: Final = (
 D_JOINT_LOWER: Final = "joint_lower_rad"
 D_JOINT_UPPER: Final = "joint_upper_rad"
 
+# Packed storage: every entry's arrays stacked per dataset name, plus a JSON index that mirrors
+# every attribute of the file. /entries/<key>/<name> are virtual views into /packed/<name>.
+G_PACKED: Final = "packed"
+D_INDEX: Final = "index"
+
 # Entries.
 G_ENTRIES: Final = "entries"
 D_T: Final = "t"

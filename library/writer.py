@@ -1,8 +1,15 @@
-"""Write motion libraries atomically: a temporary file in the target folder, then os.replace."""
+"""Write motion libraries atomically: a temporary file in the target folder, then os.replace.
+
+Layout (``docs/library-format.md``): ``/packed/<name>`` stacks every entry's array ``<name>``,
+``/packed/index`` is a JSON mirror of all attributes with each entry's row offsets, and
+``/entries/<key>/<name>`` are virtual views into the packed arrays carrying their column names
+and units. Readers that only need the data open a handful of datasets.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
@@ -13,7 +20,7 @@ from typing import Any
 import h5py
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.digest import digest, read_all
+from skatelib.library.digest import placeholder, seal
 
 
 @dataclass(frozen=True)
@@ -22,8 +29,8 @@ class EntryData:
 
     Attributes:
         key: Entry name (``v0.50_s2``).
-        attrs: Scalars (at least ``format.ENTRY_ATTRS``).
-        arrays: Datasets by name (``t``, ``state``, ``control``, ...).
+        attrs: Scalars (at least ``schema.ENTRY_ATTRS``).
+        arrays: Datasets by name (``t``, ``state``, ``control``, ...); the first axis is time.
         columns: Column names per dataset that has named columns.
         units: Column units per dataset, aligned with ``columns``.
     """
@@ -35,6 +42,17 @@ class EntryData:
     units: Mapping[str, Sequence[str]] = field(default_factory=dict)
 
 
+def jsonable(v: Any) -> Any:
+    """Plain JSON value of an attribute (numpy scalars and arrays converted)."""
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, bytes):
+        return v.decode()
+    return v
+
+
 @contextlib.contextmanager
 def _atomic_path(path: Path) -> Iterator[Path]:
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -42,6 +60,9 @@ def _atomic_path(path: Path) -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a library is an ordinary file
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -49,50 +70,81 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
-def _dataset(
-    group: h5py.Group, name: str, data: np.ndarray, columns: Sequence[str] | None, units: Sequence[str] | None
-) -> None:
-    arr = np.asarray(data)
-    # fletcher32 needs chunked storage; one chunk per dataset keeps reads to one call.
-    d = group.create_dataset(name, data=arr, fletcher32=True, chunks=arr.shape if arr.ndim else None)
-    if columns is not None:
-        d.attrs[schema.A_COLUMNS] = np.array(list(columns), dtype=h5py.string_dtype())
-    if units is not None:
-        d.attrs[schema.A_UNITS] = np.array(list(units), dtype=h5py.string_dtype())
+def _stored(group: h5py.Group, name: str, data: np.ndarray) -> np.ndarray:
+    arr = np.ascontiguousarray(data)
+    # fletcher32 needs chunked storage; one chunk per dataset keeps a read to one call.
+    group.create_dataset(name, data=arr, fletcher32=True, chunks=arr.shape if arr.size else None)
+    return arr
 
 
-def write_library(
-    path: Path | str,
-    root_attrs: Mapping[str, Any],
-    model_attrs: Mapping[str, Any],
-    model_arrays: Mapping[str, np.ndarray],
-    model_text: Mapping[str, str],
-    entries: Sequence[EntryData],
-) -> Path:
+def _strings(values: Sequence[str]) -> np.ndarray:
+    return np.array(list(values), dtype=h5py.string_dtype())
+
+
+def write_library(path: Path | str, root_attrs: Mapping[str, Any], model_attrs: Mapping[str, Any],
+                  model_arrays: Mapping[str, np.ndarray], model_text: Mapping[str, str],
+                  entries: Sequence[EntryData]) -> Path:
     """Write a complete library file; a reader never sees a half-written one.
 
-    Returns:
-        The final path.
+    Raises:
+        ValueError: When entries disagree on their dataset names or trailing shapes.
     """
     path = Path(path)
-    with _atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
-        for k, v in root_attrs.items():
-            f.attrs[k] = v
-        f.attrs[schema.A_FORMAT] = schema.FORMAT_NAME
-        f.attrs[schema.A_FORMAT_VERSION] = schema.FORMAT_VERSION_STR
+    names = list(entries[0].arrays) if entries else []
+    for e in entries:
+        if list(e.arrays) != names:
+            raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
+    root = {**{k: jsonable(v) for k, v in root_attrs.items()}, schema.A_FORMAT: schema.FORMAT_NAME,
+            schema.A_FORMAT_VERSION: schema.FORMAT_VERSION_STR}
+    index: dict[str, Any] = {"root": root, "model": {k: jsonable(v) for k, v in model_attrs.items()}, "entries": []}
+    offsets = dict.fromkeys(names, 0)
+    for e in entries:
+        rows = {}
+        for n in names:
+            rows[n] = [offsets[n], offsets[n] + len(e.arrays[n])]
+            offsets[n] += len(e.arrays[n])
+        index["entries"].append({"key": e.key, "attrs": {k: jsonable(v) for k, v in e.attrs.items()}, "rows": rows,
+                                 "columns": {k: list(v) for k, v in e.columns.items()},
+                                 "units": {k: list(v) for k, v in e.units.items()}})
+    stored: dict[str, np.ndarray] = {}
+    marker = placeholder()
+    with _atomic_path(path) as tmp:
+        _write_h5(tmp, root, model_attrs, model_arrays, model_text, entries, names, index, stored, marker)
+        seal(tmp, marker)
+    return path
+
+
+def _write_h5(tmp: Path, root: dict[str, Any], model_attrs: Mapping[str, Any], model_arrays: Mapping[str, np.ndarray],
+              model_text: Mapping[str, str], entries: Sequence[EntryData], names: list[str], index: dict[str, Any],
+              stored: dict[str, np.ndarray], marker: bytes) -> None:
+    with h5py.File(tmp, "w") as f:
         model = f.create_group(schema.G_MODEL)
         for k, v in model_attrs.items():
             model.attrs[k] = v
         for k, arr in model_arrays.items():
-            _dataset(model, k, arr, None, None)
+            stored[f"{schema.G_MODEL}/{k}"] = _stored(model, k, arr)
         for k, text in model_text.items():
-            model.create_dataset(k, data=np.frombuffer(text.encode(), dtype=np.uint8), fletcher32=True, chunks=True)
+            stored[f"{schema.G_MODEL}/{k}"] = _stored(model, k, np.frombuffer(text.encode(), dtype=np.uint8))
+        packed = f.create_group(schema.G_PACKED)
+        for n in names:
+            stored[f"{schema.G_PACKED}/{n}"] = _stored(packed, n, np.concatenate([e.arrays[n] for e in entries]))
         group = f.create_group(schema.G_ENTRIES)
-        for e in entries:
+        for e, meta in zip(entries, index["entries"], strict=True):
             g = group.create_group(e.key)
             for k, v in e.attrs.items():
                 g.attrs[k] = v
-            for k, arr in e.arrays.items():
-                _dataset(g, k, arr, e.columns.get(k), e.units.get(k))
-        f.attrs[schema.A_CHECKSUM] = digest(*read_all(f))
-    return path
+            for n in names:
+                src = stored[f"{schema.G_PACKED}/{n}"]
+                a, b = meta["rows"][n]
+                layout = h5py.VirtualLayout(shape=(b - a, *src.shape[1:]), dtype=src.dtype)
+                layout[:] = h5py.VirtualSource(".", f"{schema.G_PACKED}/{n}", shape=src.shape)[a:b]
+                d = g.create_virtual_dataset(n, layout)
+                if n in e.columns:
+                    d.attrs[schema.A_COLUMNS] = _strings(e.columns[n])
+                if n in e.units:
+                    d.attrs[schema.A_UNITS] = _strings(e.units[n])
+        blob = np.frombuffer(json.dumps(index, sort_keys=True).encode(), dtype=np.uint8)
+        stored[f"{schema.G_PACKED}/{schema.D_INDEX}"] = _stored(packed, schema.D_INDEX, blob)
+        for k, v in root.items():
+            f.attrs[k] = v
+        f.attrs[schema.A_CHECKSUM] = np.bytes_(marker)  # fixed length: sealed in place after closing

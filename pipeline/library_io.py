@@ -14,7 +14,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 import pinocchio as pin
-
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
 from skatelib.library.writer import EntryData, write_library

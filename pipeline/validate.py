@@ -7,6 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from skatelib.library.errors import LibraryFormatError, SkatelibError
+from skatelib.library.reader import read_library
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.system import SkateSystem
 from skatelib.pipeline.verify import check_trajectory
@@ -27,6 +28,7 @@ def system_from_library(lib: MotionLibrary) -> SkateSystem:
 
 def validate_library(path: Path | str, report: Callable[[str, str], None]) -> int:
     """Check the file (raises on a corrupt one) and each entry's physics; returns the failures."""
+    read_library(path, full=True)  # integrity: checksum, and every attribute and view against the index
     lib = MotionLibrary.open(path)
     if lib.kind != "quadruped":
         report("-", f"kind {lib.kind}: only the integrity was checked")
@@ -37,7 +39,7 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
         if not e.success:
             report(e.key, f"stored as failed ({e.attrs['status']}): skipped")
             continue
-        assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None  # noqa: S101
+        assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
         rep = check_trajectory(system, e.t, e.state, e.control, e.contact, e.foot_pos, e.board_pos)
         failures = rep.failures(system)
         bad += bool(failures)

@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
-
 from skatelib.library import schema
 from skatelib.library.channels import BOARD, GROUND
 from skatelib.library.errors import SkatelibError
@@ -61,15 +60,26 @@ class Entry:
         self.contact = _ro(arrays[schema.D_CONTACT]) if schema.D_CONTACT in arrays else None
         self.foot_pos = _ro(arrays[schema.D_FOOT_POS]) if schema.D_FOOT_POS in arrays else None
         self.board_pos = _ro(arrays[schema.D_BOARD_POS]) if schema.D_BOARD_POS in arrays else None
-        t = self.t
-        dt = np.diff(t)
-        self._t0, self._tend, self._n = float(t[0]), float(t[-1]), len(t)
+        self._t0, self._tend, self._n = float(self.t[0]), float(self.t[-1]), len(self.t)
+        self._last = max(self._n - 2, 0)  # interval index; the last knot is reached with fraction 1
+        self._no_contact = _ro(np.zeros(4, dtype=np.int8))
+        self._ready = False
+
+    def _prepare(self) -> None:
+        """Interpolation tables, built on first use so that opening a library stays cheap."""
+        dt = np.diff(self.t)
         self._uniform = bool(len(dt) and np.allclose(dt, dt[0], rtol=1e-9, atol=1e-12))
         self._inv_dt = 1.0 / float(dt[0]) if len(dt) else 0.0
-        self._tlist = t.tolist()
-        # Slopes between knots, so an interpolated sample is one multiply-add.
-        self._dstate = _ro(np.vstack([np.diff(self.state, axis=0), np.zeros((1, self.state.shape[1]))]))
-        self._no_contact = _ro(np.zeros(4, dtype=np.int8))
+        self._tlist = self.t.tolist()
+        # Slopes between knots, so an interpolated sample is one multiply-add; per-row lists
+        # because indexing a list is cheaper than making an ndarray view.
+        self._dstate = _ro(np.diff(self.state, axis=0)) if self._n > 1 else _ro(np.zeros_like(self.state))
+        self._rows = list(self.state)
+        self._drows = list(self._dstate)
+        self._urows = list(self.control) if len(self.control) else [self.control]
+        self._crows = list(self.contact) if self.contact is not None else None
+        self._ar = np.arange(1024, dtype=float)
+        self._ready = True
 
     @property
     def target_velocity_mps(self) -> float:
@@ -96,44 +106,55 @@ class Entry:
                        f"control: {', '.join(self.columns[schema.D_CONTROL])}")
 
     def _locate(self, t: float) -> tuple[int, float]:
-        """Knot index i and fraction a with t = t_i + a (t_{i+1} - t_i), clamped to the entry."""
-        if t <= self._t0:
+        """Interval index i <= K-2 and fraction a in [0, 1] of ``t``, clamped to the entry."""
+        if not self._ready:
+            self._prepare()
+        if t <= self._t0 or self._n < 2:
             return 0, 0.0
         if t >= self._tend:
-            return self._n - 1, 0.0
+            return self._last, 1.0
         if self._uniform:
             u = (t - self._t0) * self._inv_dt
             i = int(u)
-            if i >= self._n - 1:
-                return self._n - 1, 0.0
-            return i, u - i
-        i = bisect.bisect_right(self._tlist, t) - 1
+            return (i, u - i) if i <= self._last else (self._last, 1.0)
+        i = min(bisect.bisect_right(self._tlist, t) - 1, self._last)
         return i, (t - self._tlist[i]) / (self._tlist[i + 1] - self._tlist[i])
 
     def sample(self, t: float) -> Sample:
-        """State (linear), control (held) and contacts at time ``t`` [s], clamped to the entry."""
+        """State (linear), control (held) and contacts at time ``t`` [s], clamped to the entry.
+
+        At or after the end, the state is the last knot's and the control the last one.
+        """
         i, a = self._locate(t)
-        x = self.state[i] + a * self._dstate[i]
+        x = self._rows[i] + a * self._drows[i]
         x.flags.writeable = False
-        j = i if i < self._n - 1 else self._n - 2
-        c = self.contact[i] if self.contact is not None else self._no_contact
-        return Sample(x, self.control[j], c)
+        # Contacts hold like controls: the last knot's code from the end on.
+        c = self._crows[i + 1 if a >= 1.0 else i] if self._crows is not None else self._no_contact
+        return Sample(x, self._urows[i], c)
 
     def window(self, t0: float, n: int, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Reference arrays for an MPC horizon: states (n, 28) and controls (n, 24) at t0 + k dt."""
-        times = t0 + dt * np.arange(n)
-        if self._uniform:
-            u = np.clip((times - self._t0) * self._inv_dt, 0.0, self._n - 1)
-            i = np.minimum(u.astype(np.int64), self._n - 1)
+        if not self._ready:
+            self._prepare()
+        if self._uniform and self._n >= 2:
+            ar = self._ar[:n] if n <= len(self._ar) else np.arange(n, dtype=float)
+            u = ar * (dt * self._inv_dt)
+            u += (t0 - self._t0) * self._inv_dt
+            if u[0] < 0.0 or u[-1] > self._n - 1.0:  # clamping is rare; skip it when in range
+                np.clip(u, 0.0, self._n - 1.0, out=u)
         else:
-            tc = np.clip(times, self._t0, self._tend)
-            i = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._n - 1)
-            nxt = np.minimum(i + 1, self._n - 1)
-            span = np.where(nxt > i, self.t[nxt] - self.t[i], 1.0)
-            u = i + (tc - self.t[i]) / span
-        a = (u - i)[:, None]
-        xs = self.state[i] + a * self._dstate[i]
-        us = self.control[np.minimum(i, self._n - 2)]
+            tc = np.clip(t0 + dt * np.arange(n), self._t0, self._tend)
+            j = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._last)
+            span = self.t[j + 1] - self.t[j] if self._n >= 2 else np.ones(n)
+            u = j + (tc - self.t[j]) / span
+        i = u.astype(np.intp)
+        np.minimum(i, self._last, out=i)
+        u -= i
+        xs = np.take(self.state, i, axis=0)
+        slope = np.take(self._dstate, i, axis=0)
+        slope *= u.reshape(-1, 1)
+        xs += slope
+        us = np.take(self.control, i, axis=0)
         xs.flags.writeable = False
         us.flags.writeable = False
         return xs, us

@@ -1,0 +1,149 @@
+"""End to end: `skatelib build` on a tiny config really solves, writes a valid library, resumes
+from its cache, records failures, and gives the same library through a dask cluster."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from skatelib.library.reader import read_library
+from skatelib.pipeline import sweep
+from skatelib.pipeline.build import build_library
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.pushoff import PushoffSpec, WarmStart
+from skatelib.runtime import MotionLibrary
+
+TINY = Path(__file__).parent / "configs" / "tiny.toml"
+CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cache")
+    old = os.environ.get("SKATELIB_CACHE_DIR")
+    os.environ["SKATELIB_CACHE_DIR"] = str(d)
+    yield d
+    if old is None:
+        os.environ.pop("SKATELIB_CACHE_DIR")
+    else:
+        os.environ["SKATELIB_CACHE_DIR"] = old
+
+
+@pytest.fixture(scope="module")
+def built(cache, tmp_path_factory):
+    out = tmp_path_factory.mktemp("lib") / "tiny.h5"
+    env = {**os.environ, "COLUMNS": "200"}
+    r = subprocess.run([*CLI, "build", str(TINY), "-o", str(out), "--no-progress", "--jobs", "2"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return out, r.stdout
+
+
+def test_build_writes_a_complete_library(built):
+    """Both entries converge to their targets; the file carries model, provenance and columns."""
+    out, stdout = built
+    lib = MotionLibrary.open(out)
+    assert sorted(lib.keys()) == ["v0.30_s1", "v0.40_s1"]
+    for e in lib:
+        assert e.success and e.attrs["status"] == "Solve_Succeeded"
+        assert abs(e.channel("board_vx")[-1] - e.target_velocity_mps) < 0.02 * e.target_velocity_mps
+    assert lib.model["robot_mass_kg"] == pytest.approx(8.5184)
+    assert "<robot" in lib.urdf and lib.attrs["config_toml"].startswith("# A small build")
+    assert lib.attrs["ipopt_version"].count(".") == 2
+    read_library(out, full=True)
+    assert "v0.40_s1" in stdout and "wrote" in stdout
+
+
+def test_info_and_validate_commands(built):
+    """`skatelib info` lists the entries; `skatelib validate` re-checks physics and exits 0."""
+    out, _ = built
+    env = {**os.environ, "COLUMNS": "200"}
+    info = subprocess.run([*CLI, "info", str(out)], capture_output=True, text=True, env=env, check=True).stdout
+    assert "v0.30_s1" in info and "board_roll_stiffness_Nm_per_rad" in info
+    val = subprocess.run([*CLI, "validate", str(out)], capture_output=True, text=True, env=env)
+    assert val.returncode == 0, val.stdout
+    assert "all entries valid" in val.stdout
+
+
+def test_validate_rejects_a_corrupt_file(built, tmp_path):
+    """A library with a damaged byte fails `skatelib validate` with exit 2 and the file named."""
+    out, _ = built
+    bad = tmp_path / "bad.h5"
+    data = bytearray(out.read_bytes())
+    data[len(data) // 3] ^= 0xFF
+    bad.write_bytes(bytes(data))
+    r = subprocess.run([*CLI, "validate", str(bad)], capture_output=True, text=True,
+                       env={**os.environ, "COLUMNS": "300"})
+    assert r.returncode == 2
+    assert "bad.h5" in r.stdout
+
+
+def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path):
+    """A second build finds every entry in the cache and writes identical trajectories."""
+    out, _ = built
+    cfg = load_config(TINY)
+    report = build_library(cfg, tmp_path / "again.h5", jobs=1)
+    assert all(o.cached for o in report.outcomes)
+    a, b = MotionLibrary.open(out), MotionLibrary.open(report.path)
+    for e in a:
+        assert np.array_equal(e.state, b[e.key].state)
+
+
+def test_interrupted_build_leaves_no_file(cache, tmp_path, monkeypatch):
+    """Ctrl-C during the sweep leaves no library file behind."""
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("skatelib.pipeline.build.run_sweep", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        build_library(load_config(TINY), tmp_path / "x.h5")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
+    """An unreachable target is stored with success=false and its status; the command exits 1,
+    or 0 with --allow-failures."""
+    cfg_path = tmp_path / "fail.toml"
+    cfg_path.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\nmax_iter = 3\n'
+                        '[sweep]\nvelocities_mps = [0.3]\nstrides = [1]\n')
+    out = tmp_path / "fail.h5"
+    env = {**os.environ, "COLUMNS": "200"}
+    r = subprocess.run([*CLI, "build", str(cfg_path), "-o", str(out), "--no-progress", "--no-cache"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "failed" in r.stdout
+    e = MotionLibrary.open(out)["v0.30_s1"]
+    assert not e.success and e.attrs["status"] == "Maximum_Iterations_Exceeded"
+    assert e.attrs["attempts"] == 3
+    r2 = subprocess.run([*CLI, "build", str(cfg_path), "-o", str(out), "--no-progress", "--no-cache",
+                         "--allow-failures"], capture_output=True, text=True, env=env)
+    assert r2.returncode == 0
+
+
+def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
+    """The sweep on a dask LocalCluster (loopback) writes the same trajectories as loky."""
+    distributed = pytest.importorskip("distributed")
+    out, _ = built
+    cfg = load_config(TINY)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        report = build_library(cfg, tmp_path / "dask.h5", backend="dask", scheduler=cluster.scheduler_address,
+                               use_cache=False)
+    a, b = MotionLibrary.open(out), MotionLibrary.open(report.path)
+    for e in a:
+        assert np.allclose(e.state, b[e.key].state, atol=1e-9)
+    assert not any(o.cached for o in report.outcomes)
+
+
+def test_retry_ladder_goes_cold_then_other_guesses():
+    """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run."""
+    cfg = load_config(TINY)
+    spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1)))
+    ladder = sweep.retry_ladder(spec)
+    assert [s.warm is not None for s in ladder] == [True, False, False, False]
+    assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]
+    assert ("mu_strategy", "adaptive") in ladder[-1].ipopt
