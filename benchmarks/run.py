@@ -5,6 +5,11 @@ Push-off TO (issue #3): build + solve of 0.5 m/s, 2 strides, dt 0.03 s, one core
  * compiled: stage functions compiled with the C compiler (cached on disk; the first run
    compiles, which is reported separately);
  * warm: the compiled solve warm-started from the 0.45 m/s solution.
+
+Motion library (issue #4): the default library built serially and cold (baseline) and with two
+workers over warm-start chains; runtime open, sample and window against naive baselines.
+
+``python -m benchmarks.run [pushoff|library|runtime ...]`` runs a subset.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ import dataclasses
 import os
 import statistics
 import time
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -61,5 +67,78 @@ def bench_pushoff(repeats: int = 3) -> None:
     print("target (issue #3): build + solve <= 1.5 s median")
 
 
+def bench_library() -> Path:
+    import tempfile
+
+    from skatelib.pipeline.build import build_library
+
+    cfg = load_config()
+    serial_cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, warm_start=False))
+    out = Path(tempfile.mkdtemp()) / "default.h5"
+    t_serial = time.perf_counter()
+    rs = build_library(serial_cfg, out, jobs=1, use_cache=False)
+    t_serial = time.perf_counter() - t_serial
+    t_par = time.perf_counter()
+    rp = build_library(cfg, out, jobs=2, use_cache=False)
+    t_par = time.perf_counter() - t_par
+    it_s = sum(o.result.iterations for o in rs.outcomes)
+    it_p = sum(o.result.iterations for o in rp.outcomes)
+    print(f"default library ({len(rp.outcomes)} entries, {len(rp.failed)} failed)")
+    print(f"  serial, cold (baseline): {t_serial:6.1f} s  {it_s:5d} IPOPT iterations")
+    print(f"  2 workers, warm chains:  {t_par:6.1f} s  {it_p:5d} IPOPT iterations   {t_serial / t_par:.1f}x")
+    print("  target (issue #4): <= 30 s wall on 2 cores")
+    return out
+
+
+def bench_runtime(path: Path | None = None) -> None:
+    import timeit
+
+    import h5py
+    import numpy as np
+    from skatelib.runtime import MotionLibrary
+
+    if path is None:
+        from skatelib.pipeline.build import build_library
+
+        path = build_library(load_config(), Path("out") / "bench-default.h5").path  # resume cache makes this quick
+    t_open = min(timeit.repeat(lambda: MotionLibrary.open(path), number=1, repeat=30))
+
+    def naive_open() -> dict:
+        with h5py.File(path, "r") as f:
+            g = f["entries"]
+            return {k: {n: g[k][n][()] for n in g[k]} for k in g}
+
+    t_naive = min(timeit.repeat(naive_open, number=1, repeat=10))
+    e = MotionLibrary.open(path).select(0.5, 2)
+    e.sample(0.0)
+    n = 100_000
+    t_sample = min(timeit.repeat(lambda: e.sample(0.613), number=n, repeat=5)) / n
+    t_interp = min(timeit.repeat(lambda: [np.interp(0.613, e.t, e.state[:, j]) for j in range(28)],
+                                 number=2000, repeat=5)) / 2000
+    t_window = min(timeit.repeat(lambda: e.window(0.61, 10, 1 / 30), number=20000, repeat=5)) / 20000
+    t_loop = min(timeit.repeat(lambda: [e.sample(0.61 + k / 30) for k in range(10)], number=5000, repeat=5)) / 5000
+    print("runtime (best of repeats)")
+    print(f"  open (verified, packed):  {t_open * 1e3:7.2f} ms   naive per-entry h5py read {t_naive * 1e3:.2f} ms"
+          f"  ({t_naive / t_open:.1f}x)   target <= 10 ms")
+    print(f"  sample:                   {t_sample * 1e6:7.2f} us   per-channel np.interp {t_interp * 1e6:.1f} us"
+          f"  ({t_interp / t_sample:.0f}x)   target <= 3 us")
+    print(f"  window(n=10):             {t_window * 1e6:7.2f} us   10 sample() calls {t_loop * 1e6:.1f} us"
+          f"  ({t_loop / t_window:.1f}x)   target <= 15 us")
+
+
 if __name__ == "__main__":
-    bench_pushoff()
+    import sys
+
+    parts = sys.argv[1:] or ["pushoff", "library", "runtime"]
+    lib_path = None
+    if "pushoff" in parts:
+        bench_pushoff()
+    if "library" in parts:
+        lib_path = bench_library()
+    if "runtime" in parts:
+        # Measured in a fresh process: the build's idle worker processes would disturb it.
+        import subprocess
+
+        subprocess.run([sys.executable, "-c", "import sys; from benchmarks.run import bench_runtime; "
+                        "from pathlib import Path; bench_runtime(Path(sys.argv[1]) if sys.argv[1] else None)",
+                        str(lib_path or "")], check=True)

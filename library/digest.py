@@ -32,7 +32,7 @@ def file_digest(raw: bytes | bytearray | memoryview, field: bytes) -> str | None
     h = hashlib.sha256()
     h.update(mv[:pos])
     h.update(_ZEROS)
-    h.update(mv[pos + DIGEST_LEN:])
+    h.update(mv[pos + DIGEST_LEN :])
     return h.hexdigest()
 
 
@@ -43,6 +43,6 @@ def seal(path: Path, marker: bytes) -> str:
     if d is None:
         raise RuntimeError(f"{path}: checksum placeholder not found exactly once")
     pos = bytes(raw).find(marker)
-    raw[pos:pos + DIGEST_LEN] = d.encode()
+    raw[pos : pos + DIGEST_LEN] = d.encode()
     path.write_bytes(bytes(raw))
     return d

@@ -66,14 +66,24 @@ def check_version(path: Path, version: str) -> None:
         raise LibraryFormatError(path, field, f"{version!r} is not 'major.minor'") from None
     ours = schema.FORMAT_VERSION
     if major > ours[0]:
-        raise LibraryFormatError(path, field, f"format {version} is newer than this skatelib reads "
-                                 f"({schema.FORMAT_VERSION_STR}); update skatelib (pip install -U skatelib)")
+        raise LibraryFormatError(
+            path,
+            field,
+            f"format {version} is newer than this skatelib reads "
+            f"({schema.FORMAT_VERSION_STR}); update skatelib (pip install -U skatelib)",
+        )
     if major < ours[0]:
-        raise LibraryFormatError(path, field, f"format {version} is older than {schema.FORMAT_VERSION_STR}; "
-                                 "rebuild the library with 'skatelib build' from the config in its config_toml")
+        raise LibraryFormatError(
+            path,
+            field,
+            f"format {version} is older than {schema.FORMAT_VERSION_STR}; "
+            "rebuild the library with 'skatelib build' from the config in its config_toml",
+        )
     if minor != ours[1]:
-        warnings.warn(f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; "
-                      "reading what it knows", stacklevel=3)
+        warnings.warn(
+            f"{path}: format {version}, this skatelib writes {schema.FORMAT_VERSION_STR}; reading what it knows",
+            stacklevel=3,
+        )
 
 
 def read_library(path: Path | str, verify_checksum: bool = True, full: bool = False) -> LibraryData:
@@ -95,15 +105,16 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
             fmt = f.attrs.get(schema.A_FORMAT)
             if fmt is None or _str(fmt) != schema.FORMAT_NAME:
-                raise LibraryFormatError(path, f"/@{schema.A_FORMAT}",
-                                         f"not a skatelib motion library (format={fmt!r})")
+                raise LibraryFormatError(
+                    path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})"
+                )
             version = f.attrs.get(schema.A_FORMAT_VERSION)
             if version is None:
                 raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
             check_version(path, _str(version))
             stored_sum = f.attrs.get(schema.A_CHECKSUM)
             arrays: dict[str, np.ndarray] = {}
-            for gname in (schema.G_MODEL, schema.G_PACKED):
+            for gname in (schema.G_MODEL, schema.G_PACKED) if full else (schema.G_PACKED,):
                 if gname not in f:
                     raise LibraryFormatError(path, f"/{gname}", "required group missing")
                 for name, obj in f[gname].items():
@@ -118,14 +129,18 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
                     raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
                 field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
                 if file_digest(raw, field) != field.decode(errors="replace"):
-                    raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}",
-                                             "the file does not match its checksum: it is corrupt; rebuild it")
+                    raise LibraryFormatError(
+                        path,
+                        f"/@{schema.A_CHECKSUM}",
+                        "the file does not match its checksum: it is corrupt; rebuild it",
+                    )
             index = _parse_index(path, arrays[index_key])
             if full:
                 _check_against_index(path, f, index, arrays)
     except _H5_ERRORS as e:
-        raise LibraryFormatError(path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); "
-                                 "rebuild it with 'skatelib build'") from e
+        raise LibraryFormatError(
+            path, "/", f"cannot be read as HDF5 (truncated or corrupt: {e}); rebuild it with 'skatelib build'"
+        ) from e
     for arr in arrays.values():
         arr.setflags(write=False)
     root = index["root"]
@@ -134,19 +149,28 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
             raise LibraryFormatError(path, f"/@{key}", "required root attribute missing")
     kind = str(root[schema.A_KIND])
     if kind not in schema.ENTRY_DATASETS:
-        raise LibraryFormatError(path, f"/@{schema.A_KIND}",
-                                 f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}")
+        raise LibraryFormatError(
+            path, f"/@{schema.A_KIND}", f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}"
+        )
     model = index["model"]
     if kind == "quadruped":
         for key in schema.QUADRUPED_MODEL_ATTRS:
             if key not in model:
                 raise LibraryFormatError(path, f"/{schema.G_MODEL}@{key}", "required model parameter missing")
-    prefix = schema.G_MODEL + "/"
-    model_arrays = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix) and v.dtype != np.uint8}
-    model_text = {k[len(prefix):]: v.tobytes().decode() for k, v in arrays.items()
-                  if k.startswith(prefix) and v.dtype == np.uint8}
-    return LibraryData(path=path, attrs=root, model_attrs=model, model_arrays=model_arrays, model_text=model_text,
-                       entries=_entries(path, kind, index, arrays))
+    model_arrays = {}
+    for k, spec in index.get("model_arrays", {}).items():
+        a = np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"])
+        a.setflags(write=False)
+        model_arrays[k] = a
+    model_text = dict(index.get("model_text", {}))
+    return LibraryData(
+        path=path,
+        attrs=root,
+        model_attrs=model,
+        model_arrays=model_arrays,
+        model_text=model_text,
+        entries=_entries(path, kind, index, arrays),
+    )
 
 
 def _parse_index(path: Path, blob: np.ndarray) -> dict[str, Any]:
@@ -183,10 +207,16 @@ def _entries(path: Path, kind: str, index: dict[str, Any], arrays: dict[str, np.
             if d not in cols:
                 raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
             if len(cols[d]) != data[d].shape[-1]:
-                raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}",
-                                         f"{len(cols[d])} names for {data[d].shape[-1]} columns")
-        out[key] = EntryRecord(key=key, attrs=meta["attrs"], arrays=data, columns=cols,
-                               units={k: tuple(v) for k, v in meta["units"].items()})
+                raise LibraryFormatError(
+                    path, f"{base}/{d}@{schema.A_COLUMNS}", f"{len(cols[d])} names for {data[d].shape[-1]} columns"
+                )
+        out[key] = EntryRecord(
+            key=key,
+            attrs=meta["attrs"],
+            arrays=data,
+            columns=cols,
+            units={k: tuple(v) for k, v in meta["units"].items()},
+        )
     return out
 
 
@@ -199,6 +229,7 @@ def _same(a: Any, b: Any) -> bool:
 
 def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
     """Every HDF5 attribute and per-entry view equals what the checksummed index says."""
+
     def compare(where: str, attrs: Any, expected: dict[str, Any], skip: tuple[str, ...] = ()) -> None:
         for k, v in attrs.items():
             if k in skip:
@@ -208,6 +239,21 @@ def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays
 
     compare("/", f.attrs, index["root"], skip=(schema.A_CHECKSUM,))
     compare(f"/{schema.G_MODEL}", f[schema.G_MODEL].attrs, index["model"])
+    mirrored = set(index.get("model_arrays", {})) | set(index.get("model_text", {}))
+    stored = {k.split("/", 1)[1] for k in arrays if k.startswith(schema.G_MODEL + "/")}
+    if mirrored != stored:
+        raise LibraryFormatError(
+            path, f"/{schema.G_MODEL}", f"datasets {sorted(stored ^ mirrored)} differ from the index"
+        )
+    for k, spec in index.get("model_arrays", {}).items():
+        if not np.array_equal(
+            arrays[f"{schema.G_MODEL}/{k}"],
+            np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"]),
+        ):
+            raise LibraryFormatError(path, f"/{schema.G_MODEL}/{k}", "differs from the checksummed index")
+    for k, text in index.get("model_text", {}).items():
+        if arrays[f"{schema.G_MODEL}/{k}"].tobytes().decode() != text:
+            raise LibraryFormatError(path, f"/{schema.G_MODEL}/{k}", "differs from the checksummed index")
     for meta in index["entries"]:
         base = f"{schema.G_ENTRIES}/{meta['key']}"
         compare(f"/{base}", f[base].attrs, meta["attrs"])
@@ -218,5 +264,6 @@ def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays
             for attr, expected in ((schema.A_COLUMNS, meta["columns"].get(d)), (schema.A_UNITS, meta["units"].get(d))):
                 got = view.attrs.get(attr)
                 if (got is None) != (expected is None) or (
-                        got is not None and [_str(x) for x in got] != list(expected or [])):
+                    got is not None and [_str(x) for x in got] != list(expected or [])
+                ):
                     raise LibraryFormatError(path, f"/{base}/{d}@{attr}", "differs from the checksummed index")

@@ -81,9 +81,14 @@ def _strings(values: Sequence[str]) -> np.ndarray:
     return np.array(list(values), dtype=h5py.string_dtype())
 
 
-def write_library(path: Path | str, root_attrs: Mapping[str, Any], model_attrs: Mapping[str, Any],
-                  model_arrays: Mapping[str, np.ndarray], model_text: Mapping[str, str],
-                  entries: Sequence[EntryData]) -> Path:
+def write_library(
+    path: Path | str,
+    root_attrs: Mapping[str, Any],
+    model_attrs: Mapping[str, Any],
+    model_arrays: Mapping[str, np.ndarray],
+    model_text: Mapping[str, str],
+    entries: Sequence[EntryData],
+) -> Path:
     """Write a complete library file; a reader never sees a half-written one.
 
     Raises:
@@ -94,18 +99,37 @@ def write_library(path: Path | str, root_attrs: Mapping[str, Any], model_attrs: 
     for e in entries:
         if list(e.arrays) != names:
             raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
-    root = {**{k: jsonable(v) for k, v in root_attrs.items()}, schema.A_FORMAT: schema.FORMAT_NAME,
-            schema.A_FORMAT_VERSION: schema.FORMAT_VERSION_STR}
-    index: dict[str, Any] = {"root": root, "model": {k: jsonable(v) for k, v in model_attrs.items()}, "entries": []}
+    root = {
+        **{k: jsonable(v) for k, v in root_attrs.items()},
+        schema.A_FORMAT: schema.FORMAT_NAME,
+        schema.A_FORMAT_VERSION: schema.FORMAT_VERSION_STR,
+    }
+    index: dict[str, Any] = {
+        "root": root,
+        "model": {k: jsonable(v) for k, v in model_attrs.items()},
+        # Mirrors of /model's datasets, so a reader needs only /packed (the file hash covers all).
+        "model_arrays": {
+            k: {"dtype": np.asarray(v).dtype.str, "shape": list(np.shape(v)), "data": jsonable(np.asarray(v))}
+            for k, v in model_arrays.items()
+        },
+        "model_text": dict(model_text),
+        "entries": [],
+    }
     offsets = dict.fromkeys(names, 0)
     for e in entries:
         rows = {}
         for n in names:
             rows[n] = [offsets[n], offsets[n] + len(e.arrays[n])]
             offsets[n] += len(e.arrays[n])
-        index["entries"].append({"key": e.key, "attrs": {k: jsonable(v) for k, v in e.attrs.items()}, "rows": rows,
-                                 "columns": {k: list(v) for k, v in e.columns.items()},
-                                 "units": {k: list(v) for k, v in e.units.items()}})
+        index["entries"].append(
+            {
+                "key": e.key,
+                "attrs": {k: jsonable(v) for k, v in e.attrs.items()},
+                "rows": rows,
+                "columns": {k: list(v) for k, v in e.columns.items()},
+                "units": {k: list(v) for k, v in e.units.items()},
+            }
+        )
     stored: dict[str, np.ndarray] = {}
     marker = placeholder()
     with _atomic_path(path) as tmp:
@@ -114,9 +138,18 @@ def write_library(path: Path | str, root_attrs: Mapping[str, Any], model_attrs: 
     return path
 
 
-def _write_h5(tmp: Path, root: dict[str, Any], model_attrs: Mapping[str, Any], model_arrays: Mapping[str, np.ndarray],
-              model_text: Mapping[str, str], entries: Sequence[EntryData], names: list[str], index: dict[str, Any],
-              stored: dict[str, np.ndarray], marker: bytes) -> None:
+def _write_h5(
+    tmp: Path,
+    root: dict[str, Any],
+    model_attrs: Mapping[str, Any],
+    model_arrays: Mapping[str, np.ndarray],
+    model_text: Mapping[str, str],
+    entries: Sequence[EntryData],
+    names: list[str],
+    index: dict[str, Any],
+    stored: dict[str, np.ndarray],
+    marker: bytes,
+) -> None:
     with h5py.File(tmp, "w") as f:
         model = f.create_group(schema.G_MODEL)
         for k, v in model_attrs.items():

@@ -79,6 +79,13 @@ class Entry:
         self._urows = list(self.control) if len(self.control) else [self.control]
         self._crows = list(self.contact) if self.contact is not None else None
         self._ar = np.arange(1024, dtype=float)
+        nx = self.state.shape[1]
+        # One table [state_k, slope_k, control_k] per interval: a window is a single take.
+        self._cols = (nx, 2 * nx)
+        if self._n > 1:
+            self._table = np.hstack([self.state[:-1], self._dstate, self.control])
+        else:
+            self._table = np.hstack([self.state, self._dstate, np.zeros((1, self.control.shape[-1]))])
         self._ready = True
 
     @property
@@ -150,14 +157,14 @@ class Entry:
         i = u.astype(np.intp)
         np.minimum(i, self._last, out=i)
         u -= i
-        xs = np.take(self.state, i, axis=0)
-        slope = np.take(self._dstate, i, axis=0)
+        rows = np.take(self._table, i, axis=0)
+        a, b = self._cols
+        slope = rows[:, a:b]
         slope *= u.reshape(-1, 1)
-        xs += slope
-        us = np.take(self.control, i, axis=0)
-        xs.flags.writeable = False
-        us.flags.writeable = False
-        return xs, us
+        state = rows[:, :a]
+        state += slope
+        rows.flags.writeable = False  # views made from here on are read-only too
+        return rows[:, :a], rows[:, b:]
 
     def __repr__(self) -> str:
         return (f"Entry({self.key!r}, v={self.target_velocity_mps} m/s, strides={self.n_strides}, "
