@@ -11,6 +11,7 @@ from typing import Any
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
 from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
+from skatelib.pipeline.pushoff import problem_for
 from skatelib.pipeline.system import SkateSystem
 
 
@@ -38,6 +39,9 @@ def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 
     marked ``success = false`` with their IPOPT status)."""
     t0 = time.perf_counter()
     out = out or default_output(config)
+    if config.optimization.compile and backend == "loky":
+        # Compile the stage functions once here, so parallel workers load them instead of all compiling.
+        problem_for(config, min(config.sweep.strides))
     outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry))
     system = SkateSystem.from_config(config)
     entries = [entry_from_result(o.result, o.attempts, o.physics) for o in outcomes]

@@ -60,3 +60,30 @@ def test_solution_equals_plain_nlpsol():
     r2 = ca.nlpsol("b", "ipopt", S.nlp, opts)(**args)
     assert float(r1["f"]) == pytest.approx(float(r2["f"]), rel=1e-8)
     assert np.allclose(np.asarray(r1["x"]), np.asarray(r2["x"]), atol=1e-6)
+
+
+def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
+    """The C-compiled stage functions (cached by hash) give the symbolic ones' values; a second
+    call loads the cached library instead of compiling."""
+    import shutil
+
+    from skatelib.pipeline import stagewise
+
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path))
+    z, p = ca.SX.sym("z", 4), ca.SX.sym("p", 1)
+    cost, cons = p[0] * ca.sumsqr(z) + ca.sin(z[0]) * z[3], ca.vertcat(z[0] * z[1] - z[2], ca.exp(z[3]) - z[1] ** 2)
+    sym = stagewise.stage_functions(z, p, cost, cons)
+    comp = stagewise.compiled_stage_functions(z, p, cost, cons)
+    libs = list(tmp_path.glob("stage_*.so"))
+    assert len(libs) == 1
+    zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
+    for a, b, args in ((sym.value, comp.value, (zv, pv)), (sym.grad, comp.grad, (zv, pv)),
+                       (sym.jac, comp.jac, (zv, pv)), (sym.hess, comp.hess, (zv, pv, 0.8, lam))):
+        for x, y in zip(a(*args) if a.n_out() > 1 else [a(*args)], b(*args) if b.n_out() > 1 else [b(*args)],
+                        strict=True):
+            assert np.allclose(np.asarray(ca.densify(x)), np.asarray(ca.densify(y)), atol=1e-12)
+    mtime = libs[0].stat().st_mtime_ns
+    stagewise.compiled_stage_functions(z, p, cost, cons)
+    assert libs[0].stat().st_mtime_ns == mtime
