@@ -10,8 +10,8 @@ from typing import Any
 
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
-from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
 from skatelib.pipeline.pushoff import problem_for
+from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
 from skatelib.pipeline.system import SkateSystem
 
 
