@@ -79,12 +79,17 @@ def build(
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
 ) -> None:
-    """Build a motion library: sweep target speeds x stride counts through the push-off TO."""
+    """Build a motion library: sweep target speeds x stride counts through the push-off TO
+    (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
     from skatelib.pipeline.build import build_library, default_output
-    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.config import HumanoidConfig, load_any_config
     from skatelib.pipeline.sweep import chains_for
 
-    cfg = load_config(config)
+    any_cfg = load_any_config(config)
+    if isinstance(any_cfg, HumanoidConfig):
+        _build_humanoid(any_cfg, out, allow_failures)
+        return
+    cfg = any_cfg
     if backend == "dask" and scheduler is None:
         raise typer.BadParameter("--backend dask needs --scheduler tcp://HOST:PORT")
     total = sum(len(c.velocities) for c in chains_for(cfg))
@@ -107,6 +112,26 @@ def build(
     if report.failed and not allow_failures:
         console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
+        raise typer.Exit(1)
+
+
+def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
+    from skatelib.pipeline.humanoid_build import build_humanoid_library
+
+    report = build_humanoid_library(cfg, out)
+    t = Table(title=f"{cfg.meta.name}: {cfg.sweep.motion} ({cfg.gpm.nodes} LG nodes, {cfg.gpm.solver})")
+    for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
+        t.add_column(escape(col))
+    from skatelib.library.schema import entry_key
+
+    for m in report.motions:
+        for r in m.steps:
+            t.add_row(entry_key(m.velocity_mps, len(m.steps)), r.spec.name, r.status, str(r.iterations),
+                      f"{1e3 * r.solve_time_s:.1f}", f"{r.objective:.4f}")
+    console.print(t)
+    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.2f} s")
+    if report.failed and not allow_failures:
+        console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept with success=false)")
         raise typer.Exit(1)
 
 

@@ -30,9 +30,8 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
     """Check the file (raises on a corrupt one) and each entry's physics; returns the failures."""
     read_library(path, full=True)  # integrity: checksum, and every attribute and view against the index
     lib = MotionLibrary.open(path)
-    if lib.kind != "quadruped":
-        report("-", f"kind {lib.kind}: only the integrity was checked")
-        return 0
+    if lib.kind == "humanoid":
+        return _validate_humanoid(lib, report)
     system = system_from_library(lib)
     bad = 0
     for e in lib:
@@ -44,4 +43,28 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
         failures = rep.failures(system)
         bad += bool(failures)
         report(e.key, "ok" if not failures else "; ".join(failures))
+    return bad
+
+
+def _validate_humanoid(lib: MotionLibrary, report: Callable[[str, str], None]) -> int:
+    from skatelib.pipeline.config import humanoid_config_from_json
+    from skatelib.pipeline.humanoid_motions import skating_steps, walking_steps
+    from skatelib.pipeline.humanoid_verify import check_steps, failures
+
+    try:
+        cfg = humanoid_config_from_json(str(lib.attrs["config_resolved_json"]), lib.path)
+    except SkatelibError as err:
+        raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {err}") from err
+    h = cfg.humanoid
+    bad = 0
+    for e in lib:
+        if not e.success:
+            report(e.key, f"stored as failed ({e.attrs['status']}): skipped")
+            continue
+        plan = (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
+        rep = check_steps(plan, e.arrays["nodes_t"], e.arrays["nodes_state"], e.arrays["nodes_control"],
+                          h.gravity_mps2, h.leg_min_m, h.leg_max_m)
+        fails = failures(rep)
+        bad += bool(fails)
+        report(e.key, "ok" if not fails else "; ".join(fails))
     return bad

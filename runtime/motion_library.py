@@ -54,6 +54,7 @@ class Entry:
         self.attrs = attrs
         self.columns = columns
         self.check = check
+        self.arrays = {k: _ro(v) for k, v in arrays.items()}  # every dataset of the entry, read-only
         self.t = _ro(arrays[schema.D_T])
         self.state = _ro(arrays[schema.D_STATE])
         self.control = _ro(arrays[schema.D_CONTROL])

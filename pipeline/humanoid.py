@@ -1,0 +1,300 @@
+"""Humanoid COM steps by Gauss pseudospectral optimization (Takasugi et al., Sec. III-B to III-E).
+
+Per step: state X = [P_COM, V_COM] at tau_0 and the N LG nodes, control U = A_COM at the nodes
+(Eq. 12), cost the integral of |A_COM|^2 by quadrature (Eq. 13-14). Forces and moments per unit
+mass about the representative contact point P0: F = A + [0, 0, g] (Eq. 15), N = (P - P0) x F
+(Eq. 16), imposed at the nodes: unilateral F_z >= 0 (17), ZMP inside the support polygon (18),
+linearized static friction (19) with a zero coefficient along a skating direction (20), leg reach
+r_min <= |P - P0| <= r_max (21). Boundary: X_0 fixed to the previous step's X_f (22); the last
+step stops, P_f = P_ref, V_f = V_ref (23-24); otherwise the divergent component of motion ends on
+the next support, P_f + b (V_f - V_step) = P_step + [0, 0, dz], b = sqrt(dz / g) (25-27), with
+the terminal friction condition |x_f - p_step| <= mu z_f along the walking direction (30), or, at
+a push-to-slide transition, d (P_f - P_step) = 0 (31), zero terminal acceleration along d (the
+intent of Eq. 32: no jump of acceleration into the frictionless slide) and zero vertical COM
+speed (Sec. V-B). On a rolling board nothing pushes along it, so there the DCM and stop
+conditions act across the board only (along it they follow from the dynamics, and imposing them
+again would make the constraints degenerate).
+
+P0 may move at constant velocity (a foot on a rolling skateboard); the constraints are written in
+that inertial frame, where accelerations are unchanged.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from skatelib.pipeline.gpm import GaussPseudospectral, collocation_defects, lagrange_basis, terminal_state
+
+MAX_EDGES = 8
+TERMINALS = ("walk", "skate", "dcm_on_board", "none", "stop", "stop_on_board")
+
+
+@dataclass(frozen=True)
+class Support:
+    """Contact during part of a step.
+
+    Attributes:
+        p0: Representative contact point at the segment's start [m] (world).
+        velocity: Its constant velocity [m/s] (zero on the ground, the board's on a skateboard).
+        polygon: (M, 2) support polygon vertices relative to P0, counter-clockwise [m].
+        mu_x, mu_y: Static friction coefficients along x and y (0 along a skating direction).
+    """
+
+    p0: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    polygon: tuple[tuple[float, float], ...]
+    mu_x: float
+    mu_y: float
+
+
+@dataclass(frozen=True)
+class StepSpec:
+    """One step: duration, contact segments, boundary conditions."""
+
+    name: str
+    duration_s: float
+    segments: tuple[tuple[float, Support], ...]  # (start time within the step [s], support)
+    terminal: str  # walk | skate | dcm_on_board | none | stop | stop_on_board
+    p_step: tuple[float, float, float] = (0.0, 0.0, 0.0)  # next support point (walk, skate) or P_ref (stop)
+    v_step: tuple[float, float, float] = (0.0, 0.0, 0.0)  # next support velocity / V_ref
+    dz_vrp_m: float = 0.8
+    mu_next: float = 0.5
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """A solved step: node values, solver outcome, and the per-node contact data used."""
+
+    spec: StepSpec
+    t0: float
+    success: bool
+    status: str
+    iterations: int
+    solve_time_s: float
+    objective: float
+    max_violation: float
+    X: np.ndarray  # (N+1, 6) at tau_0..tau_N
+    U: np.ndarray  # (N, 3) at the LG nodes
+    Xf: np.ndarray  # (6,)
+    P0: np.ndarray  # (N, 3) representative contact point at the nodes
+    supports: tuple[Support, ...] = field(repr=False, default=())
+
+
+def _edges(polygon: tuple[tuple[float, float], ...]) -> np.ndarray:
+    """Rows (a, b, c) with a x + b y + c >= 0 inside a counter-clockwise polygon; padded with the
+    trivial (0, 0, 1) so every node has MAX_EDGES rows."""
+    v = np.asarray(polygon, dtype=float)
+    rows = []
+    for i in range(len(v)):
+        (x0, y0), (x1, y1) = v[i], v[(i + 1) % len(v)]
+        ex, ey = x1 - x0, y1 - y0
+        rows.append((-ey, ex, ey * x0 - ex * y0))
+    if len(rows) > MAX_EDGES:
+        raise ValueError(f"support polygons have at most {MAX_EDGES} edges")
+    rows += [(0.0, 0.0, 1.0)] * (MAX_EDGES - len(rows))
+    return np.asarray(rows)
+
+
+def rectangle(cx: float, cy: float, length: float, width: float) -> tuple[tuple[float, float], ...]:
+    """Counter-clockwise rectangle centred at (cx, cy)."""
+    hx, hy = length / 2, width / 2
+    return ((cx - hx, cy - hy), (cx + hx, cy - hy), (cx + hx, cy + hy), (cx - hx, cy + hy))
+
+
+def convex_hull(points: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """Counter-clockwise convex hull (monotone chain)."""
+    pts = sorted({(round(float(x), 12), round(float(y), 12)) for x, y in points})
+
+    def cross(o: Any, a: Any, b: Any) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[Any] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    upper: list[Any] = []
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return tuple(lower[:-1] + upper[:-1])
+
+
+class StepProblem:
+    """The NLP of one step for a node count and terminal kind; parameters carry everything else.
+
+    Parameters (per solve): x0 (6), duration, P0 at the nodes (N x 3), edges (N x MAX_EDGES x 3),
+    friction (N x 2), p_step (3), v_step (3), b (1), mu_next (1), r_min, r_max, g.
+    """
+
+    def __init__(self, n_nodes: int, terminal: str, solver: str = "ipopt"):
+        if terminal not in TERMINALS:
+            raise ValueError(f"terminal {terminal!r}; use one of {TERMINALS}")
+        self.gpm = gpm = GaussPseudospectral(n_nodes)
+        N = n_nodes
+        X = ca.SX.sym("X", N + 1, 6)
+        U = ca.SX.sym("U", N, 3)
+        Xf = ca.SX.sym("Xf", 1, 6)
+        x0 = ca.SX.sym("x0", 1, 6)
+        T = ca.SX.sym("T")
+        P0 = ca.SX.sym("P0", N, 3)
+        E = ca.SX.sym("E", N, 3 * MAX_EDGES)
+        MU = ca.SX.sym("MU", N, 2)
+        p_step, v_step = ca.SX.sym("p_step", 1, 3), ca.SX.sym("v_step", 1, 3)
+        b, mu_next, rmin, rmax, g = (ca.SX.sym(n) for n in ("b", "mu_next", "rmin", "rmax", "g"))
+        params = [ca.vec(x0), T, ca.vec(P0), ca.vec(E), ca.vec(MU), ca.vec(p_step), ca.vec(v_step), b, mu_next,
+                  rmin, rmax, g]
+        self.param_sizes = [int(p.numel()) for p in params]
+        F_dyn = ca.horzcat(X[1:, 3:6], U)  # [V, A] at the nodes
+        eq: list[Any] = [ca.vec(collocation_defects(gpm, X, F_dyn, 0.0, T)),  # Eq. (12)
+              ca.vec(Xf - terminal_state(gpm, X[0, :], F_dyn, 0.0, T)),  # Eq. (6)
+              ca.vec(X[0, :] - x0)]  # Eq. (22)
+        ineq: list[Any] = []
+        lo: list[np.ndarray] = []
+        hi: list[np.ndarray] = []
+
+        def add(expr: Any, lb: float, ub: float) -> None:
+            ineq.append(expr)
+            lo.append(np.full(expr.numel(), lb))
+            hi.append(np.full(expr.numel(), ub))
+
+        for k in range(N):
+            r = X[k + 1, 0:3].T - P0[k, :].T
+            F = U[k, :].T + ca.vertcat(0, 0, g)  # Eq. (15)
+            Nm = ca.cross(r, F)  # Eq. (16)
+            add(F[2], 0.0, ca.inf)  # Eq. (17)
+            for e in range(MAX_EDGES):
+                a_, b_, c_ = E[k, 3 * e], E[k, 3 * e + 1], E[k, 3 * e + 2]
+                add(-a_ * Nm[1] + b_ * Nm[0] + c_ * F[2], 0.0, ca.inf)  # Eq. (18)
+            for j in range(2):  # Eq. (19), (20): |F_j| <= mu_j F_z
+                add(MU[k, j] * F[2] - F[j], 0.0, ca.inf)
+                add(MU[k, j] * F[2] + F[j], 0.0, ca.inf)
+            add(ca.sumsqr(r) - rmin**2, 0.0, ca.inf)  # Eq. (21)
+            add(rmax**2 - ca.sumsqr(r), 0.0, ca.inf)
+        Pf, Vf = Xf[0, 0:3], Xf[0, 3:6]
+        dz = b**2 * g
+        dcm_error = Pf + b * (Vf - v_step) - p_step - ca.horzcat(0, 0, dz)  # Eq. (25)-(27)
+        if terminal in ("walk", "skate"):
+            eq.append(ca.vec(dcm_error))
+        if terminal == "dcm_on_board":
+            # Along a frictionless board x follows from the dynamics: the DCM is placed across it only.
+            eq.append(ca.vec(dcm_error[1:3]))
+        if terminal == "walk":  # Eq. (30) along the walking direction x, relative to the next support
+            add(mu_next * Pf[2] - (Pf[0] - p_step[0]), 0.0, ca.inf)
+            add(mu_next * Pf[2] + (Pf[0] - p_step[0]), 0.0, ca.inf)
+        if terminal == "skate":
+            eq.append(Pf[0] - p_step[0])  # Eq. (31), sliding direction x
+            eq.append(Vf[2])  # the paper sets the COM's vertical velocity to 0 at the transition
+            u_end = ca.DM(lagrange_basis(gpm.tau, 1.0)) @ U  # control interpolant at tau = 1
+            eq.append(u_end[0])  # Eq. (32), see the module docstring
+        if terminal == "stop":
+            eq.append(ca.vec(Pf - p_step))  # Eq. (23)
+            eq.append(ca.vec(Vf - v_step))  # Eq. (24)
+        if terminal == "stop_on_board":
+            # On a rolling board nothing pushes along x (no friction there), so x of P_f and V_f
+            # follows from the dynamics; Eq. (23)-(24) are imposed across the board only.
+            eq.append(ca.vec(Pf[1:3] - p_step[1:3]))
+            eq.append(ca.vec(Vf[1:3] - v_step[1:3]))
+        J = T / 2 * ca.dot(ca.DM(gpm.weights), ca.sum2(U**2))  # Eq. (14)
+        geq = ca.vertcat(*eq)
+        gin = ca.vertcat(*ineq)
+        self.n_eq = geq.numel()
+        self.lbg = np.concatenate([np.zeros(self.n_eq), *lo])
+        self.ubg = np.concatenate([np.zeros(self.n_eq), *hi])
+        w = ca.vertcat(ca.vec(X), ca.vec(U), ca.vec(Xf))
+        self.n_w = w.numel()
+        p = ca.vertcat(*params)
+        nlp = {"x": w, "p": p, "f": J, "g": ca.vertcat(geq, gin)}
+        if solver == "ipopt":
+            opts: dict[str, Any] = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+                                    "ipopt.tol": 1e-9, "ipopt.max_iter": 200}
+        elif solver == "sqp":
+            opts = {"print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
+                    "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False,
+                                                        "error_on_fail": False},
+                    "tol_pr": 1e-9, "tol_du": 1e-9, "max_iter": 100, "error_on_fail": False}
+        else:
+            raise ValueError(f"solver {solver!r}; use 'ipopt' or 'sqp'")
+        self.solver = ca.nlpsol(f"com_step_{terminal}", "ipopt" if solver == "ipopt" else "sqpmethod", nlp, opts)
+        self.nlp = nlp
+        self.N = N
+
+    def parameters(self, spec: StepSpec, x0: np.ndarray, g: float, rmin: float, rmax: float
+                   ) -> tuple[np.ndarray, np.ndarray, tuple[Support, ...]]:
+        """Parameter vector, node contact points and the support at each node."""
+        t_nodes = self.gpm.times(0.0, spec.duration_s)
+        P0 = np.zeros((self.N, 3))
+        E = np.zeros((self.N, 3 * MAX_EDGES))
+        MU = np.zeros((self.N, 2))
+        sup = []
+        for k, t in enumerate(t_nodes):
+            start, s = [seg for seg in spec.segments if seg[0] <= t][-1]
+            P0[k] = np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
+            E[k] = _edges(s.polygon).reshape(-1)
+            MU[k] = (s.mu_x, s.mu_y)
+            sup.append(s)
+        b = np.sqrt(spec.dz_vrp_m / g)
+        parts = [x0, [spec.duration_s], P0.reshape(-1, order="F"), E.reshape(-1, order="F"),
+                 MU.reshape(-1, order="F"), spec.p_step, spec.v_step, [b], [spec.mu_next], [rmin], [rmax], [g]]
+        return np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts]), P0, tuple(sup)
+
+    def initial_guess(self, x0: np.ndarray, spec: StepSpec) -> np.ndarray:
+        """Hold the initial state, drifting at its velocity (never random)."""
+        N = self.N
+        t = self.gpm.times(0.0, spec.duration_s, self.gpm.support)
+        X = np.tile(x0, (N + 1, 1))
+        X[:, 0:3] += np.outer(t, x0[3:6])
+        Xf = x0.copy()
+        Xf[0:3] += spec.duration_s * x0[3:6]
+        return np.concatenate([X.reshape(-1, order="F"), np.zeros(3 * N), Xf])
+
+
+_PROBLEMS: dict[tuple[int, str, str], StepProblem] = {}
+
+
+def step_problem(n_nodes: int, terminal: str, solver: str = "ipopt") -> StepProblem:
+    """Cached per process: building costs milliseconds, solving is what repeats."""
+    key = (n_nodes, terminal, solver)
+    if key not in _PROBLEMS:
+        _PROBLEMS[key] = StepProblem(n_nodes, terminal, solver)
+    return _PROBLEMS[key]
+
+
+def solve_step(spec: StepSpec, x0: np.ndarray, t0: float, n_nodes: int, g: float, rmin: float, rmax: float,
+               solver: str = "ipopt") -> StepResult:
+    """Solve one step from ``x0``; a failure is returned with its status, never raised."""
+    prob = step_problem(n_nodes, spec.terminal, solver)
+    p, P0, sup = prob.parameters(spec, x0, g, rmin, rmax)
+    tic = time.perf_counter()
+    sol = prob.solver(x0=prob.initial_guess(x0, spec), p=p, lbg=prob.lbg, ubg=prob.ubg)
+    dt = time.perf_counter() - tic
+    st = prob.solver.stats()
+    w = np.asarray(sol["x"]).reshape(-1)
+    N = n_nodes
+    X = w[: 6 * (N + 1)].reshape(N + 1, 6, order="F")
+    U = w[6 * (N + 1): 6 * (N + 1) + 3 * N].reshape(N, 3, order="F")
+    Xf = w[6 * (N + 1) + 3 * N:]
+    g_val = np.asarray(sol["g"]).reshape(-1)
+    viol = float(max(np.max(prob.lbg - g_val, initial=0.0), np.max(g_val - prob.ubg, initial=0.0)))
+    return StepResult(spec=spec, t0=t0, success=bool(st.get("success", False)),
+                      status=str(st.get("return_status", "unknown")), iterations=int(st.get("iter_count", -1)),
+                      solve_time_s=dt, objective=float(sol["f"]), max_violation=viol, X=X, U=U, Xf=Xf, P0=P0,
+                      supports=sup)
+
+
+def solve_sequence(steps: list[StepSpec], x0: np.ndarray, n_nodes: int, g: float, rmin: float, rmax: float,
+                   solver: str = "ipopt") -> list[StepResult]:
+    """Solve steps one after another, each starting from the previous final state (Eq. 22)."""
+    out, t0, x = [], 0.0, np.asarray(x0, dtype=float)
+    for spec in steps:
+        r = solve_step(spec, x, t0, n_nodes, g, rmin, rmax, solver)
+        out.append(r)
+        if not r.success:
+            break
+        x, t0 = r.Xf.copy(), t0 + spec.duration_s
+    return out

@@ -1,0 +1,152 @@
+"""Walking and skating step sequences of the humanoid paper (Sec. V), and their sampling into
+library entries.
+
+Walking: a double-support start, ``steps`` steps of single support then double support on the
+new foot (footsteps ``step_length`` apart, alternating feet), and a stop over both feet.
+Skating: the left foot pushes on the ground (static contact, the representative point) while the
+right foot rides the board; at the push-to-slide transition the DCM sits above the board foot at
+the transition height, moving with the board; the slide rides the board foot alone with no
+friction along the board; the stop brings the COM back over both feet on the board.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.pipeline.config import HumanoidConfig
+from skatelib.pipeline.gpm import lagrange_basis
+from skatelib.pipeline.humanoid import StepResult, StepSpec, Support, convex_hull, rectangle, solve_sequence
+
+STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
+STATE_UNITS = ("m", "m", "m", "m/s", "m/s", "m/s")
+CONTROL_NAMES = ("com_ax", "com_ay", "com_az")
+CONTROL_UNITS = ("m/s^2",) * 3
+ZMP_NAMES = ("zmp_x", "zmp_y")
+PUSH_SEGMENTS = 10
+
+
+def _rect(c: HumanoidConfig, foot: np.ndarray, ref: np.ndarray) -> tuple[tuple[float, float], ...]:
+    h = c.humanoid
+    return rectangle(float(foot[0] - ref[0]), float(foot[1] - ref[1]), h.foot_length_m, h.foot_width_m)
+
+
+def _hull(c: HumanoidConfig, feet: list[np.ndarray], ref: np.ndarray) -> tuple[tuple[float, float], ...]:
+    return convex_hull(np.vstack([np.asarray(_rect(c, f, ref)) for f in feet]))
+
+
+def walking_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[StepSpec]]:
+    """Initial state and steps for walking at ``velocity`` (step length = velocity x step period)."""
+    h, w = c.humanoid, c.walk
+    mu, z = h.friction_mu, h.com_height_m
+    length = velocity * (w.single_support_s + w.double_support_s)
+    right, left = np.array([0.0, -h.step_width_m / 2, 0.0]), np.array([0.0, h.step_width_m / 2, 0.0])
+    mid = (right + left) / 2
+    start = Support(tuple(mid), (0, 0, 0), _hull(c, [right, left], mid), mu, mu)
+    steps = [StepSpec("start", w.start_s, ((0.0, start),), "walk", tuple(right), dz_vrp_m=z, mu_next=mu)]
+    stance, swing = right, left
+    for j in range(1, w.steps + 1):
+        landed = np.array([j * length, swing[1], 0.0])
+        mid = (stance + landed) / 2
+        segs = ((0.0, Support(tuple(stance), (0, 0, 0), _rect(c, stance, stance), mu, mu)),
+                (w.single_support_s, Support(tuple(mid), (0, 0, 0), _hull(c, [stance, landed], mid), mu, mu)))
+        steps.append(StepSpec(f"step{j}", w.single_support_s + w.double_support_s, segs, "walk", tuple(landed),
+                              dz_vrp_m=z, mu_next=mu))
+        stance, swing = landed, stance
+    mid = (stance + swing) / 2
+    steps.append(StepSpec("stop", w.stop_s, ((0.0, Support(tuple(mid), (0, 0, 0), _hull(c, [stance, swing], mid),
+                                                          mu, mu)),), "stop", tuple(mid + np.array([0.0, 0.0, z]))))
+    return np.array([0.0, 0.0, z, 0.0, 0.0, 0.0]), steps
+
+
+def skating_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[StepSpec]]:
+    """Initial state and the push, slide and stop phases for a board speed ``velocity``."""
+    h, s = c.humanoid, c.skate
+    mu, z = h.friction_mu, h.com_height_m
+    ground, board = np.array([0.0, h.step_width_m / 2, 0.0]), np.array([0.0, -h.step_width_m / 2, 0.0])
+    v = np.array([velocity, 0.0, 0.0])
+    board_end = board + v * s.push_s / 2  # the board speeds up evenly from rest during the push
+    # Both soles carry the robot during the push: the support polygon is the hull of the ground foot
+    # and the board foot where the board has rolled to (updated in PUSH_SEGMENTS pieces).
+    segs = []
+    for i in range(PUSH_SEGMENTS):
+        t_mid = (i + 0.5) * s.push_s / PUSH_SEGMENTS
+        on_board = board + v * t_mid**2 / (2 * s.push_s)
+        segs.append((i * s.push_s / PUSH_SEGMENTS,
+                     Support(tuple(ground), (0, 0, 0), _hull(c, [ground, on_board], ground), mu, mu)))
+    push = StepSpec("push", s.push_s, tuple(segs), "skate", tuple(board_end), tuple(v),
+                    dz_vrp_m=s.transition_com_height_m, mu_next=0.0)
+    foot_b = board_end + v * s.slide_s
+    foot_g = np.array([foot_b[0], ground[1], 0.0])  # the pushing foot steps onto the board beside the other
+    mid = (foot_b + foot_g) / 2
+    # The slide ends with its DCM over the stance to come (both feet on the board), at walking height.
+    slide = StepSpec("slide", s.slide_s, ((0.0, Support(tuple(board_end), tuple(v), _rect(c, board_end, board_end),
+                                                       0.0, mu)),), "dcm_on_board", tuple(mid), tuple(v), dz_vrp_m=z)
+    stop = StepSpec("stop", s.stop_s, ((0.0, Support(tuple(mid), tuple(v), _hull(c, [foot_b, foot_g], mid), 0.0, mu)),),
+                    "stop_on_board", tuple(mid + v * s.stop_s + np.array([0.0, 0.0, z])), tuple(v))
+    return np.array([0.0, 0.0, z, 0.0, 0.0, 0.0]), [push, slide, stop]
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A solved motion: its steps, sampled trajectory and totals."""
+
+    velocity_mps: float
+    steps: list[StepResult]
+    t: np.ndarray
+    state: np.ndarray
+    control: np.ndarray
+    zmp: np.ndarray
+    contact_point: np.ndarray
+    step_index: np.ndarray
+
+    @property
+    def success(self) -> bool:
+        return bool(self.steps) and all(r.success for r in self.steps) and len(self.steps) == self.n_planned
+
+    n_planned: int = 0
+
+
+def solve_motion(c: HumanoidConfig, velocity: float) -> Motion:
+    """Plan and solve a walk or a skate at ``velocity``, step by step, then sample it."""
+    x0, specs = (walking_steps if c.sweep.motion == "walk" else skating_steps)(c, velocity)
+    h = c.humanoid
+    results = solve_sequence(specs, x0, c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, c.gpm.solver)
+    t, X, U, Z, P, S = sample(results, c.gpm.sample_dt_s, h.gravity_mps2)
+    return Motion(velocity, results, t, X, U, Z, P, S, n_planned=len(specs))
+
+
+def sample(results: list[StepResult], dt: float, g: float) -> tuple[np.ndarray, ...]:
+    """Uniform samples of every solved step: state (Lagrange through the support points and the
+    quadrature end state), acceleration (through the LG nodes), ZMP and contact point."""
+    ts, xs, us, zs, ps, si = [], [], [], [], [], []
+    for j, r in enumerate(results):
+        T = r.spec.duration_s
+        gpm = __import__("skatelib.pipeline.gpm", fromlist=["GaussPseudospectral"]).GaussPseudospectral(len(r.U))
+        last = j == len(results) - 1
+        local = np.arange(0.0, T + (dt / 2 if last else -dt / 2), dt)
+        tau = gpm.to_tau(local, 0.0, T)
+        X = gpm.interpolate_state(r.X, tau)
+        X[-1] = r.Xf if last and abs(local[-1] - T) < 1e-9 else X[-1]
+        A = gpm.interpolate_control(r.U, tau)
+        P0 = np.array([_contact_at(r, tt) for tt in local])
+        rel = X[:, 0:3] - P0
+        F = A + np.array([0.0, 0.0, g])
+        zmp = P0[:, 0:2] + rel[:, 0:2] - rel[:, 2:3] * F[:, 0:2] / F[:, 2:3]
+        ts.append(r.t0 + local)
+        xs.append(X)
+        us.append(A)
+        zs.append(zmp)
+        ps.append(P0)
+        si.append(np.full(len(local), j, dtype=np.int16))
+    t = np.concatenate(ts)
+    return (t, np.vstack(xs), np.vstack(us)[:-1], np.vstack(zs), np.vstack(ps), np.concatenate(si))
+
+
+def _contact_at(r: StepResult, t: float) -> np.ndarray:
+    start, s = [seg for seg in r.spec.segments if seg[0] <= t + 1e-12][-1]
+    return np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
+
+
+__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "lagrange_basis", "skating_steps", "solve_motion",
+           "walking_steps"]

@@ -1,0 +1,126 @@
+"""Humanoid GPM steps (Takasugi et al.): the paper's figures, every constraint by independent
+code, and the library round trip."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from skatelib.library.errors import ConfigError
+from skatelib.pipeline.config import CONFIG_DIR, load_humanoid_config
+from skatelib.pipeline.humanoid_build import build_humanoid_library
+from skatelib.pipeline.humanoid_motions import skating_steps, solve_motion, walking_steps
+from skatelib.pipeline.humanoid_verify import check_steps, failures
+from skatelib.runtime import MotionLibrary
+
+WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"
+
+
+@pytest.fixture(scope="module")
+def walk():
+    c = load_humanoid_config(WALK)
+    return c, solve_motion(c, 0.375)
+
+
+@pytest.fixture(scope="module")
+def skate():
+    c = load_humanoid_config(SKATE)
+    return c, solve_motion(c, 1.0)
+
+
+def _report(c, m):
+    plan = (walking_steps if c.sweep.motion == "walk" else skating_steps)(c, m.velocity_mps)[1]
+    nodes_t = np.stack([r.t0 + np.concatenate([(np.concatenate([[-1.0], np.polynomial.legendre.leggauss(
+        len(r.U))[0]]) + 1) / 2 * r.spec.duration_s, [r.spec.duration_s]]) for r in m.steps])
+    nodes_X = np.stack([np.vstack([r.X, r.Xf]) for r in m.steps])
+    h = c.humanoid
+    return plan, nodes_t, nodes_X, np.stack([r.U for r in m.steps]), (h.gravity_mps2, h.leg_min_m, h.leg_max_m)
+
+
+def test_skate_push_reaches_one_metre_per_second_at_one_second(skate):
+    """Paper Sec. V-B: 0 -> 1.0 m/s in the 1.0 s push; COM 0.80 m -> 0.73 m at the transition."""
+    _, m = skate
+    assert m.success
+    push = m.steps[0]
+    assert push.spec.duration_s == pytest.approx(1.0)
+    assert push.Xf[3] == pytest.approx(1.0, abs=1e-9)
+    assert push.X[0, 2] == pytest.approx(0.80) and push.Xf[2] == pytest.approx(0.73, abs=1e-9)
+    k = int(np.argmin(np.abs(m.t - 1.0)))
+    assert m.state[k, 3] == pytest.approx(1.0, abs=1e-6)  # the stored samples agree
+    assert np.abs(m.state[m.t > 1.0, 3] - 1.0).max() < 1e-6  # no friction along the board afterwards
+
+
+def test_walking_reaches_0_4_metres_per_second(walk):
+    """Paper Sec. V-A: six 0.3 m steps of 0.8 s; the COM reaches about 0.40 m/s at 0.80 m height."""
+    _, m = walk
+    assert m.success and len(m.steps) == 8
+    assert 0.38 <= m.state[:, 3].max() <= 0.42
+    assert np.abs(m.state[:, 2] - 0.80).max() < 0.02
+    assert m.state[-1, 3:6] == pytest.approx(np.zeros(3), abs=1e-6)  # stopped
+
+
+@pytest.mark.parametrize("motion", ["walk", "skate"])
+def test_every_constraint_holds_by_independent_check(motion, walk, skate):
+    """Dynamics, quadrature, continuity, unilateral, ZMP, friction, skating, reach and every
+    terminal condition hold at the nodes, checked with scipy interpolation."""
+    c, m = walk if motion == "walk" else skate
+    plan, nt, nx, nu, (g, rmin, rmax) = _report(c, m)
+    rep = check_steps(plan, nt, nx, nu, g, rmin, rmax)
+    assert failures(rep) == [], rep
+    expected = {"dynamics_position", "zmp_in_polygon", "friction", "reach", "continuity", "stop", "dcm_terminal"}
+    assert expected <= set(rep)
+
+
+def test_checker_catches_a_perturbed_node(skate):
+    """Moving one node's acceleration by 0.05 m/s^2 is reported (the check can fail)."""
+    c, m = skate
+    plan, nt, nx, nu, args = _report(c, m)
+    nu = nu.copy()
+    nu[0, 4, 0] += 0.05
+    assert any("dynamics_velocity" in f for f in failures(check_steps(plan, nt, nx, nu, *args)))
+
+
+def test_sqp_and_ipopt_reach_the_same_optimum():
+    """Both NLP solvers give the same cost per step of the 1.0 m/s skate."""
+    c = load_humanoid_config(SKATE)
+    a = solve_motion(c, 1.0)
+    b = solve_motion(dataclasses.replace(c, gpm=dataclasses.replace(c.gpm, solver="ipopt")), 1.0)
+    for x, y in zip(a.steps, b.steps, strict=True):
+        assert x.objective == pytest.approx(y.objective, rel=1e-6)
+
+
+def test_library_round_trip_and_cli(tmp_path):
+    """`skatelib build` on the skating config writes a humanoid library that validates."""
+    out = tmp_path / "skate.h5"
+    env = {**os.environ, "COLUMNS": "200"}
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out)], capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lib = MotionLibrary.open(out)
+    assert lib.kind == "humanoid" and len(lib) == 3
+    e = lib.select(1.0)
+    assert e.columns["state"] == ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
+    assert e.columns["zmp"] == ("zmp_x", "zmp_y")
+    assert e.sample(1.0).state[3] == pytest.approx(1.0, abs=1e-6)
+    v = subprocess.run([*cli, "validate", str(out)], capture_output=True, text=True, env=env)
+    assert v.returncode == 0 and "all entries valid" in v.stdout
+
+
+def test_build_report_marks_all_entries(tmp_path):
+    """The walking build writes one successful entry with 8 steps."""
+    rep = build_humanoid_library(load_humanoid_config(WALK), tmp_path / "w.h5")
+    assert not rep.failed and MotionLibrary.open(rep.path).select(0.375).n_strides == 8
+
+
+def test_unknown_motion_is_a_config_error(tmp_path):
+    """A motion other than walk or skate names the key."""
+    p = tmp_path / "x.toml"
+    p.write_text(f'extends = "{WALK.as_posix()}"\n[sweep]\nmotion = "run"\nvelocities_mps = [1.0]\n')
+    with pytest.raises(ConfigError, match=r"sweep\.motion"):
+        load_humanoid_config(p)
+    assert Path(WALK).exists()
