@@ -126,6 +126,54 @@ def bench_runtime(path: Path | None = None) -> None:
           f"  ({t_loop / t_window:.1f}x)   target <= 15 us")
 
 
+def bench_rerun(path: Path | None = None) -> None:
+    """Logging the default library to a Rerun recording with columns, against logging the
+    same entries row by row (rr.log per knot) as the baseline."""
+    import tempfile
+
+    import rerun as rr
+    from skatelib.pipeline.build import build_library
+    from skatelib.pipeline.inspect_rerun import _Robot, log_library
+    from skatelib.runtime import MotionLibrary
+
+    path = path or build_library(load_config(), Path("out") / "bench-default.h5").path
+    lib = MotionLibrary.open(path)
+    tmp = Path(tempfile.mkdtemp())
+    rec = rr.RecordingStream("skatelib-bench")
+    rec.save(str(tmp / "cols.rrd"))
+    t0 = time.perf_counter()
+    log_library(lib, rec)
+    rec.flush()
+    t_cols = time.perf_counter() - t0
+    rec.disconnect()
+    # Baseline: the robot's link transforms of 2 entries logged one knot at a time.
+    rec2 = rr.RecordingStream("skatelib-bench-rows")
+    rec2.save(str(tmp / "rows.rrd"))
+    robot = _Robot(lib.urdf)
+    t0 = time.perf_counter()
+    entries = list(lib)[:2]
+    n_rows = 0
+    for e in entries:
+        import numpy as np
+        from skatelib.pipeline.inspect_rerun import _rpy
+
+        R = _rpy(e.state[:, 3:6])
+        trans, quats, _ = robot.poses(e.state[:, 0:3], R, e.state[:, 12:24])
+        for k, tk in enumerate(e.t):
+            rec2.set_time("time", duration=float(tk))
+            for i, g in enumerate(robot.geoms.geometryObjects):
+                rec2.log(f"/{e.key}/robot/{g.name}", rr.Transform3D(translation=trans[k, i], quaternion=quats[k, i]))
+                n_rows += 1
+            rec2.log(f"/{e.key}/plots/board_speed", rr.Scalars(float(np.asarray(e.state[k, 24]))))
+    rec2.flush()
+    t_rows = time.perf_counter() - t0
+    per_entry_rows = t_rows / len(entries)
+    print(f"Rerun logging of the default library ({len(lib)} entries)")
+    print(f"  send_columns, everything:          {t_cols:6.2f} s   target <= 2 s")
+    print(f"  row by row, transforms only:       {per_entry_rows:6.2f} s per entry "
+          f"(~{per_entry_rows * len(lib):.1f} s for the library, {per_entry_rows * len(lib) / t_cols:.1f}x)")
+
+
 def bench_humanoid(repeats: int = 21) -> None:
     """One skating push step (10 LG nodes): CasADi SQP and IPOPT against scipy SLSQP with
     finite-difference gradients on the same NLP (the paper's solver)."""
@@ -184,7 +232,7 @@ def bench_humanoid(repeats: int = 21) -> None:
 if __name__ == "__main__":
     import sys
 
-    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid"]
+    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid", "rerun"]
     lib_path = None
     if "pushoff" in parts:
         bench_pushoff()
@@ -192,6 +240,8 @@ if __name__ == "__main__":
         lib_path = bench_library()
     if "humanoid" in parts:
         bench_humanoid()
+    if "rerun" in parts:
+        bench_rerun(lib_path)
     if "runtime" in parts:
         # Measured in a fresh process: the build's idle worker processes would disturb it.
         import subprocess

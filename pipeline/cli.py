@@ -216,6 +216,26 @@ def validate(library: LibArg) -> None:
     console.print("[green]all entries valid[/]")
 
 
+@app.command()
+def inspect(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all by default.")] = None,
+    save: Annotated[Path | None, typer.Option(help="Write a Rerun recording (.rrd).")] = None,
+    spawn: Annotated[bool, typer.Option(help="Open a Rerun viewer.")] = False,
+    overlay: Annotated[bool, typer.Option(help="Overlay entries instead of side by side.")] = False,
+) -> None:
+    """Look at trajectories in Rerun: robot, board, forces and plots, with a default layout."""
+    try:
+        from skatelib.pipeline.inspect_rerun import inspect_library
+    except ImportError as e:
+        raise typer.BadParameter(f"Rerun is not installed ({e}); pip install rerun-sdk") from e
+    if save is None and not spawn:
+        save = library.with_suffix(".rrd")
+    roots = inspect_library(library, entry, save, spawn, overlay)
+    console.print(f"logged {len(roots)} entries" + (escape(f" to {save}; open it with: rerun {save}") if save else ""))
+
+
 def main() -> None:
     """Entry point: turn skatelib errors into a message and exit code 2, not a traceback."""
     try:

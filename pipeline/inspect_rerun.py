@@ -1,0 +1,249 @@
+"""Log motion libraries to Rerun: columns over time (``send_columns``), a static scene, and a
+saved default blueprint. Imported only by ``skatelib inspect``.
+
+Quadruped entries: the robot's URDF shapes posed by pinocchio at every knot, the board as a box
+that moves and rolls, contact forces as arrows (blue on the board, orange on the ground), and
+plots of board speed against the target, deck roll, normal forces, joint angles and the
+friction and torque margins. Humanoid entries: COM, ZMP, the representative contact point and
+the soles, with plots of COM height and speed and the ZMP.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import rerun as rr
+import rerun.blueprint as rrb
+from skatelib.library.channels import BOARD, GROUND, LEGS
+from skatelib.library.errors import LibraryFormatError
+from skatelib.runtime import Entry, MotionLibrary
+
+BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)
+FORCE_SCALE_M_PER_N = 0.004
+SPACING_M = 1.2  # side-by-side entries are this far apart along y
+
+
+def _time(t: np.ndarray) -> list[rr.TimeColumn]:
+    return [rr.TimeColumn("time", duration=np.asarray(t, dtype=float))]
+
+
+class _Robot:
+    """Pinocchio model and visual shapes from the URDF stored in the library."""
+
+    def __init__(self, urdf_text: str):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "robot.urdf"
+            path.write_text(urdf_text)
+            self.model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+            self.geoms = pin.buildGeomFromUrdf(self.model, str(path), pin.GeometryType.VISUAL)
+        self.data = self.model.createData()
+        self.gdata = pin.GeometryData(self.geoms)
+        self.q_idx = np.array([self.model.joints[j].idx_q for j in range(2, self.model.njoints)])
+        feet = [f.name for f in self.model.frames if f.name.endswith("_foot")]
+        self.foot_ids = [self.model.getFrameId(f"{leg}_foot") for leg in LEGS] if len(feet) >= 4 else []
+
+    def shape(self, g: Any) -> Any:
+        geo = g.geometry
+        name = type(geo).__name__
+        if name == "Box":
+            return rr.Boxes3D(half_sizes=[geo.halfSide], colors=[(90, 90, 100)])
+        if name == "Cylinder":
+            return rr.Cylinders3D(lengths=[2 * geo.halfLength], radii=[geo.radius], colors=[(120, 120, 130)])
+        if name == "Sphere":
+            return rr.Ellipsoids3D(half_sizes=[[geo.radius] * 3], colors=[(30, 30, 30)], fill_mode="solid")
+        return None
+
+    def poses(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Per knot and shape: translations (K, G, 3) and xyzw quaternions (K, G, 4); feet (K, 4, 3)."""
+        K, G = len(q), len(self.geoms.geometryObjects)
+        trans, quats = np.zeros((K, G, 3)), np.zeros((K, G, 4))
+        tau = np.zeros((K, 4, 3, 3))
+        qp = pin.neutral(self.model)
+        for k in range(K):
+            qp[:3] = base_pos[k]
+            qp[3:7] = pin.Quaternion(base_rot[k]).coeffs()
+            qp[self.q_idx] = q[k]
+            pin.forwardKinematics(self.model, self.data, qp)
+            pin.updateGeometryPlacements(self.model, self.data, self.geoms, self.gdata)
+            for i in range(G):
+                M = self.gdata.oMg[i]
+                trans[k, i] = M.translation
+                quats[k, i] = pin.Quaternion(M.rotation).coeffs()
+            if self.foot_ids:
+                pin.computeJointJacobians(self.model, self.data, qp)
+                pin.updateFramePlacements(self.model, self.data)
+                for leg, fid in enumerate(self.foot_ids):
+                    J = pin.getFrameJacobian(self.model, self.data, fid, pin.LOCAL_WORLD_ALIGNED)[:3, 6:]
+                    tau[k, leg] = J[:, 3 * leg: 3 * leg + 3]  # this leg's columns: d foot / d q_leg
+        return trans, quats, tau
+
+
+def _rpy(rpy: np.ndarray) -> np.ndarray:
+    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    R = np.empty((len(rpy), 3, 3))
+    R[:, 0] = np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=1)
+    R[:, 1] = np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=1)
+    R[:, 2] = np.stack([-sp, cp * sr, cp * cr], axis=1)
+    return R
+
+
+def _quat_rows(R: np.ndarray) -> np.ndarray:
+    return np.array([pin.Quaternion(Ri).coeffs() for Ri in R])
+
+
+def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: _Robot, root: str,
+                        offset: np.ndarray) -> None:
+    t, x, u = e.t, e.state, e.control
+    assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
+    K = len(t)
+    R = _rpy(x[:, 3:6])
+    com_off = lib.model_arrays.get("robot_com_offset_m", np.zeros(3))
+    trunk = x[:, 0:3] - np.einsum("kij,j->ki", R, com_off) + offset
+    trans, quats, jac = robot.poses(trunk, R, x[:, 12:24])
+    for i, g in enumerate(robot.geoms.geometryObjects):
+        path = f"{root}/robot/{g.name}"
+        shape = robot.shape(g)
+        if shape is not None:
+            rec.log(path, shape, static=True)
+        rec.send_columns(path, indexes=_time(t),
+                         columns=rr.Transform3D.columns(translation=trans[:, i], quaternion=quats[:, i]))
+    # The board: a deck-sized box rolling about its x axis and yawing with the robot.
+    m = lib.model
+    half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, 0.01]
+    rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -0.01]], colors=[(160, 110, 60)]),
+            static=True)
+    yaw, roll = e.board_pos[:, 3], x[:, 26]
+    Rb = np.einsum("kij,kjl->kil", _rpy(np.column_stack([np.zeros(K), np.zeros(K), yaw])),
+                   _rpy(np.column_stack([roll, np.zeros(K), np.zeros(K)])))
+    rec.send_columns(f"{root}/board", indexes=_time(t),
+                     columns=rr.Transform3D.columns(translation=e.board_pos[:, :3] + offset, quaternion=_quat_rows(Rb)))
+    # Contact forces at the knots where a control acts.
+    forces = u[:, :12].reshape(-1, 4, 3)
+    for i, leg in enumerate(LEGS):
+        c = e.contact[:-1, i]
+        colors = np.array([BOARD_COLOR if ci == BOARD else GROUND_COLOR if ci == GROUND else SWING_COLOR for ci in c],
+                          dtype=np.uint8)
+        rec.send_columns(f"{root}/forces/{leg}", indexes=_time(t[:-1]),
+                         columns=rr.Arrows3D.columns(origins=e.foot_pos[:-1, i] + offset,
+                                                     vectors=forces[:, i] * FORCE_SCALE_M_PER_N, colors=colors))
+    # Plots.
+    v_fwd = np.cos(x[:, 5]) * x[:, 24] + np.sin(x[:, 5]) * x[:, 25]
+    plot = f"{root}/plots"
+    rec.send_columns(f"{plot}/board_speed/actual", indexes=_time(t), columns=rr.Scalars.columns(scalars=v_fwd))
+    rec.send_columns(f"{plot}/board_speed/target", indexes=_time(t),
+                     columns=rr.Scalars.columns(scalars=np.full(K, e.target_velocity_mps)))
+    rec.send_columns(f"{plot}/board_roll", indexes=_time(t), columns=rr.Scalars.columns(scalars=x[:, 26]))
+    for i, leg in enumerate(LEGS):
+        rec.send_columns(f"{plot}/normal_force/{leg}", indexes=_time(t[:-1]),
+                         columns=rr.Scalars.columns(scalars=forces[:, i, 2]))
+    names = e.columns["state"][12:24]
+    for j, name in enumerate(names):
+        rec.send_columns(f"{plot}/joints/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=x[:, 12 + j]))
+    mu, tau_max = float(m["friction_mu"]), float(m.get("torque_limit_Nm", np.inf))
+    fric = np.full(K - 1, np.inf)
+    torque = np.full(K - 1, np.inf)
+    for k in range(K - 1):
+        Rbk = Rb[k]
+        for i in range(4):
+            if e.contact[k, i] in (BOARD, GROUND):
+                f = forces[k, i]
+                fl = Rbk.T @ f if e.contact[k, i] == BOARD else f
+                fric[k] = min(fric[k], mu * fl[2] - abs(fl[0]), mu * fl[2] - abs(fl[1]))
+                tau = -jac[k, i].T @ f
+                torque[k] = min(torque[k], tau_max - np.abs(tau).max())
+    rec.send_columns(f"{plot}/margins/friction_N", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=fric))
+    rec.send_columns(f"{plot}/margins/torque_Nm", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=torque))
+
+
+def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
+    t, x = e.t, e.state
+    zmp = e.arrays["zmp"]
+    cp = e.arrays["contact_point"]
+    m = lib.model
+    rec.send_columns(f"{root}/com", indexes=_time(t),
+                     columns=rr.Points3D.columns(positions=x[:, 0:3] + offset, radii=np.full(len(t), 0.03)))
+    rec.log(f"{root}/com_path", rr.LineStrips3D([x[:, 0:3] + offset], colors=[(200, 40, 40)]), static=True)
+    zmp3 = np.column_stack([zmp, np.zeros(len(zmp))]) + offset
+    green = np.tile(np.array([[20, 160, 60]], dtype=np.uint8), (len(t), 1))
+    rec.send_columns(f"{root}/zmp", indexes=_time(t),
+                     columns=rr.Points3D.columns(positions=zmp3, radii=np.full(len(t), 0.02), colors=green))
+    rec.send_columns(f"{root}/contact_point", indexes=_time(t),
+                     columns=rr.Points3D.columns(positions=cp + offset, radii=np.full(len(t), 0.015)))
+    # Soles under the contact point (the footprints of the plan), static.
+    feet = np.unique(np.round(cp[:, :2], 4), axis=0)
+    half = [m["foot_length_m"] / 2, m["foot_width_m"] / 2, 0.005]
+    rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
+                                        half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
+    plot = f"{root}/plots"
+    for name, col in (("com_z", x[:, 2]), ("com_vx", x[:, 3]), ("zmp_x", zmp[:, 0]), ("zmp_y", zmp[:, 1])):
+        rec.send_columns(f"{plot}/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=col))
+
+
+def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
+    """A 3D view of every entry beside time-series panels."""
+    if lib.kind == "quadruped":
+        panels = [("board speed vs target", "board_speed"), ("deck roll", "board_roll"),
+                  ("normal forces", "normal_force"), ("joint angles", "joints"), ("margins", "margins")]
+    else:
+        panels = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), ("ZMP y", "zmp_y")]
+    series = [rrb.TimeSeriesView(name=title, contents=[f"{r}/plots/{p}/**" for r in roots] + [
+        f"{r}/plots/{p}" for r in roots]) for title, p in panels]
+    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="scene", origin="/"), rrb.Vertical(*series),
+                                        column_shares=[3, 2]), collapse_panels=True)
+
+
+def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | None = None,
+                overlay: bool = False) -> list[str]:
+    """Log entries (all by default) side by side (or overlaid); returns their entity roots."""
+    entries = [lib[k] for k in keys] if keys else list(lib)
+    robot = _Robot(lib.urdf) if lib.kind == "quadruped" else None
+    roots = []
+    rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    for n, e in enumerate(entries):
+        root = f"/{e.key}"
+        offset = np.zeros(3) if overlay else np.array([0.0, SPACING_M * n, 0.0])
+        if robot is not None:
+            log_quadruped_entry(rec, lib, e, robot, root, offset)
+        else:
+            log_humanoid_entry(rec, lib, e, root, offset)
+        roots.append(root)
+    rec.send_blueprint(blueprint(lib, roots))
+    return roots
+
+
+def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn: bool, overlay: bool) -> list[str]:
+    """Open a library and log it to a file (written atomically) and/or a spawned viewer."""
+    lib = MotionLibrary.open(path)
+    if lib.kind == "quadruped" and not lib.urdf:
+        raise LibraryFormatError(path, "/model/robot_urdf", "the library carries no robot description; rebuild it")
+    for k in keys or []:
+        lib[k]  # raises EntryNotFound with the valid keys before anything is written
+    rec = rr.RecordingStream(f"skatelib-{path.stem}")
+    tmp = None
+    if save is not None:
+        save.parent.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(prefix=f".{save.name}.", suffix=".tmp", dir=save.parent)
+        os.close(fd)
+        tmp = Path(name)
+        rec.save(str(tmp))
+    if spawn:
+        rec.spawn()
+    try:
+        roots = log_library(lib, rec, keys, overlay)
+        rec.flush()
+        rec.disconnect()
+        if tmp is not None and save is not None:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a recording is an ordinary file
+            os.replace(tmp, save)
+    finally:
+        if tmp is not None and tmp.exists():
+            tmp.unlink()
+    return roots

@@ -1,0 +1,102 @@
+"""Rerun inspection: the .rrd read back with rerun's own reader matches the library."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+rr = pytest.importorskip("rerun")
+from rerun.chunk import RrdReader  # noqa: E402
+from skatelib.pipeline.build import build_library  # noqa: E402
+from skatelib.pipeline.config import CONFIG_DIR, load_config, load_humanoid_config  # noqa: E402
+from skatelib.pipeline.humanoid_build import build_humanoid_library  # noqa: E402
+from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
+from skatelib.runtime import MotionLibrary  # noqa: E402
+
+TINY = Path(__file__).parent / "configs" / "tiny.toml"
+
+
+def _columns(rrd: Path) -> dict[str, dict[str, list]]:
+    """entity path -> {column name: values}, concatenated over chunks, from rerun's reader."""
+    out: dict[str, dict[str, list]] = {}
+    import pyarrow as pa
+
+    for chunk in RrdReader(str(rrd)).store().stream():
+        rb = chunk.to_record_batch()
+        dst = out.setdefault(chunk.entity_path, {})
+        for field, col in zip(rb.schema, rb.columns, strict=True):
+            if pa.types.is_duration(field.type):
+                col = col.cast(pa.int64())  # nanoseconds
+            dst.setdefault(field.name, []).extend(col.to_pylist())
+    return out
+
+
+@pytest.fixture(scope="module")
+def quad_lib(tmp_path_factory):
+    cfg = load_config(TINY)
+    return build_library(cfg, tmp_path_factory.mktemp("q") / "tiny.h5", jobs=1, use_cache=False).path
+
+
+def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path):
+    """Entity paths, time points and values of the board speed and a force arrow match the library."""
+    out = tmp_path / "q.rrd"
+    roots = inspect_library(quad_lib, None, out, spawn=False, overlay=False)
+    lib = MotionLibrary.open(quad_lib)
+    cols = _columns(out)
+    e = lib["v0.30_s1"]
+    root = "/v0.30_s1"
+    assert root in roots
+    for sub in ("board", "robot/trunk_0", "forces/RL", "plots/board_speed/actual", "plots/board_speed/target",
+                "plots/margins/friction_N", "plots/joints/q_FL_knee"):
+        path = f"{root}/{sub}"
+        assert path in cols, sorted(cols)
+    speed = cols[f"{root}/plots/board_speed/actual"]
+    assert len(speed["time"]) == len(e.t)
+    got = np.array([v[0] for v in speed["Scalars:scalars"]])
+    assert np.allclose(got, e.state[:, 24], atol=1e-12)  # straight push: yaw stays 0
+    arrows = cols[f"{root}/forces/RL"]
+    assert len(arrows["time"]) == len(e.t) - 1
+    vec = np.array([v[0] for v in arrows["Arrows3D:vectors"]])
+    assert np.allclose(vec[3], e.control[3, 6:9] * 0.004, atol=1e-6)
+    margins = np.array([v[0] for v in cols[f"{root}/plots/margins/friction_N"]["Scalars:scalars"]])
+    assert margins.min() >= -1e-4  # the friction cones hold on the logged data
+
+
+def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
+    """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
+    lib_path = build_humanoid_library(load_humanoid_config(CONFIG_DIR / "hrp2_skate.toml"), tmp_path / "s.h5").path
+    out = tmp_path / "h.rrd"
+    inspect_library(lib_path, ["v1.00_s3"], out, spawn=False, overlay=False)
+    cols = _columns(out)
+    e = MotionLibrary.open(lib_path)["v1.00_s3"]
+    com = cols["/v1.00_s3/com"]
+    assert len(com["time"]) == len(e.t)
+    assert np.allclose(np.array([p[0] for p in com["Points3D:positions"]])[:, 2], e.state[:, 2], atol=1e-6)
+    assert "/v1.00_s3/zmp" in cols and "/v1.00_s3/soles" in cols and "/v1.00_s3/plots/com_vx" in cols
+    assert "/v1.00_s0" not in cols
+
+
+def test_cli_save_then_rerun_verify(quad_lib, tmp_path):
+    """`skatelib inspect LIB --save x.rrd` then `rerun rrd verify x.rrd` both succeed."""
+    out = tmp_path / "x.rrd"
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    r = subprocess.run([*cli, "inspect", str(quad_lib), "--save", str(out)], capture_output=True, text=True,
+                       env={**os.environ, "COLUMNS": "200"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    rerun_bin = Path(sys.executable).parent / "rerun"
+    v = subprocess.run([str(rerun_bin), "rrd", "verify", str(out)], capture_output=True, text=True)
+    assert v.returncode == 0, v.stdout + v.stderr
+
+
+def test_unknown_entry_writes_nothing(quad_lib, tmp_path):
+    """Asking for an entry that does not exist fails before any file is written."""
+    from skatelib.runtime import EntryNotFound
+
+    with pytest.raises(EntryNotFound, match=r"v0\.30_s1"):
+        inspect_library(quad_lib, ["v9.99_s9"], tmp_path / "y.rrd", spawn=False, overlay=False)
+    assert list(tmp_path.iterdir()) == []
