@@ -12,6 +12,7 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.writer import EntryData, write_library
 from skatelib.pipeline.config import HumanoidConfig
+from skatelib.pipeline.gpm import GaussPseudospectral
 from skatelib.pipeline.humanoid_motions import (
     CONTROL_NAMES,
     CONTROL_UNITS,
@@ -39,8 +40,9 @@ def entry_from_motion(m: Motion, n_nodes: int) -> EntryData:
     """A library entry with the sampled trajectory and every step's GPM node values."""
     steps = m.steps
     nodes_state = np.stack([np.vstack([r.X, r.Xf]) for r in steps])  # (S, N+2, 6): tau_0..tau_N, end
-    nodes_t = np.stack([r.t0 + np.concatenate([(np.asarray(_support(n_nodes)) + 1) / 2 * r.spec.duration_s,
-                                               [r.spec.duration_s]]) for r in steps])
+    support = GaussPseudospectral(n_nodes).support
+    nodes_t = np.stack([r.t0 + np.concatenate([(support + 1) / 2 * r.spec.duration_s, [r.spec.duration_s]])
+                        for r in steps])
     status = "; ".join(f"{r.spec.name}: {r.status}" for r in steps)
     attrs = {
         "target_velocity_mps": m.velocity_mps, "n_strides": len(steps), "success": m.success,
@@ -62,12 +64,6 @@ def entry_from_motion(m: Motion, n_nodes: int) -> EntryData:
              "contact_point": ("m", "m", "m")}
     return EntryData(key=schema.entry_key(m.velocity_mps, len(steps)), attrs=attrs, arrays=arrays, columns=columns,
                      units=units)
-
-
-def _support(n: int) -> np.ndarray:
-    from skatelib.pipeline.gpm import GaussPseudospectral
-
-    return GaussPseudospectral(n).support
 
 
 def build_humanoid_library(config: HumanoidConfig, out: Path | None = None,

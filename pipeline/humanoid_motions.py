@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.pipeline.config import HumanoidConfig
-from skatelib.pipeline.gpm import lagrange_basis
+from skatelib.pipeline.gpm import GaussPseudospectral
 from skatelib.pipeline.humanoid import StepResult, StepSpec, Support, convex_hull, rectangle, solve_sequence
 
 STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
@@ -99,12 +99,11 @@ class Motion:
     zmp: np.ndarray
     contact_point: np.ndarray
     step_index: np.ndarray
+    n_planned: int = 0  # steps in the plan; fewer results mean a step failed and the rest was not tried
 
     @property
     def success(self) -> bool:
         return bool(self.steps) and all(r.success for r in self.steps) and len(self.steps) == self.n_planned
-
-    n_planned: int = 0
 
 
 def solve_motion(c: HumanoidConfig, velocity: float) -> Motion:
@@ -122,7 +121,7 @@ def sample(results: list[StepResult], dt: float, g: float) -> tuple[np.ndarray, 
     ts, xs, us, zs, ps, si = [], [], [], [], [], []
     for j, r in enumerate(results):
         T = r.spec.duration_s
-        gpm = __import__("skatelib.pipeline.gpm", fromlist=["GaussPseudospectral"]).GaussPseudospectral(len(r.U))
+        gpm = GaussPseudospectral(len(r.U))
         last = j == len(results) - 1
         local = np.arange(0.0, T + (dt / 2 if last else -dt / 2), dt)
         tau = gpm.to_tau(local, 0.0, T)
@@ -148,5 +147,4 @@ def _contact_at(r: StepResult, t: float) -> np.ndarray:
     return np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
 
 
-__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "lagrange_basis", "skating_steps", "solve_motion",
-           "walking_steps"]
+__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "skating_steps", "solve_motion", "walking_steps"]

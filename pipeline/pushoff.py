@@ -195,28 +195,78 @@ class PushoffProblem:
         return lbx.reshape(-1), ubx.reshape(-1), lbg, ubg
 
     def initial_guess(self, v_target: float, kind: str) -> np.ndarray:
-        """Static stance riding a board whose speed ramps to the target (``kind="ramp"``) or at rest."""
+        """Static stance riding a board whose speed ramps to the target (``kind="ramp"``) or at rest.
+
+        The push leg is posed by inverse kinematics so that its foot stays where it touched down
+        while the trunk rides on, and swings back between pushes; the push force carries the
+        momentum the ramp needs (never random).
+        """
         s, sch = self.system, self.schedule
         T = sch.t[-1]
-        guess = np.tile(np.concatenate([self.x0, np.zeros(NU)]), (len(sch.t), 1))
-        if kind == "ramp":
-            v = v_target * sch.t / T
-            dist = 0.5 * v_target * sch.t**2 / T
-            guess[:, 24] = v
-            guess[:, 6] = v
-            guess[:, 0] += dist
-            guess[:, NX] = dist
+        K = len(sch.t)
+        guess = np.tile(np.concatenate([self.x0, np.zeros(NU)]), (K, 1))
+        a = v_target / T if kind == "ramp" else 0.0
+        guess[:, 24] = guess[:, 6] = a * sch.t
+        guess[:, 0] += 0.5 * a * sch.t**2
+        guess[:, NX] = 0.5 * a * sch.t**2
         p = s.push_index
-        for k in range(len(sch.t)):
+        q = np.tile(s.stance.q_board, (K, 1))
+        runs = sch.stance_intervals(p, GROUND)
+        com_off = s.srb.com_offset_m
+        for k0, k1 in runs:
+            trunk0 = guess[k0, S_POS] - com_off
+            foot_world = trunk0 + np.asarray(s.robot.foot_positions_body(s.stance.q_push))[:, p]
+            q_leg = s.stance.q_push[3 * p: 3 * p + 3].copy()
+            for k in range(k0, k1 + 1):
+                q_leg = self._leg_ik(foot_world - (guess[k, S_POS] - com_off), q_leg)
+                q[k, 3 * p: 3 * p + 3] = q_leg
+        # Swings: joint angles interpolate from lift-off to the next touchdown (or the stance).
+        lifts = [k1 for _, k1 in runs]
+        downs = [k0 for k0, _ in runs[1:]] + [K - 1]
+        for k1, k2 in zip(lifts, downs, strict=True):
+            end = q[k2, 3 * p: 3 * p + 3] if k2 < K - 1 else s.stance.q_push[3 * p: 3 * p + 3]
+            for k in range(k1 + 1, k2 + (1 if k2 == K - 1 else 0)):
+                w = (k - k1) / max(k2 - k1, 1)
+                q[k, 3 * p: 3 * p + 3] = (1 - w) * q[k1, 3 * p: 3 * p + 3] + w * end
+        guess[:, S_Q] = q
+        m_r, m_b = s.srb.mass_kg, s.board.mass_kg
+        push_time = sum(k1 - k0 for k0, k1 in runs) * (sch.t[1] - sch.t[0])
+        f_push = (m_r + m_b) * v_target / push_time if kind == "ramp" and push_time > 0 else 0.0
+        for k in range(K - 1):
             on = [i for i in range(4) if sch.contact[k, i] != SWING]
-            q = s.stance.q_board.copy()
-            if sch.contact[k, p] == GROUND:
-                q[3 * p: 3 * p + 3] = s.stance.q_push[3 * p: 3 * p + 3]
-            guess[k, S_Q] = q
             for i in on:
-                guess[k, NXA + 3 * i + 2] = s.srb.mass_kg * s.gravity_mps2 / len(on)
+                guess[k, NXA + 3 * i + 2] = m_r * s.gravity_mps2 / len(on)
+                if i == p:
+                    guess[k, NXA + 3 * i] = f_push
+                elif sch.contact[k, i] != SWING:
+                    guess[k, NXA + 3 * i] = -m_b * a / 3
         guess[-1, NXA:] = 0.0
         return guess.reshape(-1)
+
+    @cached_property
+    def _leg_fk(self) -> ca.Function:
+        """Push-leg foot position in the trunk frame and its 3x3 Jacobian, from the leg's joints."""
+        p = self.system.push_index
+        q_leg = ca.SX.sym("q", 3)
+        chain = self.system.robot.chains[p]
+        from skatelib.pipeline.robot import foot_position_leg
+
+        pos = foot_position_leg(chain, q_leg)
+        return ca.Function("leg_fk", [q_leg], [pos, ca.jacobian(pos, q_leg)])
+
+    def _leg_ik(self, target: np.ndarray, q0: np.ndarray) -> np.ndarray:
+        """Damped Newton on one leg, kept inside the joint limits (a guess, not a constraint)."""
+        p = self.system.push_index
+        lo = self.system.robot.lower_limits[3 * p: 3 * p + 3]
+        hi = self.system.robot.upper_limits[3 * p: 3 * p + 3]
+        q = q0.copy()
+        for _ in range(20):
+            pos, J = (np.asarray(v) for v in self._leg_fk(q))
+            err = target - pos.reshape(-1)
+            if np.linalg.norm(err) < 1e-9:
+                break
+            q = np.clip(q + np.linalg.solve(J.T @ J + 1e-6 * np.eye(3), J.T @ err), lo, hi)
+        return q
 
     @cached_property
     def _g_fn(self) -> ca.Function:
