@@ -180,9 +180,27 @@ def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, ro
     half = [m["foot_length_m"] / 2, m["foot_width_m"] / 2, 0.005]
     rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
                                         half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
+    _log_support_polygons(rec, lib, e, root, offset)
     plot = f"{root}/plots"
     for name, col in (("com_z", x[:, 2]), ("com_vx", x[:, 3]), ("zmp_x", zmp[:, 0]), ("zmp_y", zmp[:, 1])):
         rec.send_columns(f"{plot}/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=col))
+
+
+def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str,
+                          offset: np.ndarray) -> None:
+    """The support polygon of each contact segment of the plan, on the ground where it starts."""
+    from skatelib.pipeline.config import humanoid_config_from_json
+    from skatelib.pipeline.humanoid_motions import skating_steps, walking_steps
+
+    cfg = humanoid_config_from_json(str(lib.attrs["config_resolved_json"]), lib.path)
+    plan = (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
+    strips = []
+    for spec in plan:
+        for _, sup in spec.segments:
+            poly = np.asarray(sup.polygon) + np.asarray(sup.p0)[:2]
+            ring = np.vstack([poly, poly[:1]])
+            strips.append(np.column_stack([ring, np.full(len(ring), 0.002)]) + offset)
+    rec.log(f"{root}/support_polygons", rr.LineStrips3D(strips, colors=[(60, 60, 200)]), static=True)
 
 
 def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:

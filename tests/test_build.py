@@ -147,3 +147,14 @@ def test_retry_ladder_goes_cold_then_other_guesses():
     assert [s.warm is not None for s in ladder] == [True, False, False, False]
     assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]
     assert ("mu_strategy", "adaptive") in ladder[-1].ipopt
+
+
+def test_solve_command_writes_a_one_entry_library(cache, tmp_path):
+    """`skatelib solve --velocity 0.35 --strides 1 --config tiny -o x.h5` writes one valid entry."""
+    out = tmp_path / "one.h5"
+    r = subprocess.run([*CLI, "solve", "--velocity", "0.35", "--strides", "1", "--config", str(TINY), "-o", str(out)],
+                       capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    lib = MotionLibrary.open(out)
+    assert lib.keys() == ["v0.35_s1"] and lib["v0.35_s1"].success
+    assert lib["v0.35_s1"].channel("board_vx")[-1] == pytest.approx(0.35, rel=0.02)

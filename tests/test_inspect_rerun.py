@@ -78,6 +78,8 @@ def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
     assert len(com["time"]) == len(e.t)
     assert np.allclose(np.array([p[0] for p in com["Points3D:positions"]])[:, 2], e.state[:, 2], atol=1e-6)
     assert "/v1.00_s3/zmp" in cols and "/v1.00_s3/soles" in cols and "/v1.00_s3/plots/com_vx" in cols
+    (strips,) = cols["/v1.00_s3/support_polygons"]["LineStrips3D:strips"]  # one static row
+    assert len(strips) == 12  # 10 push segments, the slide, the stop
     assert "/v1.00_s0" not in cols
 
 
