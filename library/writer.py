@@ -54,7 +54,8 @@ def jsonable(v: Any) -> Any:
 
 
 @contextlib.contextmanager
-def _atomic_path(path: Path) -> Iterator[Path]:
+def atomic_path(path: Path) -> Iterator[Path]:
+    """Yield a temporary path in ``path``'s folder; on success it replaces ``path``, on error it is removed."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -132,7 +133,7 @@ def write_library(
         )
     stored: dict[str, np.ndarray] = {}
     marker = placeholder()
-    with _atomic_path(path) as tmp:
+    with atomic_path(path) as tmp:
         _write_h5(tmp, root, model_attrs, model_arrays, model_text, entries, names, index, stored, marker)
         seal(tmp, marker)
     return path

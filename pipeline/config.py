@@ -239,15 +239,7 @@ def load_humanoid_config(path: Path | str) -> HumanoidConfig:
     """
     path = Path(path)
     data, text = read_toml(path)
-    unknown = set(data) - set(_HUMANOID_SECTIONS)
-    if unknown:
-        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join(_HUMANOID_SECTIONS)}")
-    sections = {}
-    for name, cls in _HUMANOID_SECTIONS.items():
-        if name not in data:
-            raise ConfigError(path, name, f"missing table [{name}]")
-        sections[name] = build_section(path, name, cls, data[name])
-    cfg = HumanoidConfig(path=path.resolve(), text=text, **sections)
+    cfg = HumanoidConfig(path=path.resolve(), text=text, **_sections(path, data, _HUMANOID_SECTIONS))
     if cfg.sweep.motion not in ("walk", "skate"):
         raise ConfigError(path, "sweep.motion", f"{cfg.sweep.motion!r}: use 'walk' or 'skate'")
     if cfg.gpm.solver not in ("ipopt", "sqp"):
@@ -377,6 +369,19 @@ def build_section(path: Path, prefix: str, cls: type, data: dict[str, Any]) -> A
     return cls(**kwargs)
 
 
+def _sections(path: Path, data: dict[str, Any], tables: dict[str, type]) -> dict[str, Any]:
+    """Validate every table of a config; unknown or missing tables are errors."""
+    unknown = set(data) - set(tables)
+    if unknown:
+        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join(tables)}")
+    out = {}
+    for name, cls in tables.items():
+        if name not in data:
+            raise ConfigError(path, name, f"missing table [{name}]")
+        out[name] = build_section(path, name, cls, data[name])
+    return out
+
+
 def load_config(path: Path | str | None = None) -> QuadrupedConfig:
     """Load and validate a quadruped build config (the shipped default when ``path`` is None).
 
@@ -388,15 +393,7 @@ def load_config(path: Path | str | None = None) -> QuadrupedConfig:
     meta = data.get("meta", {})
     if meta.get("kind") != "quadruped":
         raise ConfigError(path, "meta.kind", f"expected 'quadruped', got {meta.get('kind')!r}")
-    unknown = set(data) - set(_SECTIONS)
-    if unknown:
-        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join(_SECTIONS)}")
-    sections = {}
-    for name, cls in _SECTIONS.items():
-        if name not in data:
-            raise ConfigError(path, name, f"missing table [{name}]")
-        sections[name] = build_section(path, name, cls, data[name])
-    cfg = QuadrupedConfig(path=path.resolve(), text=text, **sections)
+    cfg = QuadrupedConfig(path=path.resolve(), text=text, **_sections(path, data, _SECTIONS))
     _check_cross_fields(cfg)
     return cfg
 

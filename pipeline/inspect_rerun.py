@@ -10,7 +10,7 @@ the soles, with plots of COM height and speed and the ZMP.
 
 from __future__ import annotations
 
-import os
+import contextlib
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -21,6 +21,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 from skatelib.library.channels import BOARD, GROUND, LEGS
 from skatelib.library.errors import LibraryFormatError
+from skatelib.library.writer import atomic_path
+from skatelib.pipeline.verify import board_rotations, friction_margins
 from skatelib.runtime import Entry, MotionLibrary
 
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)
@@ -118,9 +120,7 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, 0.01]
     rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -0.01]], colors=[(160, 110, 60)]),
             static=True)
-    yaw, roll = e.board_pos[:, 3], x[:, 26]
-    Rb = np.einsum("kij,kjl->kil", _rpy(np.column_stack([np.zeros(K), np.zeros(K), yaw])),
-                   _rpy(np.column_stack([roll, np.zeros(K), np.zeros(K)])))
+    Rb = board_rotations(e.board_pos[:, 3], x[:, 26])
     rec.send_columns(f"{root}/board", indexes=_time(t),
                      columns=rr.Transform3D.columns(translation=e.board_pos[:, :3] + offset, quaternion=_quat_rows(Rb)))
     # Contact forces at the knots where a control acts.
@@ -145,18 +145,11 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     names = e.columns["state"][12:24]
     for j, name in enumerate(names):
         rec.send_columns(f"{plot}/joints/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=x[:, 12 + j]))
-    mu, tau_max = float(m["friction_mu"]), float(m.get("torque_limit_Nm", np.inf))
-    fric = np.full(K - 1, np.inf)
-    torque = np.full(K - 1, np.inf)
-    for k in range(K - 1):
-        Rbk = Rb[k]
-        for i in range(4):
-            if e.contact[k, i] in (BOARD, GROUND):
-                f = forces[k, i]
-                fl = Rbk.T @ f if e.contact[k, i] == BOARD else f
-                fric[k] = min(fric[k], mu * fl[2] - abs(fl[0]), mu * fl[2] - abs(fl[1]))
-                tau = -jac[k, i].T @ f
-                torque[k] = min(torque[k], tau_max - np.abs(tau).max())
+    tau_max = float(m.get("torque_limit_Nm", np.inf))
+    fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
+    touching = np.isin(e.contact[:-1], (BOARD, GROUND))
+    tau = np.abs(np.einsum("klji,klj->kli", jac[:-1], forces)).max(axis=2)  # |J^T f| per leg
+    torque = np.where(touching, tau_max - tau, np.inf).min(axis=1)
     rec.send_columns(f"{plot}/margins/friction_N", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=fric))
     rec.send_columns(f"{plot}/margins/torque_Nm", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=torque))
 
@@ -243,25 +236,12 @@ def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn
     for k in keys or []:
         lib[k]  # raises EntryNotFound with the valid keys before anything is written
     rec = rr.RecordingStream(f"skatelib-{path.stem}")
-    tmp = None
-    if save is not None:
-        save.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{save.name}.", suffix=".tmp", dir=save.parent)
-        os.close(fd)
-        tmp = Path(name)
-        rec.save(str(tmp))
-    if spawn:
-        rec.spawn()
-    try:
+    with contextlib.ExitStack() as stack:
+        if save is not None:
+            rec.save(str(stack.enter_context(atomic_path(save))))  # moved into place only on success
+        if spawn:
+            rec.spawn()
         roots = log_library(lib, rec, keys, overlay)
         rec.flush()
         rec.disconnect()
-        if tmp is not None and save is not None:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a recording is an ordinary file
-            os.replace(tmp, save)
-    finally:
-        if tmp is not None and tmp.exists():
-            tmp.unlink()
     return roots

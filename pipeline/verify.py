@@ -70,6 +70,29 @@ class PhysicsReport:
         return out
 
 
+def board_rotations(yaw: np.ndarray, roll: np.ndarray) -> np.ndarray:
+    """R_B = Rz(yaw) Rx(roll) for arrays of angles: (K, 3, 3)."""
+    cy, sy, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(roll), np.sin(roll)
+    z = np.zeros_like(yaw)
+    return np.stack([np.stack([cy, -sy * cr, sy * sr], -1), np.stack([sy, cy * cr, -cy * sr], -1),
+                     np.stack([z, sr, cr], -1)], axis=-2)
+
+
+def friction_margins(state: np.ndarray, control: np.ndarray, contact: np.ndarray,
+                     mu: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per control knot: the smallest mu f_n - |f_t| [N] and the smallest normal force [N] over the
+    feet in contact (deck frame on the board, world on the ground); +inf where none is."""
+    n = len(control)
+    R_B = board_rotations(state[:n, 5], state[:n, 26])
+    f = control[:, :12].reshape(n, 4, 3)
+    local = np.where((contact[:n] == BOARD)[:, :, None], np.einsum("kji,klj->kli", R_B, f), f)
+    tangential = np.maximum(np.abs(local[:, :, 0]), np.abs(local[:, :, 1]))
+    touching = np.isin(contact[:n], (BOARD, GROUND))
+    margin = np.where(touching, mu * local[:, :, 2] - tangential, np.inf).min(axis=1)
+    normal = np.where(touching, local[:, :, 2], np.inf).min(axis=1)
+    return margin, normal
+
+
 def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray,
                      contact: np.ndarray, foot_pos: np.ndarray, board_pos: np.ndarray,
                      substeps: int = 40) -> PhysicsReport:
@@ -87,16 +110,8 @@ def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, cont
         nxt = np.asarray(fine[h](state[k], control[k])).reshape(-1)
         defect = max(defect, float(np.abs(nxt - state[k + 1]).max()))
 
-    mu = system.friction_mu
-    margin, normal = np.inf, np.inf
-    for k in range(len(t) - 1):
-        R_B = np.asarray(board_rotation(state[k, 26], state[k, 5]))
-        for i in range(4):
-            if contact[k, i] in (BOARD, GROUND):
-                fw = control[k, 3 * i: 3 * i + 3]
-                fl = R_B.T @ fw if contact[k, i] == BOARD else fw
-                margin = min(margin, mu * fl[2] - abs(fl[0]), mu * fl[2] - abs(fl[1]))
-                normal = min(normal, fl[2])
+    margins, normals = friction_margins(state, control, contact, system.friction_mu)
+    margin, normal = float(margins.min(initial=np.inf)), float(normals.min(initial=np.inf))
 
     p = system.push_index
     ground_slip = 0.0
