@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
+from skatelib.library.writer import atomic_path
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, problem_for, solve
 from skatelib.pipeline.stagewise import cache_dir
@@ -73,11 +74,8 @@ def _load_cached(path: Path) -> tuple[SolveResult, int, dict[str, float]] | None
 
 
 def _store(path: Path, result: SolveResult, attempts: int, physics: dict[str, float]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    with tmp.open("wb") as f:
+    with atomic_path(path) as tmp, tmp.open("wb") as f:  # parallel workers never read a half-written entry
         pickle.dump({"result": result, "attempts": attempts, "physics": physics}, f)
-    os.replace(tmp, path)
 
 
 def physics_of(config: QuadrupedConfig, r: SolveResult) -> dict[str, float]:
