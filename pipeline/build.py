@@ -44,7 +44,7 @@ def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 
         problem_for(config, min(config.sweep.strides))
     outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry))
     system = SkateSystem.from_config(config)
-    entries = [entry_from_result(o.result, o.attempts, o.physics) for o in outcomes]
+    entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
     options = outcomes[0].result.ipopt_options if outcomes else {}
     path = write_quadruped_library(out, config, system, entries, options)
     return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0)

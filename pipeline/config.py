@@ -9,6 +9,7 @@ tables are merged key by key, the extending file winning.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import tomllib
 import types
@@ -22,6 +23,7 @@ from skatelib.library.errors import ConfigError
 
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT_CONFIG = "cyberdog2.toml"
+FRICTION_MODELS = ("cone", "polygon8")
 
 
 def _f(lo: float | None = None, hi: float | None = None, doc: str = "", **kw: Any) -> Any:
@@ -123,8 +125,29 @@ class OptimizationConfig:
     mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="monotone")
     mu_init: float = _f(1e-9, 1e3, "IPOPT initial barrier parameter [-].", default=0.01)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
+    friction_model: str = _f(
+        doc="Friction constraint of every contact: 'cone' (exact Coulomb cone, mu^2 f_n^2 >= |f_t|^2, f_n >= 0) "
+            "or 'polygon8' (inscribed 8-facet pyramid, inside the cone).", default="cone")
+    friction_margin: float = _f(0.5, 1.0, "Planning margin: the TO uses mu_plan = margin x mu [-].", default=1.0)
     weights: WeightsConfig = _f(doc="Cost weights of Eq. (16).", default_factory=lambda: WeightsConfig(
         **{f.name: 0.0 for f in dataclasses.fields(WeightsConfig)}))
+
+
+@dataclass(frozen=True)
+class TerminalConfig:
+    """The riding state every push-off ends in, from which three-leg transfer and balancing begin."""
+
+    relative_speed_tol_mps: float = _f(1e-4, 0.5, "Largest lateral COM speed relative to the board at the end [m/s].",
+                                       default=0.005)
+    vertical_speed_tol_mps: float = _f(1e-4, 0.5, "Largest |vertical COM speed| at the end [m/s].", default=0.005)
+    angular_speed_tol_radps: float = _f(1e-4, 1.0, "Largest |body angular velocity| per axis at the end [rad/s].",
+                                    default=0.005)
+    height_tol_m: float = _f(1e-4, 0.1, "Largest COM height error from the riding stance at the end [m].", default=0.01)
+    attitude_tol_rad: float = _f(1e-4, 0.5, "Largest |body roll| and |pitch| at the end [rad].", default=0.03)
+    joint_velocity_tol_radps: float = _f(1e-3, 10.0, "Largest |joint velocity| over the last interval [rad/s].",
+                                         default=0.05)
+    push_foot_height_m: float = _f(0.0, 0.2, "Push foot's lift-off clearance above the ground at the end [m].",
+                                   default=0.02)
 
 
 @dataclass(frozen=True)
@@ -146,6 +169,7 @@ class QuadrupedConfig:
     stance: StanceConfig
     schedule: ScheduleConfig
     optimization: OptimizationConfig
+    terminal: TerminalConfig
     sweep: SweepConfig
 
     @property
@@ -159,6 +183,17 @@ class QuadrupedConfig:
         d.pop("path")
         d.pop("text")
         return json.dumps(d, sort_keys=True, default=str)
+
+    def problem_json(self) -> str:
+        """The part of the config that determines a solved entry, as JSON: no name, no sweep list,
+        no compile switch, and the URDF by the SHA-256 of its bytes instead of its path (so a moved
+        checkout hits the same cache entries and an edited URDF misses them)."""
+        d = json.loads(self.resolved_json())
+        d.pop("meta")
+        d.pop("sweep")
+        d["optimization"].pop("compile")
+        d["robot"]["urdf"] = hashlib.sha256(self.urdf_path.read_bytes()).hexdigest()
+        return json.dumps(d, sort_keys=True)
 
 
 @dataclass(frozen=True)
@@ -271,7 +306,8 @@ def load_any_config(path: Path | str | None = None) -> QuadrupedConfig | Humanoi
 
 _SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "robot": RobotConfig, "board": BoardConfig, "stance": StanceConfig,
-    "schedule": ScheduleConfig, "optimization": OptimizationConfig, "sweep": SweepConfig,
+    "schedule": ScheduleConfig, "optimization": OptimizationConfig, "terminal": TerminalConfig,
+    "sweep": SweepConfig,
 }
 
 
@@ -403,6 +439,7 @@ def config_from_json(text: str, origin: Path, urdf: Path) -> QuadrupedConfig:
     the robot description at ``urdf``. Errors name ``origin``."""
     data = json.loads(text)
     data["robot"]["urdf"] = str(urdf)
+    data.setdefault("terminal", {})  # format 1.0 libraries predate the riding end state
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _SECTIONS.items()}
     cfg = QuadrupedConfig(path=Path(origin), text="", **sections)
     _check_cross_fields(cfg)
@@ -421,6 +458,9 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
         raise ConfigError(p, "meta.kind", "must be 'quadruped' here")
     if cfg.optimization.integrator not in ("etdrk4", "rk4"):
         raise ConfigError(p, "optimization.integrator", f"{cfg.optimization.integrator!r}: use 'etdrk4' or 'rk4'")
+    if cfg.optimization.friction_model not in FRICTION_MODELS:
+        raise ConfigError(p, "optimization.friction_model",
+                          f"{cfg.optimization.friction_model!r}: use one of {', '.join(FRICTION_MODELS)}")
     if cfg.optimization.mu_strategy not in ("monotone", "adaptive"):
         raise ConfigError(p, "optimization.mu_strategy", "use 'monotone' or 'adaptive'")
     if not cfg.urdf_path.is_file():

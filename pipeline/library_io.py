@@ -89,7 +89,8 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
     return attrs, arrays
 
 
-def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None) -> EntryData:
+def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None,
+                      cache_key: str = "") -> EntryData:
     attrs = {
         "target_velocity_mps": r.target_velocity_mps, "n_strides": r.n_strides, "success": r.success,
         "status": r.status, "iterations": r.iterations, "solve_time_s": r.solve_time_s,
@@ -97,7 +98,7 @@ def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, floa
         "max_constraint_violation": r.max_constraint_violation, "final_velocity_mps": r.final_velocity_mps,
         "final_velocity_error": r.final_velocity_error, "attempts": attempts,
         "ipopt_options_json": json.dumps(r.ipopt_options, sort_keys=True, default=str),
-        "physics_json": json.dumps(physics or {}, sort_keys=True),
+        "physics_json": json.dumps(physics or {}, sort_keys=True), "cache_key": cache_key,
     }
     arrays = {schema.D_T: r.t, schema.D_STATE: r.state, schema.D_CONTROL: r.control,
               schema.D_CONTACT: r.contact.astype(np.int8), schema.D_FOOT_POS: r.foot_pos,

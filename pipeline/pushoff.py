@@ -8,6 +8,7 @@ solves a chain of velocities builds once.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -15,7 +16,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import GROUND, NU, NX, S_POS, S_Q, SWING
+from skatelib.library.channels import GROUND, NU, NX, S_OMEGA, S_POS, S_Q, S_RPY, S_VEL, SWING, U_QD
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.dynamics import contact_points_world, dynamics_function, modes_for
 from skatelib.pipeline.integrators import integrator
@@ -31,7 +32,8 @@ from skatelib.pipeline.pushoff_terms import (
     EffortCost,
     FeetOnBoard,
     FinalSpeed,
-    FrictionPyramids,
+    FrictionCones,
+    Propulsion,
     PushFoot,
     Steering,
     TerminalSpeedCost,
@@ -128,12 +130,14 @@ class PushoffProblem:
         q_nom[3 * p: 3 * p + 3] = system.stance.q_push[3 * p: 3 * p + 3]
         w = opt.weights
         costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
-        self.final_speed = FinalSpeed(0.0, opt.final_velocity_tol)
+        mu_plan = opt.friction_margin * system.friction_mu
+        term = config.terminal
         self.constraints: list[ConstraintTerm] = [
             DynamicsDefect(step), FeetOnBoard(system, board_legs),
-            PushFoot(system, self.schedule, config.stance),
-            FrictionPyramids(system, self.schedule, self.mode.board_legs),
-            TorqueLimits(system, self.schedule), Steering(system), self.final_speed,
+            PushFoot(system, self.schedule, config.stance, term.push_foot_height_m),
+            FrictionCones(system, self.schedule, self.mode.board_legs, mu_plan, opt.friction_model),
+            Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),
+            FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), NXA, NU, N_PARAMS, costs,
                                           self.constraints, compile_c=opt.compile)
@@ -188,11 +192,21 @@ class PushoffProblem:
             lbx[swing, NXA + 3 * i: NXA + 3 * i + 3] = ubx[swing, NXA + 3 * i: NXA + 3 * i + 3] = 0.0
         lbx[0, :NXA] = ubx[0, :NXA] = self.x0
         lbx[N, NXA:] = ubx[N, NXA:] = 0.0  # u_N is a placeholder
-        lbg, ubg = self.tr.lbg.copy(), self.tr.ubg.copy()
-        i = self.tr.row(N - 1, "final_speed")
-        tol = self.config.optimization.final_velocity_tol
-        lbg[i], ubg[i] = v_target * (1 - tol), v_target * (1 + tol)
-        return lbx.reshape(-1), ubx.reshape(-1), lbg, ubg
+        self._riding_end(lbx[N], ubx[N], lbx[N - 1], ubx[N - 1])
+        return lbx.reshape(-1), ubx.reshape(-1), self.tr.lbg.copy(), self.tr.ubg.copy()
+
+    def _riding_end(self, lo: np.ndarray, hi: np.ndarray, lo_u: np.ndarray, hi_u: np.ndarray) -> None:
+        """Bounds of the last knot: the body still (vertical speed, angular velocity), level and at
+        the riding stance's height, and no joint motion over the last interval."""
+        term = self.config.terminal
+        z = self.x0[S_POS][2]
+        lo[2], hi[2] = z - term.height_tol_m, z + term.height_tol_m
+        lo[S_RPY][:2], hi[S_RPY][:2] = -term.attitude_tol_rad, term.attitude_tol_rad
+        lo[S_VEL][2], hi[S_VEL][2] = -term.vertical_speed_tol_mps, term.vertical_speed_tol_mps
+        lo[S_OMEGA], hi[S_OMEGA] = -term.angular_speed_tol_radps, term.angular_speed_tol_radps
+        qd = slice(NXA + U_QD.start, NXA + U_QD.stop)
+        lo_u[qd] = np.maximum(lo_u[qd], -term.joint_velocity_tol_radps)
+        hi_u[qd] = np.minimum(hi_u[qd], term.joint_velocity_tol_radps)
 
     def initial_guess(self, v_target: float, kind: str) -> np.ndarray:
         """Static stance riding a board whose speed ramps to the target (``kind="ramp"``) or at rest.
@@ -268,6 +282,18 @@ class PushoffProblem:
             q = np.clip(q + np.linalg.solve(J.T @ J + 1e-6 * np.eye(3), J.T @ err), lo, hi)
         return q
 
+    def fingerprint(self, v_target: float, guess: str) -> str:
+        """SHA-256 of everything this problem feeds IPOPT for one target besides its options and warm
+        start: the stage function (every cost and constraint term), the problem config (URDF by
+        content), parameters, bounds and the cold initial guess."""
+        h = hashlib.sha256()
+        h.update(self.tr.fingerprint.encode())
+        h.update(self.config.problem_json().encode())
+        h.update(str(self.n_strides).encode())
+        for a in (self.parameters(v_target), *self.bounds(v_target), self.initial_guess(v_target, guess)):
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+        return h.hexdigest()
+
     @cached_property
     def _g_fn(self) -> ca.Function:
         return ca.Function("g", [self.tr.nlp.nlp["x"], self.tr.nlp.nlp["p"]], [self.tr.nlp.nlp["g"]])
@@ -301,13 +327,8 @@ def problem_for(config: QuadrupedConfig, n_strides: int) -> PushoffProblem:
     return _PROBLEMS[key]
 
 
-def solve(spec: PushoffSpec) -> SolveResult:
-    """Solve one push-off problem. Never raises on solver failure: the result says so."""
-    t_build = time.perf_counter()
-    built_before = (spec.config.resolved_json(), spec.n_strides) in _PROBLEMS
-    prob = problem_for(spec.config, spec.n_strides)
-    build_time = 0.0 if built_before else time.perf_counter() - t_build
-    v = spec.target_velocity_mps
+def solver_options(spec: PushoffSpec) -> dict[str, Any]:
+    """The IPOPT options a solve of ``spec`` uses: the config's, warm-start settings, then ``spec.ipopt``."""
     opt = spec.config.optimization
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
                                "mu_init": opt.mu_init}
@@ -315,6 +336,17 @@ def solve(spec: PushoffSpec) -> SolveResult:
         options.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
                         "warm_start_mult_bound_push": 1e-6})
     options.update(dict(spec.ipopt))
+    return options
+
+
+def solve(spec: PushoffSpec) -> SolveResult:
+    """Solve one push-off problem. Never raises on solver failure: the result says so."""
+    t_build = time.perf_counter()
+    built_before = (spec.config.resolved_json(), spec.n_strides) in _PROBLEMS
+    prob = problem_for(spec.config, spec.n_strides)
+    build_time = 0.0 if built_before else time.perf_counter() - t_build
+    v = spec.target_velocity_mps
+    options = solver_options(spec)
     solver = prob.solver(options)
     P = prob.parameters(v)
     bounds = prob.bounds(v)

@@ -148,6 +148,7 @@ class PushFoot:
     system: SkateSystem
     schedule: KnotSchedule
     stance: StanceConfig
+    end_height_m: float = 0.0  # lift-off clearance of the foot above the ground at the last knot [m]
     name: str = "push_foot"
 
     def rows(self, s: Stage) -> Any:
@@ -178,35 +179,72 @@ class PushFoot:
             elif contact[k + 1] != GROUND and contact[k] != GROUND:
                 lo[k, 3] = r + lift[k + 1]
         lo[:, 4] = self.system.board.deck_width_m / 2 + r + self.stance.push_clearance_m
+        if contact[n] != GROUND:
+            lo[n - 1, 3] = max(lo[n - 1, 3], r + self.end_height_m)
         return lo, hi
 
 
 @dataclass(frozen=True)
-class FrictionPyramids:
-    """Unilateral forces inside linearized friction cones (deck frame on the board, world on the
-    ground): mu f_n -+ f_t >= 0 per tangent axis, which also implies f_n >= 0; free rows where the
-    foot swings (its force is fixed to zero)."""
+class FrictionCones:
+    """Coulomb friction at every contact, in the deck frame on the board (it rolls) and the world frame
+    on the ground; free rows where the foot swings (its force is fixed to zero).
+
+    ``model="cone"``: the exact cone as ``mu^2 f_n^2 - |f_t|^2 >= 0`` with ``f_n >= 0`` (smooth, unlike
+    the sqrt form). ``model="polygon8"``: eight facets of the inscribed octagon,
+    ``n_j . f_t <= mu cos(pi/8) f_n`` (inside the cone; implies ``f_n >= 0``).
+    ``mu`` is the planning coefficient (margin x the model's mu).
+    """
 
     system: SkateSystem
     schedule: KnotSchedule
     board_legs: tuple[bool, ...]
+    mu: float
+    model: str = "cone"
     name: str = "friction"
 
+    @property
+    def rows_per_foot(self) -> int:
+        return 2 if self.model == "cone" else 8
+
     def rows(self, s: Stage) -> Any:
-        mu = self.system.friction_mu
+        mu = self.mu
         R_B = board_rotation(s.x[I_BOARD_ROLL], s.x[S_RPY][2])
         out = []
         for i in range(4):
             f = s.u[3 * i: 3 * i + 3]
             fl = R_B.T @ f if self.board_legs[i] else f
-            out += [mu * fl[2] - fl[0], mu * fl[2] + fl[0], mu * fl[2] - fl[1], mu * fl[2] + fl[1]]
+            if self.model == "cone":
+                out += [mu**2 * fl[2] ** 2 - fl[0] ** 2 - fl[1] ** 2, fl[2]]
+            else:
+                c = mu * np.cos(np.pi / 8)
+                out += [c * fl[2] - np.cos(a) * fl[0] - np.sin(a) * fl[1] for a in np.arange(8) * np.pi / 4]
         return ca.vertcat(*out)
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = np.zeros((n, 16)), np.full((n, 16), INF)
+        m = self.rows_per_foot
+        lo, hi = np.zeros((n, 4 * m)), np.full((n, 4 * m), INF)
         for i in range(4):
             swing = self.schedule.contact[:n, i] == SWING
-            lo[swing, 4 * i: 4 * i + 4] = -INF
+            lo[swing, m * i: m * i + m] = -INF
+        return lo, hi
+
+
+@dataclass(frozen=True)
+class Propulsion:
+    """The ground pushes the push foot forward along the board heading, never backward."""
+
+    system: SkateSystem
+    schedule: KnotSchedule
+    name: str = "propulsion"
+
+    def rows(self, s: Stage) -> Any:
+        p = self.system.push_index
+        yaw = s.x[S_RPY][2]
+        return ca.cos(yaw) * s.u[3 * p] + ca.sin(yaw) * s.u[3 * p + 1]
+
+    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
+        lo[self.schedule.contact[:n, self.system.push_index] == GROUND] = 0.0
         return lo, hi
 
 
@@ -248,16 +286,23 @@ class Steering:
 
 @dataclass(frozen=True)
 class FinalSpeed:
-    """The board's forward speed at the end within a relative tolerance of the target."""
+    """At the end, the board's and the robot COM's forward speeds both within a relative tolerance
+    of the target (stage parameter ``P_TARGET``), and the COM's lateral speed relative to the
+    board within ``lateral_tol_mps``: robot and board ride on together at the label speed."""
 
-    target_mps: float
     rel_tol: float
+    lateral_tol_mps: float
     name: str = "final_speed"
 
     def rows(self, s: Stage) -> Any:
-        return forward_speed(s.x_next)
+        x = s.x_next
+        yaw = x[S_RPY][2]
+        lateral = -ca.sin(yaw) * (x[S_VEL][0] - x[S_BOARD_V][0]) + ca.cos(yaw) * (x[S_VEL][1] - x[S_BOARD_V][1])
+        robot_fwd = ca.cos(yaw) * x[S_VEL][0] + ca.sin(yaw) * x[S_VEL][1]
+        return ca.vertcat(forward_speed(x) / s.p[P_TARGET] - 1, robot_fwd / s.p[P_TARGET] - 1, lateral)
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
-        lo[-1], hi[-1] = self.target_mps * (1 - self.rel_tol), self.target_mps * (1 + self.rel_tol)
+        lo, hi = np.full((n, 3), -INF), np.full((n, 3), INF)
+        lo[-1, :2], hi[-1, :2] = -self.rel_tol, self.rel_tol
+        lo[-1, 2], hi[-1, 2] = -self.lateral_tol_mps, self.lateral_tol_mps
         return lo, hi

@@ -6,6 +6,7 @@ stage sees the same window ``[x_k, u_k, x_{k+1}, u_{k+1}]`` and is fixed to zero
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -40,6 +41,7 @@ class Transcribed:
     nu: int
     n_params: int
     rows_per_stage: int
+    fingerprint: str  # SHA-256 of the serialized stage function: changes with any cost or constraint term
 
     def row(self, stage: int, term: str, offset: int = 0) -> int:
         """Index into g (and lbg/ubg) of one row of a term at a stage.
@@ -77,6 +79,7 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     oracle = ca.Function("stage_value", [z, p], [cost, cons])
     nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=oracle, keep=keep)
+    fingerprint = hashlib.sha256(oracle.serialize().encode()).hexdigest()
     return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices, nx=nx, nu=nu,
-                       n_params=n_params, rows_per_stage=cons.shape[0])
+                       n_params=n_params, rows_per_stage=cons.shape[0], fingerprint=fingerprint)
 

@@ -22,7 +22,7 @@ from typing import Any
 from skatelib.library import schema
 from skatelib.library.writer import atomic_path
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, problem_for, solve
+from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
 from skatelib.pipeline.stagewise import cache_dir
 from skatelib.pipeline.verify import check_trajectory
 
@@ -31,12 +31,15 @@ THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 @dataclass(frozen=True)
 class EntryOutcome:
-    """A finished sweep entry: the result (without warm-start data), attempts and cache origin."""
+    """A finished sweep entry: the result (without warm-start data), attempts, cache origin, the
+    independent physics measurements, the cache key it is stored under and any note for the user."""
 
     result: SolveResult
     attempts: int
     cached: bool
     physics: dict[str, float]
+    cache_key: str = ""
+    note: str = ""
 
 
 @dataclass(frozen=True)
@@ -54,36 +57,68 @@ def chains_for(config: QuadrupedConfig) -> list[Chain]:
     return [Chain(config, s, v) for s in sorted(config.sweep.strides, reverse=True)]
 
 
-def entry_hash(config: QuadrupedConfig, v: float, strides: int) -> str:
-    """Cache key of an entry: config as used, target, strides and the format version."""
-    src = json.dumps([config.resolved_json(), round(v, 9), strides, schema.FORMAT_VERSION_STR])
-    return hashlib.sha256(src.encode()).hexdigest()[:24]
+# Bump when the retry ladder, the solve's post-processing or the cached payload changes: the key
+# covers the problem itself (stage function, bounds, guess, options) but not that code.
+CACHE_VERSION = "2"
+_MAGIC = b"skatelib-entry-cache 2\n"
 
 
-def _cache_file(config: QuadrupedConfig, v: float, strides: int) -> Path:
-    return cache_dir() / "entries" / f"{entry_hash(config, v, strides)}.pkl"
+def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
+    """Cache key of an entry: what determines its solution.
+
+    The problem's fingerprint (stage function, problem config with the URDF by content, parameters,
+    bounds, cold guess), the IPOPT options, target and strides, the key of the entry whose solution
+    warm-starts it (``None`` when cold), the library format and :data:`CACHE_VERSION`.
+    """
+    prob = problem_for(spec.config, spec.n_strides)
+    v = spec.target_velocity_mps
+    src = json.dumps([CACHE_VERSION, schema.FORMAT_VERSION_STR, prob.fingerprint(v, spec.guess),
+                      solver_options(spec), round(v, 9), spec.n_strides, predecessor], sort_keys=True, default=str)
+    return hashlib.sha256(src.encode()).hexdigest()[:32]
 
 
-def _load_cached(path: Path) -> tuple[SolveResult, int, dict[str, float]] | None:
+def _cache_file(key: str) -> Path:
+    return cache_dir() / "entries" / f"{key}.pkl"
+
+
+def _load_cached(path: Path) -> tuple[SolveResult, int] | str | None:
+    """The cached (result, attempts), ``None`` when absent, or a message when the file is damaged."""
     try:
-        with path.open("rb") as f:
-            obj = pickle.load(f)
-        return obj["result"], obj["attempts"], obj["physics"]
-    except (OSError, pickle.UnpicklingError, EOFError, KeyError, AttributeError):
-        return None  # unreadable or from another version: solve again
+        blob = path.read_bytes()
+    except FileNotFoundError:
+        return None
+    except OSError as e:
+        return f"cache entry {path} unreadable ({e.strerror})"
+    head, sep, payload = blob.partition(b"\n" + b"-" * 8 + b"\n")
+    if not sep or not head.startswith(_MAGIC) or head[len(_MAGIC):].decode(errors="replace") != (
+            hashlib.sha256(payload).hexdigest()):
+        return f"cache entry {path} is damaged (checksum mismatch)"
+    try:
+        obj = pickle.loads(payload)
+        return obj["result"], obj["attempts"]
+    except (pickle.UnpicklingError, EOFError, KeyError, AttributeError, ImportError, TypeError) as e:
+        return f"cache entry {path} cannot be loaded ({type(e).__name__})"
 
 
-def _store(path: Path, result: SolveResult, attempts: int, physics: dict[str, float]) -> None:
-    with atomic_path(path) as tmp, tmp.open("wb") as f:  # parallel workers never read a half-written entry
-        pickle.dump({"result": result, "attempts": attempts, "physics": physics}, f)
+def _store(path: Path, result: SolveResult, attempts: int) -> None:
+    payload = pickle.dumps({"result": result, "attempts": attempts})
+    blob = _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + b"-" * 8 + b"\n" + payload
+    with atomic_path(path) as tmp:  # parallel workers never read a half-written entry
+        tmp.write_bytes(blob)
 
 
-def physics_of(config: QuadrupedConfig, r: SolveResult) -> dict[str, float]:
-    """The independent physics checks of a result (empty for a failed solve)."""
+def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[str, float]]:
+    """Run the independent physics checks on a converged result; a result that fails them is
+    returned with ``success = False`` and the failed checks as its status."""
     if not r.success:
-        return {}
+        return r, {}
     system = problem_for(config, r.n_strides).system
-    return check_trajectory(system, r.t, r.state, r.control, r.contact, r.foot_pos, r.board_pos).as_dict()
+    report = check_trajectory(system, r.t, r.state, r.control, r.contact, r.foot_pos, r.board_pos,
+                              target_velocity_mps=r.target_velocity_mps)
+    failures = report.failures(system)
+    if failures:
+        r = replace(r, success=False, status=f"Physics_Check_Failed: {'; '.join(failures)}")
+    return r, report.as_dict()
 
 
 def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
@@ -117,22 +152,27 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None) -> list[
     for var in THREAD_VARS:
         os.environ[var] = "1"
     out: list[EntryOutcome] = []
-    warm = None
+    warm: WarmStart | None = None
+    warm_key: str | None = None
     for v in chain.velocities:
-        path = _cache_file(chain.config, v, chain.n_strides)
+        use_warm = warm if chain.config.sweep.warm_start else None
+        spec = PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm)
+        key = entry_key(spec, warm_key if use_warm is not None else None)
+        path = _cache_file(key)
         hit = _load_cached(path) if use_cache else None
-        if hit is not None:
-            result, attempts, physics = hit
-            cached = True
+        note = hit if isinstance(hit, str) else ""
+        if isinstance(hit, tuple):
+            result, attempts = hit
         else:
-            use_warm = warm if chain.config.sweep.warm_start else None
-            result, attempts = solve_with_retries(PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm))
-            physics = physics_of(chain.config, result)
-            cached = False
+            result, attempts = solve_with_retries(spec)
             if use_cache:
-                _store(path, result, attempts, physics)
-        warm = result.warm if result.success else warm
-        outcome = EntryOutcome(replace(result, warm=None), attempts, cached, physics)
+                _store(path, result, attempts)
+        if note:
+            note += "; solved again"
+        if result.success:
+            warm, warm_key = result.warm, key
+        judged, physics = judge(chain.config, result)
+        outcome = EntryOutcome(replace(judged, warm=None), attempts, isinstance(hit, tuple), physics, key, note)
         out.append(outcome)
         if events is not None:
             events.put((schema.entry_key(v, chain.n_strides), outcome))

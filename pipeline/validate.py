@@ -39,10 +39,13 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
             report(e.key, f"stored as failed ({e.attrs['status']}): skipped")
             continue
         assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
-        rep = check_trajectory(system, e.t, e.state, e.control, e.contact, e.foot_pos, e.board_pos)
+        rep = check_trajectory(system, e.t, e.state, e.control, e.contact, e.foot_pos, e.board_pos,
+                               target_velocity_mps=e.target_velocity_mps)
         failures = rep.failures(system)
         bad += bool(failures)
-        report(e.key, "ok" if not failures else "; ".join(failures))
+        ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({100 * rep.momentum_speed_error:.2f} % off), "
+              f"Coulomb margin {rep.min_friction_margin_N:.2f} N, defect {rep.max_defect:.1e}")
+        report(e.key, ok if not failures else "; ".join(failures))
     return bad
 
 

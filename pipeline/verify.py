@@ -11,9 +11,25 @@ from dataclasses import asdict, dataclass
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import BOARD, GROUND, NX
-from skatelib.pipeline.dynamics import board_rotation, dynamics_function, joint_torques, modes_for, rk4_step
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
+from skatelib.pipeline.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
 from skatelib.pipeline.system import SkateSystem
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """What the physics checks accept. Looser than the TO's own bounds (they hold to ~1e-6), tight
+    enough to refuse a terminal shove (board fast, robot slow and falling) or a slipping foot."""
+
+    defect: float = 1e-3
+    force_N: float = 1e-3
+    slip_m: float = 1e-5
+    angle_rad: float = 1e-6
+    momentum_speed_rel: float = 0.02
+    relative_speed_mps: float = 0.02
+    vertical_speed_mps: float = 0.02
+    angular_speed_radps: float = 0.05
+    clearance_m: float = 1e-4
 
 
 @dataclass(frozen=True)
@@ -22,52 +38,85 @@ class PhysicsReport:
 
     Attributes:
         max_defect: Largest state mismatch between knot k+1 and a fine re-integration from knot k.
-        min_friction_margin_N: Smallest mu f_n - |f_t| (per tangent axis) over feet in contact [N].
+        min_friction_margin_N: Smallest Coulomb margin mu f_n - |f_t| over feet in contact [N]
+            (deck frame on the board, world frame on the ground; the exact cone, not a pyramid).
         min_normal_force_N: Smallest normal force over feet in contact [N].
+        max_swing_force_N: Largest |force| on a swinging foot [N].
+        min_push_propulsion_N: Smallest forward (board heading) ground force on the planted push foot [N].
         max_ground_slip_m: Largest motion of the pushing foot while on the ground [m].
         max_board_slip_m: Largest distance of a foot from its deck point [m].
+        min_swing_clearance_m: Lowest point of the swinging push foot above the ground, or above the
+            deck top where it is over the deck [m].
         max_joint_limit_violation_rad: Largest joint-angle excursion past a limit [rad].
         max_torque_Nm: Largest quasi-static joint torque [N m] (limit: ``torque_limit_Nm``).
         max_joint_velocity_radps: Largest joint speed [rad/s].
         max_board_roll_rad: Largest |deck roll| [rad].
+        final_board_speed_mps: Board speed along its heading at the end [m/s].
+        final_robot_speed_mps: Robot COM speed along the heading at the end [m/s].
+        momentum_speed_mps: (m_R v_R + m_B v_B) / (m_R + m_B) along the heading at the end: the
+            speed both ride at once the feet hold on the deck [m/s].
+        momentum_speed_error: Relative error of the momentum speed against the label [-].
+        final_relative_speed_mps: |robot COM horizontal velocity - board velocity| at the end [m/s].
+        final_vertical_speed_mps: |vertical COM speed| at the end [m/s].
+        final_angular_speed_radps: Largest |body angular velocity| component at the end [rad/s].
     """
 
     max_defect: float
     min_friction_margin_N: float
     min_normal_force_N: float
+    max_swing_force_N: float
+    min_push_propulsion_N: float
     max_ground_slip_m: float
     max_board_slip_m: float
+    min_swing_clearance_m: float
     max_joint_limit_violation_rad: float
     max_torque_Nm: float
     max_joint_velocity_radps: float
     max_board_roll_rad: float
+    final_board_speed_mps: float
+    final_robot_speed_mps: float
+    momentum_speed_mps: float
+    momentum_speed_error: float
+    final_relative_speed_mps: float
+    final_vertical_speed_mps: float
+    final_angular_speed_radps: float
 
     def as_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in asdict(self).items()}
 
-    def failures(self, system: SkateSystem, defect_tol: float = 1e-3, force_tol: float = 1e-4,
-                 slip_tol: float = 1e-5, angle_tol: float = 1e-6) -> list[str]:
+    def failures(self, system: SkateSystem, tol: Tolerances = Tolerances()) -> list[str]:
         """Human-readable list of the checks that fail; empty when the trajectory is valid."""
-        out = []
-        if self.max_defect > defect_tol:
-            out.append(f"dynamics defect {self.max_defect:.2e} > {defect_tol:.0e}")
-        if self.min_friction_margin_N < -force_tol:
-            out.append(f"friction cone violated by {-self.min_friction_margin_N:.2e} N")
-        if self.min_normal_force_N < -force_tol:
-            out.append(f"pulling normal force {self.min_normal_force_N:.2e} N")
-        if self.max_ground_slip_m > slip_tol:
-            out.append(f"push foot slides {self.max_ground_slip_m:.2e} m on the ground")
-        if self.max_board_slip_m > slip_tol:
-            out.append(f"foot leaves its deck point by {self.max_board_slip_m:.2e} m")
-        if self.max_joint_limit_violation_rad > angle_tol:
-            out.append(f"joint limit exceeded by {self.max_joint_limit_violation_rad:.2e} rad")
-        if self.max_torque_Nm > system.torque_limit_Nm * (1 + 1e-6) + force_tol:
-            out.append(f"torque {self.max_torque_Nm:.3f} N m > {system.torque_limit_Nm} N m")
-        if self.max_joint_velocity_radps > system.joint_velocity_limit_radps * (1 + 1e-6):
-            out.append(f"joint speed {self.max_joint_velocity_radps:.2f} rad/s over the limit")
-        if self.max_board_roll_rad > system.board.roll_limit_rad * (1 + 1e-6):
-            out.append(f"deck roll {self.max_board_roll_rad:.3f} rad over the limit")
-        return out
+        checks = [
+            (self.max_defect > tol.defect, f"dynamics defect {self.max_defect:.2e} > {tol.defect:.0e}"),
+            (self.min_friction_margin_N < -tol.force_N,
+             f"outside the Coulomb cone by {-self.min_friction_margin_N:.3g} N"),
+            (self.min_normal_force_N < -tol.force_N, f"pulling normal force {self.min_normal_force_N:.3g} N"),
+            (self.max_swing_force_N > tol.force_N, f"force {self.max_swing_force_N:.3g} N on a swinging foot"),
+            (self.min_push_propulsion_N < -tol.force_N,
+             f"push foot brakes: ground force {self.min_push_propulsion_N:.3g} N along the heading"),
+            (self.max_ground_slip_m > tol.slip_m, f"push foot slides {self.max_ground_slip_m:.2e} m on the ground"),
+            (self.max_board_slip_m > tol.slip_m, f"foot leaves its deck point by {self.max_board_slip_m:.2e} m"),
+            (self.min_swing_clearance_m < -tol.clearance_m,
+             f"swinging foot {-self.min_swing_clearance_m:.3g} m into the ground or deck"),
+            (self.max_joint_limit_violation_rad > tol.angle_rad,
+             f"joint limit exceeded by {self.max_joint_limit_violation_rad:.2e} rad"),
+            (self.max_torque_Nm > system.torque_limit_Nm * (1 + 1e-6) + tol.force_N,
+             f"torque {self.max_torque_Nm:.3f} N m > {system.torque_limit_Nm} N m"),
+            (self.max_joint_velocity_radps > system.joint_velocity_limit_radps * (1 + 1e-6),
+             f"joint speed {self.max_joint_velocity_radps:.2f} rad/s over the limit"),
+            (self.max_board_roll_rad > system.board.roll_limit_rad * (1 + 1e-6),
+             f"deck roll {self.max_board_roll_rad:.3f} rad over the limit"),
+            (self.momentum_speed_error > tol.momentum_speed_rel,
+             f"rides at {self.momentum_speed_mps:.3f} m/s (momentum speed), {100 * self.momentum_speed_error:.1f} % "
+             f"off the label"),
+            (self.final_relative_speed_mps > tol.relative_speed_mps,
+             f"robot and board differ by {self.final_relative_speed_mps:.3f} m/s at the end"),
+            (self.final_vertical_speed_mps > tol.vertical_speed_mps,
+             f"body moves vertically at {self.final_vertical_speed_mps:.3f} m/s at the end"),
+            (self.final_angular_speed_radps > tol.angular_speed_radps,
+             f"body turns at {self.final_angular_speed_radps:.3f} rad/s at the end"),
+        ]
+        return [msg for bad, msg in checks if bad]
 
 
 def board_rotations(yaw: np.ndarray, roll: np.ndarray) -> np.ndarray:
@@ -80,13 +129,14 @@ def board_rotations(yaw: np.ndarray, roll: np.ndarray) -> np.ndarray:
 
 def friction_margins(state: np.ndarray, control: np.ndarray, contact: np.ndarray,
                      mu: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per control knot: the smallest mu f_n - |f_t| [N] and the smallest normal force [N] over the
-    feet in contact (deck frame on the board, world on the ground); +inf where none is."""
+    """Per control knot: the smallest Coulomb margin mu f_n - |f_t| [N] (the exact cone, |f_t| the
+    Euclidean norm of the tangential force) and the smallest normal force [N] over the feet in
+    contact (deck frame on the board, world on the ground); +inf where none is."""
     n = len(control)
     R_B = board_rotations(state[:n, 5], state[:n, 26])
     f = control[:, :12].reshape(n, 4, 3)
     local = np.where((contact[:n] == BOARD)[:, :, None], np.einsum("kji,klj->kli", R_B, f), f)
-    tangential = np.maximum(np.abs(local[:, :, 0]), np.abs(local[:, :, 1]))
+    tangential = np.hypot(local[:, :, 0], local[:, :, 1])
     touching = np.isin(contact[:n], (BOARD, GROUND))
     margin = np.where(touching, mu * local[:, :, 2] - tangential, np.inf).min(axis=1)
     normal = np.where(touching, local[:, :, 2], np.inf).min(axis=1)
@@ -95,10 +145,56 @@ def friction_margins(state: np.ndarray, control: np.ndarray, contact: np.ndarray
 
 def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray,
                      contact: np.ndarray, foot_pos: np.ndarray, board_pos: np.ndarray,
-                     substeps: int = 40) -> PhysicsReport:
-    """Measure a push-off trajectory (library arrays) against the model's physics."""
-    mode = modes_for(system.push_leg)["accelerating"]
-    f = dynamics_function(system, mode)
+                     target_velocity_mps: float, substeps: int = 40) -> PhysicsReport:
+    """Measure a push-off trajectory (library arrays) against the model's physics.
+
+    Args:
+        target_velocity_mps: The entry's label: the speed robot and board must ride at together.
+        substeps: RK4 steps per knot interval of the fine re-integration.
+    """
+    margins, normals = friction_margins(state, control, contact, system.friction_mu)
+    f = control[:, :12].reshape(len(control), 4, 3)
+    swing = contact[:len(control)] == SWING
+    p = system.push_index
+    heading = np.stack([np.cos(state[:-1, 5]), np.sin(state[:-1, 5])], axis=-1)
+    planted = contact[:len(control), p] == GROUND
+    propulsion = np.einsum("kj,kj->k", heading, f[:, p, :2])[planted]
+    q = state[:, S_Q]
+    lim = float(max(np.max(system.robot.lower_limits - q), np.max(q - system.robot.upper_limits), 0.0))
+    return PhysicsReport(
+        max_defect=_defect(system, t, state, control, substeps),
+        min_friction_margin_N=float(margins.min(initial=np.inf)),
+        min_normal_force_N=float(normals.min(initial=np.inf)),
+        max_swing_force_N=float(np.linalg.norm(f, axis=-1)[swing].max(initial=0.0)),
+        min_push_propulsion_N=float(propulsion.min(initial=np.inf)),
+        max_ground_slip_m=_ground_slip(contact[:, p], foot_pos[:, p]),
+        max_board_slip_m=_board_slip(system, state, contact, foot_pos, board_pos),
+        min_swing_clearance_m=_swing_clearance(system, state, contact, foot_pos, board_pos),
+        max_joint_limit_violation_rad=lim, max_torque_Nm=_max_torque(system, state, control),
+        max_joint_velocity_radps=float(np.abs(control[:, U_QD]).max()),
+        max_board_roll_rad=float(np.abs(state[:, I_BOARD_ROLL]).max()),
+        **_riding_end(system, state[-1], target_velocity_mps),
+    )
+
+
+def _riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, float]:
+    """How the entry ends: the speeds robot and board ride on at, by momentum (no model code)."""
+    heading = np.array([np.cos(x[5]), np.sin(x[5])])
+    v_robot, v_board = x[S_VEL][:2], x[S_BOARD_V]
+    m_r, m_b = system.srb.mass_kg, system.board.mass_kg
+    v_mom = float(heading @ (m_r * v_robot + m_b * v_board) / (m_r + m_b))
+    return {
+        "final_board_speed_mps": float(heading @ v_board), "final_robot_speed_mps": float(heading @ v_robot),
+        "momentum_speed_mps": v_mom, "momentum_speed_error": abs(v_mom - label) / label,
+        "final_relative_speed_mps": float(np.linalg.norm(v_robot - v_board)),
+        "final_vertical_speed_mps": float(abs(x[S_VEL][2])),
+        "final_angular_speed_radps": float(np.abs(x[S_OMEGA]).max()),
+    }
+
+
+def _defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
+    """Largest mismatch between each knot and a fine RK4 re-integration from the one before."""
+    f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
     cr = ca.DM(system.stance.cr)
     x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
     fine: dict[float, ca.Function] = {}
@@ -109,39 +205,53 @@ def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, cont
             fine[h] = ca.Function("fine", [x_sym, u_sym], [rk4_step(f, x_sym, u_sym, cr, h, substeps)])
         nxt = np.asarray(fine[h](state[k], control[k])).reshape(-1)
         defect = max(defect, float(np.abs(nxt - state[k + 1]).max()))
+    return defect
 
-    margins, normals = friction_margins(state, control, contact, system.friction_mu)
-    margin, normal = float(margins.min(initial=np.inf)), float(normals.min(initial=np.inf))
 
-    p = system.push_index
-    ground_slip = 0.0
-    k = 0
-    while k < len(t) - 1:
-        if contact[k, p] == GROUND:
+def _ground_slip(contact: np.ndarray, foot: np.ndarray) -> float:
+    """Largest distance the push foot moves from where it touched down, per ground run."""
+    slip, k = 0.0, 0
+    while k < len(contact) - 1:
+        if contact[k] == GROUND:
             k0 = k
-            while k < len(t) - 1 and contact[k, p] == GROUND:
+            while k < len(contact) - 1 and contact[k] == GROUND:
                 k += 1
-            run = foot_pos[k0:k + 1, p]
-            ground_slip = max(ground_slip, float(np.linalg.norm(run - run[0], axis=1).max()))
+            run = foot[k0:k + 1]
+            slip = max(slip, float(np.linalg.norm(run - run[0], axis=1).max()))
         else:
             k += 1
+    return slip
 
-    board_slip = 0.0
-    for k in range(len(t)):
-        R_B = np.asarray(board_rotation(state[k, 26], state[k, 5]))
-        origin = board_pos[k, :3]
-        for i in range(4):
-            if contact[k, i] == BOARD:
-                point = origin + R_B @ np.array([system.stance.cr[0, i], system.stance.cr[1, i], 0.0])
-                board_slip = max(board_slip, float(np.linalg.norm(foot_pos[k, i] - point)))
 
-    q = state[:, 12:24]
-    lim = float(max(np.max(system.robot.lower_limits - q), np.max(q - system.robot.upper_limits), 0.0))
-    tau_fn = ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
-    tau = max(float(np.abs(np.asarray(tau_fn(state[k], control[k]))).max()) for k in range(len(t) - 1))
-    return PhysicsReport(
-        max_defect=defect, min_friction_margin_N=float(margin), min_normal_force_N=float(normal),
-        max_ground_slip_m=ground_slip, max_board_slip_m=board_slip, max_joint_limit_violation_rad=lim,
-        max_torque_Nm=tau, max_joint_velocity_radps=float(np.abs(control[:, 12:24]).max()),
-        max_board_roll_rad=float(np.abs(state[:, 26]).max()),
-    )
+def _board_slip(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray,
+                board_pos: np.ndarray) -> float:
+    """Largest distance of a foot on the deck from its deck point (Eq. 8) [m]."""
+    R_B = board_rotations(state[:, 5], state[:, I_BOARD_ROLL])
+    cr = np.vstack([system.stance.cr, np.zeros(4)])  # (3, 4) deck points in the board frame
+    points = board_pos[:, None, :3] + np.einsum("kij,jl->kli", R_B, cr)
+    dist = np.linalg.norm(foot_pos - points, axis=-1)
+    return float(dist[contact == BOARD].max(initial=0.0))
+
+
+def _swing_clearance(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray,
+                     board_pos: np.ndarray) -> float:
+    """Lowest point of the swinging push foot above the ground, and above the deck top wherever it
+    is over the deck's footprint [m]."""
+    p = system.push_index
+    k = np.flatnonzero(contact[:, p] == SWING)
+    if k.size == 0:
+        return float("inf")
+    bottom = foot_pos[k, p]
+    R_B = board_rotations(state[k, 5], state[k, I_BOARD_ROLL])
+    local = np.einsum("kji,kj->ki", R_B, bottom - board_pos[k, :3])
+    b = system.board
+    over = (np.abs(local[:, 0]) <= b.deck_length_m / 2) & (np.abs(local[:, 1]) <= b.deck_width_m / 2)
+    above_deck = np.where(over, local[:, 2], np.inf)
+    return float(np.minimum(bottom[:, 2], above_deck).min())
+
+
+def _max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> float:
+    x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
+    tau = ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
+    many = tau.map(len(control))
+    return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())

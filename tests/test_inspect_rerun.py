@@ -58,7 +58,8 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
     speed = cols[f"{root}/plots/board_speed/actual"]
     assert len(speed["time"]) == len(e.t)
     got = np.array([v[0] for v in speed["Scalars:scalars"]])
-    assert np.allclose(got, e.state[:, 24], atol=1e-12)  # straight push: yaw stays 0
+    yaw = e.state[:, 5]
+    assert np.allclose(got, np.cos(yaw) * e.state[:, 24] + np.sin(yaw) * e.state[:, 25], atol=1e-12)
     arrows = cols[f"{root}/forces/RL"]
     assert len(arrows["time"]) == len(e.t) - 1
     vec = np.array([v[0] for v in arrows["Arrows3D:vectors"]])

@@ -56,7 +56,7 @@ def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
 def test_solved_trajectory_respects_contact_and_limits(solved, system):
     """Friction, no slip on ground or deck, joint/torque/speed limits, all measured on the arrays."""
     rep = check_trajectory(system, solved.t, solved.state, solved.control, solved.contact,
-                           solved.foot_pos, solved.board_pos)
+                           solved.foot_pos, solved.board_pos, target_velocity_mps=solved.target_velocity_mps)
     assert rep.failures(system) == [], rep.as_dict()
     assert rep.max_defect < 1e-3
 

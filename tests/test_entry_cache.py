@@ -1,0 +1,69 @@
+"""The sweep's entry cache: keyed on what determines a solution, checksummed, never stale."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+from skatelib.pipeline import pushoff, pushoff_terms, sweep
+from skatelib.pipeline.config import load_config
+
+TINY = Path(__file__).parent / "configs" / "tiny.toml"
+
+
+@pytest.fixture()
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(pushoff, "_PROBLEMS", {})  # no problem built with other code survives a test
+    return tmp_path / "cache"
+
+
+def _chain() -> sweep.Chain:
+    return sweep.Chain(load_config(TINY), 1, (0.3,))
+
+
+def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
+    """Renaming the library, changing the sweep list or the compile switch, or moving the config
+    and URDF to another folder keeps the problem (and so the cache key's config part) the same."""
+    cfg = load_config(TINY)
+    other = dataclasses.replace(
+        cfg, meta=dataclasses.replace(cfg.meta, name="renamed"),
+        sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.9,), strides=(7,)),
+        optimization=dataclasses.replace(cfg.optimization, compile=True))
+    assert other.problem_json() == cfg.problem_json()
+    moved = tmp_path / "robot.urdf"
+    moved.write_bytes(cfg.urdf_path.read_bytes())
+    relocated = dataclasses.replace(cfg, robot=dataclasses.replace(cfg.robot, urdf=str(moved)))
+    assert relocated.problem_json() == cfg.problem_json()
+    moved.write_bytes(cfg.urdf_path.read_bytes().replace(b"<robot", b"<robot ", 1))
+    assert relocated.problem_json() != cfg.problem_json()  # the URDF's bytes count
+
+
+def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
+    """A second run is served from the cache; after a cost weight changes in code it is solved again."""
+    first = sweep.run_chain(_chain())
+    again = sweep.run_chain(_chain())
+    assert not first[0].cached and again[0].cached
+    assert again[0].cache_key == first[0].cache_key
+
+    original = pushoff_terms.EffortCost.cost
+    monkeypatch.setattr(pushoff_terms.EffortCost, "cost", lambda self, s: 2.0 * original(self, s))
+    monkeypatch.setattr(pushoff, "_PROBLEMS", {})
+    changed = sweep.run_chain(_chain())
+    assert not changed[0].cached
+    assert changed[0].cache_key != first[0].cache_key
+
+
+def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
+    """One flipped bit in a cached entry's payload is caught by its checksum: the entry is solved
+    again, the user is told, and the cache is repaired."""
+    first = sweep.run_chain(_chain())
+    path = cache / "entries" / f"{first[0].cache_key}.pkl"
+    blob = bytearray(path.read_bytes())
+    blob[len(blob) // 2] ^= 0x04
+    path.write_bytes(bytes(blob))
+    again = sweep.run_chain(_chain())
+    assert not again[0].cached
+    assert "damaged" in again[0].note and str(path) in again[0].note
+    assert sweep.run_chain(_chain())[0].cached

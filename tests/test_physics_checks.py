@@ -1,0 +1,118 @@
+"""The independent physics checks refuse what the optimizer was not told about: each check shown
+failing on a real or doctored trajectory (negative controls), and passing on an honest one."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from skatelib.library.channels import BOARD
+from skatelib.pipeline import pushoff
+from skatelib.pipeline.pushoff import PushoffProblem, PushoffSpec, solve
+from skatelib.pipeline.pushoff_terms import FinalSpeed
+from skatelib.pipeline.sweep import judge
+from skatelib.pipeline.verify import board_rotations, check_trajectory, friction_margins
+
+
+@pytest.fixture(scope="module")
+def small_cfg(cfg):
+    return dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
+
+
+@pytest.fixture(scope="module")
+def honest(small_cfg):
+    r = solve(PushoffSpec(small_cfg, 0.3, 1))
+    assert r.success, r.status
+    return r
+
+
+def _check(system, r, **arrays):
+    a = {"t": r.t, "state": r.state, "control": r.control, "contact": r.contact, "foot_pos": r.foot_pos,
+         "board_pos": r.board_pos, **arrays}
+    return check_trajectory(system, target_velocity_mps=r.target_velocity_mps, **a)
+
+
+def test_honest_entry_rides_at_its_label(honest, system):
+    """Robot and board end together at the label (momentum speed within 1 %), still, inside every cone."""
+    rep = _check(system, honest)
+    assert rep.failures(system) == [], rep.as_dict()
+    assert rep.momentum_speed_error < 0.01
+    assert abs(rep.final_robot_speed_mps - rep.final_board_speed_mps) < 0.01
+    assert rep.final_vertical_speed_mps < 0.006 and rep.min_friction_margin_N >= -1e-6
+
+
+def test_old_terminal_shove_is_refused(small_cfg, system):
+    """Solved the old way (only the board's final speed constrained), the optimizer shoves the deck
+    ahead in the last swing: the board hits the label, the robot does not. The checks refuse it."""
+    def board_only(self, n):
+        lo, hi = np.full((n, 3), -np.inf), np.full((n, 3), np.inf)
+        lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
+        return lo, hi
+
+    mp = pytest.MonkeyPatch()
+    try:
+        mp.setattr(FinalSpeed, "bounds", board_only)
+        mp.setattr(PushoffProblem, "_riding_end", lambda self, *a: None)
+        mp.setattr(pushoff, "_PROBLEMS", {})
+        shove = solve(PushoffSpec(small_cfg, 0.3, 1))
+    finally:
+        mp.undo()
+    assert shove.success and abs(shove.final_velocity_mps - 0.3) < 0.01  # the optimizer was satisfied
+    rep = _check(system, shove)
+    assert rep.momentum_speed_error > 0.05
+    assert any("momentum speed" in f for f in rep.failures(system))
+    judged, _ = judge(small_cfg, shove)
+    assert not judged.success and judged.status.startswith("Physics_Check_Failed")
+
+
+def test_force_inside_the_pyramid_but_outside_the_cone_is_refused(honest, system):
+    """A deck foot's tangential force set to (0.9, 0.9) mu f_n in the deck frame passes the old
+    per-axis pyramid test but leaves Coulomb's cone by 27 %: refused."""
+    control = honest.control.copy()
+    k, i = 5, 0
+    assert honest.contact[k, i] == BOARD
+    R = board_rotations(honest.state[k:k + 1, 5], honest.state[k:k + 1, 26])[0]
+    local = R.T @ control[k, 3 * i:3 * i + 3]
+    mu = system.friction_mu
+    local[:2] = 0.9 * mu * local[2]
+    control[k, 3 * i:3 * i + 3] = R @ local
+    assert max(abs(local[0]), abs(local[1])) <= mu * local[2]  # inside the pyramid
+    margins, _ = friction_margins(honest.state, control, honest.contact, mu)
+    assert margins[k] == pytest.approx(mu * local[2] * (1 - 0.9 * np.sqrt(2)))
+    rep = _check(system, honest, control=control)
+    assert any("Coulomb cone" in f for f in rep.failures(system))
+
+
+def test_falling_body_and_slow_robot_at_the_end_are_refused(honest, system):
+    """The last knot doctored to a robot 30 % slower than the board and sinking at 0.15 m/s fails
+    the momentum, relative-speed and vertical-speed checks."""
+    state = honest.state.copy()
+    state[-1, 6:8] *= 0.7
+    state[-1, 8] = -0.15
+    fails = " | ".join(_check(system, honest, state=state).failures(system))
+    for words in ("momentum speed", "robot and board differ", "vertically"):
+        assert words in fails, fails
+
+
+def test_swing_foot_through_the_deck_is_refused(honest, system):
+    """The swinging push foot moved into the deck (2 cm below its top, over the deck) is refused."""
+    p = system.push_index
+    k = int(np.flatnonzero(honest.contact[:, p] == 0)[3])
+    foot = honest.foot_pos.copy()
+    foot[k, p, :2] = honest.board_pos[k, :2]
+    foot[k, p, 2] = honest.board_pos[k, 2] - 0.02
+    rep = _check(system, honest, foot_pos=foot)
+    assert rep.min_swing_clearance_m == pytest.approx(-0.02, abs=1e-3)
+    assert any("into the ground or deck" in f for f in rep.failures(system))
+
+
+def test_braking_push_foot_is_refused(honest, system):
+    """A planted push foot whose ground force points backward along the heading is refused."""
+    p = system.push_index
+    control = honest.control.copy()
+    k = 3
+    control[k, 3 * p] = -2.0
+    rep = _check(system, honest, control=control)
+    assert rep.min_push_propulsion_N == pytest.approx(-2.0, abs=0.1)
+    assert any("push foot brakes" in f for f in rep.failures(system))
