@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
-FORMAT_VERSION: Final = (1, 0)
+FORMAT_VERSION: Final = (1, 1)  # 1.1: friction model, terminal state, cache_key, frontier_json
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -29,6 +29,7 @@ A_IPOPT: Final = "ipopt_version"
 A_PINOCCHIO: Final = "pinocchio_version"
 A_CHECKSUM: Final = "content_sha256"
 A_SOLVER_OPTIONS: Final = "solver_options_json"
+A_FRONTIER: Final = "frontier_json"  # optional: the reachable-speed frontier (skatelib build --frontier)
 ROOT_REQUIRED: Final = (
     A_FORMAT,
     A_FORMAT_VERSION,

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
 from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
 from skatelib.pipeline.pushoff import problem_for
 from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
@@ -22,6 +23,7 @@ class BuildReport:
     path: Path
     outcomes: list[EntryOutcome]
     wall_time_s: float
+    frontier: list[FrontierPoint] | None = None
 
     @property
     def failed(self) -> list[EntryOutcome]:
@@ -34,9 +36,11 @@ def default_output(config: QuadrupedConfig) -> Path:
 
 def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
                   scheduler: Any = None, use_cache: bool = True,
-                  on_entry: Callable[[str, EntryOutcome], None] | None = None) -> BuildReport:
+                  on_entry: Callable[[str, EntryOutcome], None] | None = None,
+                  frontier: FrontierSearch | None = None) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
-    marked ``success = false`` with their IPOPT status)."""
+    marked ``success = false`` with their IPOPT status); with ``frontier``, also search the
+    reachable-speed frontier of every stride count and store it in the file."""
     t0 = time.perf_counter()
     out = out or default_output(config)
     if config.optimization.compile and backend == "loky":
@@ -46,5 +50,7 @@ def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 
     system = SkateSystem.from_config(config)
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
     options = outcomes[0].result.ipopt_options if outcomes else {}
-    path = write_quadruped_library(out, config, system, entries, options)
-    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0)
+    points = find_frontier(config, config.sweep.strides, frontier, jobs) if frontier is not None else None
+    stored = frontier_json(points, frontier) if points is not None and frontier is not None else None
+    path = write_quadruped_library(out, config, system, entries, options, stored)
+    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0, frontier=points)

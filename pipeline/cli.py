@@ -78,6 +78,8 @@ def build(
     progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
+    frontier: Annotated[bool, typer.Option(
+        "--frontier", help="Also search the reachable-speed frontier of every stride count and store it.")] = False,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
@@ -105,9 +107,13 @@ def build(
             r = outcome.result
             bar.update(task, advance=1, description=f"{key}: {r.status}")
 
+        from skatelib.pipeline.frontier import FrontierSearch
+
         report = build_library(cfg, target, jobs=jobs, backend=backend, scheduler=scheduler, use_cache=cache,
-                               on_entry=on_entry)
+                               on_entry=on_entry, frontier=FrontierSearch() if frontier else None)
     _summary(report.outcomes)
+    if report.frontier is not None:
+        _frontier_table(report.frontier)
     console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
     if report.failed and not allow_failures:
         console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept in the file with success=false); "
@@ -136,22 +142,67 @@ def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
 
 
 def _summary(outcomes: list[Any]) -> None:
-    t = Table(title="entries")
-    for col in ("entry", "status", "iter", "tries", "time [s]", "v end [m/s]", "v err", "defect"):
+    t = Table(title="entries (time: c = from the cache; momentum: the speed robot and board ride at together)")
+    for col in ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
+                "Coulomb margin [N]", "torque [N m]", "defect"):
         t.add_column(escape(col), justify="left" if col in ("entry", "status") else "right")
     from skatelib.library.schema import entry_key
 
     for o in outcomes:
-        r = o.result
+        r, ph = o.result, o.physics
         status = r.status.replace("Solve_Succeeded", "ok")
-        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), status, str(r.iterations), str(o.attempts),
+        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
                   f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
-                  f"{100 * r.final_velocity_error:.2f}%", _defect(o.physics))
+                  _fmt(ph, "momentum_speed_mps", "{:.4f}"), _fmt(ph, "momentum_speed_error", "{:.2%}"),
+                  _fmt(ph, "min_friction_margin_N", "{:.3f}"), _fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
+                  _fmt(ph, "max_defect", "{:.1e}"))
+    console.print(t)
+    for o in outcomes:
+        if o.note:
+            console.print(f"[yellow]note:[/] {escape(o.note)}")
+
+
+def _fmt(physics: dict[str, float], key: str, fmt: str) -> str:
+    return fmt.format(physics[key]) if key in physics else "-"
+
+
+def _frontier_table(points: list[Any]) -> None:
+    t = Table(title="reachable-speed frontier: fastest label that converges and passes the physics checks")
+    for col in ("strides", "fastest [m/s]", "first failure [m/s]", "what stops it", "probes"):
+        t.add_column(escape(col), justify="left" if col == "what stops it" else "right")
+    for p in points:
+        fail = "-" if p.first_failure_mps is None else f"{p.first_failure_mps:.3f}"
+        t.add_row(str(p.n_strides), f"{p.fastest_mps:.3f}", fail, escape(p.limit), str(len(p.probes)))
     console.print(t)
 
 
-def _defect(physics: dict[str, float]) -> str:
-    return f"{physics['max_defect']:.1e}" if physics else "-"
+@app.command()
+def frontier(
+    config: ConfigArg = None,
+    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", help="Stride counts (repeatable); "
+                                                      "default: the config's sweep.")] = None,
+    start: Annotated[float, typer.Option(min=0.05, max=3.0, help="First speed tried [m/s].")] = 0.5,
+    step: Annotated[float, typer.Option(min=0.01, max=1.0, help="Climbing step [m/s].")] = 0.25,
+    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, help="Bisection resolution [m/s].")] = 0.02,
+    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, help="Highest speed tried [m/s].")] = 3.0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes.")] = 2,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
+) -> None:
+    """Find, per stride count, the fastest label that converges and passes the physics checks
+    (warm-started climb, then bisection)."""
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.frontier import FrontierSearch, find_frontier, frontier_json
+
+    cfg = load_config(config)
+    search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
+    points = find_frontier(cfg, strides or cfg.sweep.strides, search, jobs)
+    _frontier_table(points)
+    if out is not None:
+        from skatelib.library.writer import atomic_path
+
+        with atomic_path(out) as tmp:
+            tmp.write_text(frontier_json(points, search))
+        console.print(f"wrote {escape(str(out))}")
 
 
 @app.command()

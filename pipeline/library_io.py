@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 import json
 import re
@@ -78,6 +79,9 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
         "board_roll_limit_rad": b.roll_limit_rad, "schedule_period_s": config.schedule.period_s,
         "schedule_push_duty": config.schedule.push_duty, "dt_s": config.optimization.dt_s,
         "integrator": config.optimization.integrator, "robot_source": config.robot.source,
+        "friction_model": config.optimization.friction_model,
+        "friction_mu_plan": config.optimization.friction_margin * s.friction_mu,
+        **{f"terminal_{k}": v for k, v in dataclasses.asdict(config.terminal).items()},
         "board_source": config.board.source,
     }
     arrays = {
@@ -113,9 +117,12 @@ def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, floa
 
 
 def write_quadruped_library(path: Path | str, config: QuadrupedConfig, system: SkateSystem,
-                            entries: Sequence[EntryData], solver_options: dict[str, Any]) -> Path:
-    """Write a quadruped motion library atomically."""
+                            entries: Sequence[EntryData], solver_options: dict[str, Any],
+                            frontier_json: str | None = None) -> Path:
+    """Write a quadruped motion library atomically (with the reachable-speed frontier when given)."""
     model_attrs, model_arrays = quadruped_model(config, system)
     root = root_attributes("quadruped", config.meta.name, config.text, config.resolved_json(), solver_options)
+    if frontier_json is not None:
+        root[schema.A_FRONTIER] = frontier_json
     return write_library(path, root, model_attrs, model_arrays, {schema.D_ROBOT_URDF: system.robot.urdf_text},
                          entries)

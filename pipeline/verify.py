@@ -13,6 +13,7 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
 from skatelib.pipeline.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
+from skatelib.pipeline.leg_dynamics import rigid_leg_torques
 from skatelib.pipeline.system import SkateSystem
 
 
@@ -49,6 +50,8 @@ class PhysicsReport:
             deck top where it is over the deck [m].
         max_joint_limit_violation_rad: Largest joint-angle excursion past a limit [rad].
         max_torque_Nm: Largest quasi-static joint torque [N m] (limit: ``torque_limit_Nm``).
+        max_torque_rigid_legs_Nm: Largest joint torque with the legs' own mass, by pinocchio inverse
+            dynamics of the whole URDF (:mod:`skatelib.pipeline.leg_dynamics`) [N m].
         max_joint_velocity_radps: Largest joint speed [rad/s].
         max_board_roll_rad: Largest |deck roll| [rad].
         final_board_speed_mps: Board speed along its heading at the end [m/s].
@@ -71,6 +74,7 @@ class PhysicsReport:
     min_swing_clearance_m: float
     max_joint_limit_violation_rad: float
     max_torque_Nm: float
+    max_torque_rigid_legs_Nm: float
     max_joint_velocity_radps: float
     max_board_roll_rad: float
     final_board_speed_mps: float
@@ -102,6 +106,8 @@ class PhysicsReport:
              f"joint limit exceeded by {self.max_joint_limit_violation_rad:.2e} rad"),
             (self.max_torque_Nm > system.torque_limit_Nm * (1 + 1e-6) + tol.force_N,
              f"torque {self.max_torque_Nm:.3f} N m > {system.torque_limit_Nm} N m"),
+            (self.max_torque_rigid_legs_Nm > system.torque_limit_Nm * (1 + 1e-6) + tol.force_N,
+             f"torque {self.max_torque_rigid_legs_Nm:.2f} N m > {system.torque_limit_Nm} N m with the legs' mass"),
             (self.max_joint_velocity_radps > system.joint_velocity_limit_radps * (1 + 1e-6),
              f"joint speed {self.max_joint_velocity_radps:.2f} rad/s over the limit"),
             (self.max_board_roll_rad > system.board.roll_limit_rad * (1 + 1e-6),
@@ -171,6 +177,7 @@ def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, cont
         max_board_slip_m=_board_slip(system, state, contact, foot_pos, board_pos),
         min_swing_clearance_m=_swing_clearance(system, state, contact, foot_pos, board_pos),
         max_joint_limit_violation_rad=lim, max_torque_Nm=_max_torque(system, state, control),
+        max_torque_rigid_legs_Nm=float(np.abs(rigid_leg_torques(system, t, state, control, contact, foot_pos)).max()),
         max_joint_velocity_radps=float(np.abs(control[:, U_QD]).max()),
         max_board_roll_rad=float(np.abs(state[:, I_BOARD_ROLL]).max()),
         **_riding_end(system, state[-1], target_velocity_mps),
