@@ -42,9 +42,9 @@ def test_honest_entry_rides_at_its_label(honest, system):
     assert rep.final_vertical_speed_mps < 0.006 and rep.min_friction_margin_N >= -1e-6
 
 
-def test_old_terminal_shove_is_refused(small_cfg, system):
-    """Solved the old way (only the board's final speed constrained), the optimizer shoves the deck
-    ahead in the last swing: the board hits the label, the robot does not. The checks refuse it."""
+@pytest.fixture(scope="module")
+def shove(small_cfg):
+    """Solved the old way: only the board's final speed constrained, no riding end state."""
     def board_only(self, n):
         lo, hi = np.full((n, 3), -np.inf), np.full((n, 3), np.inf)
         lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
@@ -58,6 +58,12 @@ def test_old_terminal_shove_is_refused(small_cfg, system):
         shove = solve(PushoffSpec(small_cfg, 0.3, 1))
     finally:
         mp.undo()
+    return shove
+
+
+def test_old_terminal_shove_is_refused(small_cfg, system, shove):
+    """The optimizer shoves the deck ahead in the last swing: the board hits the label, the robot
+    does not. The checks refuse it."""
     assert shove.success and abs(shove.final_velocity_mps - 0.3) < 0.01  # the optimizer was satisfied
     rep = _check(system, shove)
     assert rep.momentum_speed_error > 0.05
@@ -146,3 +152,19 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
     x_max = _max_torque(system, r.state, r.control)
     assert np.abs(light).max() == pytest.approx(x_max, rel=1e-9)
     assert np.abs(full - light).max() > 0.05
+
+
+def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shove, tmp_path):
+    """A library written with the shove stored as a success (as format 1.0 builds did) makes
+    `skatelib validate` name the entry's failed checks and exit 1."""
+    import os
+    import subprocess
+    import sys
+
+    from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
+
+    path = write_quadruped_library(tmp_path / "shove.h5", small_cfg, system, [entry_from_result(shove)], {})
+    r = subprocess.run([sys.executable, "-c", "from skatelib.pipeline.cli import main; main()", "validate",
+                        str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "v0.30_s1" in r.stdout and "momentum speed" in r.stdout
