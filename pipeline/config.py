@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import tomllib
 import types
 import typing
@@ -129,6 +130,8 @@ class OptimizationConfig:
         doc="Friction constraint of every contact: 'cone' (exact Coulomb cone, mu^2 f_n^2 >= |f_t|^2, f_n >= 0) "
             "or 'polygon8' (inscribed 8-facet pyramid, inside the cone).", default="cone")
     friction_margin: float = _f(0.5, 1.0, "Planning margin: the TO uses mu_plan = margin x mu [-].", default=1.0)
+    joint_limit_margin_rad: float = _f(0.0, 0.3, "The TO keeps joint angles this far inside their limits [rad].",
+                                       default=0.0)
     weights: WeightsConfig = _f(doc="Cost weights of Eq. (16).", default_factory=lambda: WeightsConfig(
         **{f.name: 0.0 for f in dataclasses.fields(WeightsConfig)}))
 
@@ -281,6 +284,9 @@ def load_humanoid_config(path: Path | str) -> HumanoidConfig:
         raise ConfigError(path, "gpm.solver", f"{cfg.gpm.solver!r}: use 'ipopt' or 'sqp'")
     if cfg.humanoid.leg_min_m >= cfg.humanoid.leg_max_m:
         raise ConfigError(path, "humanoid.leg_min_m", "must be below humanoid.leg_max_m")
+    if not cfg.sweep.velocities_mps:
+        raise ConfigError(path, "sweep.velocities_mps", "is empty: list at least one speed")
+    check_unique_keys(path, cfg.sweep.velocities_mps)
     return cfg
 
 
@@ -362,6 +368,8 @@ def _convert(path: Path, key: str, tp: Any, value: Any, meta: typing.Mapping[str
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise ConfigError(path, key, f"must be a number, got {value!r}")
         value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(path, key, f"must be a finite number, got {value!r} ({meta.get('doc', '')})")
     elif tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(path, key, f"must be an integer, got {value!r}")
@@ -467,6 +475,26 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
         raise ConfigError(p, "robot.urdf", f"file {cfg.urdf_path} does not exist")
     if not cfg.sweep.velocities_mps or not cfg.sweep.strides:
         raise ConfigError(p, "sweep", "velocities_mps and strides must not be empty")
+    check_unique_keys(p, cfg.sweep.velocities_mps)
+    if len(set(cfg.sweep.strides)) != len(cfg.sweep.strides):
+        raise ConfigError(p, "sweep.strides", f"{list(cfg.sweep.strides)} repeats a stride count; list each once")
     steps = cfg.schedule.period_s / cfg.optimization.dt_s
     if abs(steps - round(steps)) > 1e-6:
         raise ConfigError(p, "optimization.dt_s", f"must divide schedule.period_s ({cfg.schedule.period_s} s)")
+
+
+def check_unique_keys(path: Path, velocities: tuple[float, ...]) -> None:
+    """Refuse speeds that repeat or that name the same entry (keys keep 2 decimals: 0.501 and 0.504
+    are both ``v0.50``), before anything is solved.
+
+    Raises:
+        ConfigError: Naming both speeds and the key they share.
+    """
+    seen: dict[str, float] = {}
+    for v in velocities:
+        key = f"{v:.2f}"
+        if key in seen:
+            raise ConfigError(path, "sweep.velocities_mps",
+                              f"{seen[key]} and {v} m/s both name entry speed v{key} (entry keys keep 2 decimals); "
+                              "list speeds that differ by at least 0.01 m/s, each once")
+        seen[key] = v

@@ -21,8 +21,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 from skatelib.library.channels import BOARD, GROUND, LEGS
 from skatelib.library.errors import LibraryFormatError
+from skatelib.library.margins import board_rotations, friction_margins
 from skatelib.library.writer import atomic_path
-from skatelib.pipeline.verify import board_rotations, friction_margins
 from skatelib.runtime import Entry, MotionLibrary
 
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)

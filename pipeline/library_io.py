@@ -81,6 +81,7 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
         "integrator": config.optimization.integrator, "robot_source": config.robot.source,
         "friction_model": config.optimization.friction_model,
         "friction_mu_plan": config.optimization.friction_margin * s.friction_mu,
+        "joint_limit_margin_rad": config.optimization.joint_limit_margin_rad,
         **{f"terminal_{k}": v for k, v in dataclasses.asdict(config.terminal).items()},
         "board_source": config.board.source,
     }

@@ -182,7 +182,8 @@ class PushoffProblem:
         lbx, ubx = np.full((N + 1, n), -np.inf), np.full((N + 1, n), np.inf)
         lbx[:, 2], ubx[:, 2] = 0.05, 1.0  # trunk height
         lbx[:, 3:5], ubx[:, 3:5] = -0.6, 0.6  # roll, pitch
-        lbx[:, S_Q], ubx[:, S_Q] = s.robot.lower_limits, s.robot.upper_limits
+        margin = self.config.optimization.joint_limit_margin_rad
+        lbx[:, S_Q], ubx[:, S_Q] = s.robot.lower_limits + margin, s.robot.upper_limits - margin
         lbx[:, 26], ubx[:, 26] = -s.board.roll_limit_rad, s.board.roll_limit_rad
         fmax = 4.0 * s.srb.mass_kg * s.gravity_mps2
         lbx[:, NXA:NXA + 12], ubx[:, NXA:NXA + 12] = -fmax, fmax

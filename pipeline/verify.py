@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
+from skatelib.library.margins import board_rotations, friction_margins
 from skatelib.pipeline.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
 from skatelib.pipeline.leg_dynamics import rigid_leg_torques
 from skatelib.pipeline.system import SkateSystem
@@ -123,30 +124,6 @@ class PhysicsReport:
              f"body turns at {self.final_angular_speed_radps:.3f} rad/s at the end"),
         ]
         return [msg for bad, msg in checks if bad]
-
-
-def board_rotations(yaw: np.ndarray, roll: np.ndarray) -> np.ndarray:
-    """R_B = Rz(yaw) Rx(roll) for arrays of angles: (K, 3, 3)."""
-    cy, sy, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(roll), np.sin(roll)
-    z = np.zeros_like(yaw)
-    return np.stack([np.stack([cy, -sy * cr, sy * sr], -1), np.stack([sy, cy * cr, -cy * sr], -1),
-                     np.stack([z, sr, cr], -1)], axis=-2)
-
-
-def friction_margins(state: np.ndarray, control: np.ndarray, contact: np.ndarray,
-                     mu: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per control knot: the smallest Coulomb margin mu f_n - |f_t| [N] (the exact cone, |f_t| the
-    Euclidean norm of the tangential force) and the smallest normal force [N] over the feet in
-    contact (deck frame on the board, world on the ground); +inf where none is."""
-    n = len(control)
-    R_B = board_rotations(state[:n, 5], state[:n, 26])
-    f = control[:, :12].reshape(n, 4, 3)
-    local = np.where((contact[:n] == BOARD)[:, :, None], np.einsum("kji,klj->kli", R_B, f), f)
-    tangential = np.hypot(local[:, :, 0], local[:, :, 1])
-    touching = np.isin(contact[:n], (BOARD, GROUND))
-    margin = np.where(touching, mu * local[:, :, 2] - tangential, np.inf).min(axis=1)
-    normal = np.where(touching, local[:, :, 2], np.inf).min(axis=1)
-    return margin, normal
 
 
 def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray,

@@ -5,6 +5,15 @@
 >>> ref = lib.select(0.5, strides=2).sample(0.6)            # doctest: +SKIP
 """
 
-from skatelib.runtime.motion_library import BlendCheck, Entry, EntryNotFound, MotionLibrary, Sample
+from skatelib.runtime.motion_library import (
+    BlendCheck,
+    BlendMargin,
+    Channels,
+    Entry,
+    EntryNotFound,
+    MotionLibrary,
+    Sample,
+    Window,
+)
 
-__all__ = ["BlendCheck", "Entry", "EntryNotFound", "MotionLibrary", "Sample"]
+__all__ = ["BlendCheck", "BlendMargin", "Channels", "Entry", "EntryNotFound", "MotionLibrary", "Sample", "Window"]

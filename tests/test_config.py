@@ -53,3 +53,24 @@ def test_missing_file_lists_shipped_configs(tmp_path):
     """A config path that does not exist names the shipped configs."""
     with pytest.raises(ConfigError, match=r"cyberdog2\.toml"):
         load_config(tmp_path / "nope.toml")
+
+
+@pytest.mark.parametrize(("text", "key"), [
+    ("[robot]\nfriction_mu = nan\n", "robot.friction_mu"),
+    ("[optimization]\ndt_s = inf\n", "optimization.dt_s"),
+    ("[sweep]\nvelocities_mps = [0.3, nan]\nstrides = [2]\n", r"sweep.velocities_mps\[1\]"),
+])
+def test_nan_and_inf_are_refused_with_the_key(tmp_path, text, key):
+    """NaN and inf pass every range test (comparisons with NaN are false): refused by name instead."""
+    with pytest.raises(ConfigError, match=f"{key}.*finite"):
+        load_config(_write(tmp_path, text))
+
+
+def test_speeds_that_name_the_same_entry_are_refused(tmp_path):
+    """0.501 and 0.504 m/s would both be entry v0.50: refused at load, before any solve."""
+    with pytest.raises(ConfigError, match=r"sweep\.velocities_mps.*0\.501 and 0\.504.*v0\.50"):
+        load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.501, 0.504]\nstrides = [2]\n"))
+    with pytest.raises(ConfigError, match=r"sweep\.velocities_mps.*0\.3 and 0\.3"):
+        load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.3, 0.3]\nstrides = [2]\n"))
+    with pytest.raises(ConfigError, match=r"sweep\.strides.*repeats"):
+        load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.3]\nstrides = [2, 2]\n"))

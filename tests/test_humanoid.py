@@ -107,6 +107,8 @@ def test_library_round_trip_and_cli(tmp_path):
     assert e.columns["state"] == ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
     assert e.columns["zmp"] == ("zmp_x", "zmp_y")
     assert e.sample(1.0).state[3] == pytest.approx(1.0, abs=1e-6)
+    assert e.sample(1.0)["com_vx"] == pytest.approx(1.0, abs=1e-6)
+    assert e.sample(1.0).contact is None and e.window(0.0, 3, 0.1).contact is None  # no made-up feet
     v = subprocess.run([*cli, "validate", str(out)], capture_output=True, text=True, env=env)
     assert v.returncode == 0 and "all entries valid" in v.stdout
 

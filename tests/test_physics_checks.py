@@ -8,11 +8,12 @@ import dataclasses
 import numpy as np
 import pytest
 from skatelib.library.channels import BOARD
+from skatelib.library.margins import board_rotations, friction_margins
 from skatelib.pipeline import pushoff
 from skatelib.pipeline.pushoff import PushoffProblem, PushoffSpec, solve
 from skatelib.pipeline.pushoff_terms import FinalSpeed
 from skatelib.pipeline.sweep import judge
-from skatelib.pipeline.verify import board_rotations, check_trajectory, friction_margins
+from skatelib.pipeline.verify import check_trajectory
 
 
 @pytest.fixture(scope="module")

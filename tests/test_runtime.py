@@ -11,9 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from skatelib.library import schema
-from skatelib.library.channels import CONTROL_NAMES, LEGS, STATE_NAMES
+from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
+from skatelib.library.errors import SkatelibError
 from skatelib.library.writer import EntryData, write_library
-from skatelib.runtime import EntryNotFound, MotionLibrary
+from skatelib.runtime import BlendMargin, EntryNotFound, MotionLibrary
 
 K = 41
 
@@ -31,7 +32,8 @@ def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryData:
     return EntryData(key=schema.entry_key(v, strides), attrs=attrs,
                      arrays={"t": t, "state": state, "control": control, "contact": contact,
                              "foot_pos": rng.normal(size=(K, 4, 3)), "board_pos": rng.normal(size=(K, 4))},
-                     columns={"state": STATE_NAMES, "control": CONTROL_NAMES, "contact": LEGS})
+                     columns={"state": STATE_NAMES, "control": CONTROL_NAMES, "contact": LEGS},
+                     units={"state": STATE_UNITS, "control": CONTROL_UNITS})
 
 
 @pytest.fixture(scope="module")
@@ -61,16 +63,18 @@ def test_sample_matches_np_interp_and_holds_controls(lib, t):
 def test_window_equals_samples(lib):
     """window(t0, n, dt) stacks the samples at t0 + k dt, clamping past the end."""
     e = lib["v0.50_s1"]
-    xs, us = e.window(1.05, 12, 1 / 30)
+    w = e.window(1.05, 12, 1 / 30)
     for k in range(12):
         s = e.sample(1.05 + k / 30)
-        assert np.allclose(xs[k], s.state, atol=1e-12) and np.array_equal(us[k], s.control)
+        assert np.allclose(w.state[k], s.state, atol=1e-12) and np.array_equal(w.control[k], s.control)
+        assert np.array_equal(w.contact[k], s.contact) and w.t[k] == pytest.approx(1.05 + k / 30)
 
 
 def test_arrays_are_read_only(lib):
     """Arrays handed out cannot be written."""
     e = lib["v0.50_s1"]
-    for a in (e.state, e.control, e.sample(0.1).state, e.window(0, 3, 0.01)[0]):
+    w = e.window(0, 3, 0.01)
+    for a in (e.state, e.control, e.sample(0.1).state, w.state, w.control, w.contact, w.t):
         with pytest.raises(ValueError):
             a[0] = 1.0
 
@@ -79,7 +83,7 @@ def test_select_picks_nearest_velocity_and_strides(lib):
     """select finds the nearest target speed, filtered by strides; unknown strides are named."""
     assert lib.select(0.36).key == "v0.30_s1"
     assert lib.select(0.46).key == "v0.50_s1"
-    assert lib.select(0.3, strides=2).key == "v0.50_s2"
+    assert lib.select(0.3, strides=2, clamp=True).key == "v0.50_s2"
     with pytest.raises(EntryNotFound, match="strides available"):
         lib.select(0.3, strides=7)
 
@@ -101,3 +105,79 @@ def test_runtime_imports_only_numpy_and_h5py():
             "'scipy', 'rich') if m in sys.modules]; print(bad); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_membership_keys_and_repr(lib):
+    """`key in lib` tests keys (it was False for every key: iteration yields entries)."""
+    assert "v0.50_s1" in lib and "v9.99_s1" not in lib
+    assert lib.keys() == ["v0.30_s1", "v0.50_s1", "v0.50_s2"]
+    assert "3 entries" in repr(lib) and "v0.50_s1" in repr(lib["v0.50_s1"])
+
+
+@pytest.mark.parametrize("args", [(0.0, -1, 0.03), (0.0, 0, 0.03), (float("nan"), 3, 0.03), (0.0, 3, 0.0),
+                                  (0.0, 3, -0.03), (0.0, 3, float("nan")), (float("inf"), 3, 0.03)])
+def test_window_refuses_bad_arguments(lib, args):
+    """n < 1, a non-finite t0, dt <= 0 or non-finite: a ValueError naming the argument (it returned
+    1023 rows for n = -1, raised IndexError for n = 0 or a NaN t0)."""
+    with pytest.raises(ValueError, match=r"window\(t0, n, dt\): (t0|n|dt) must"):
+        lib["v0.30_s1"].window(*args)
+
+
+@pytest.mark.parametrize("t", [float("nan"), float("inf"), -float("inf")])
+def test_sample_refuses_non_finite_times(lib, t):
+    """sample(nan) says what is wrong (it raised 'cannot convert float NaN to integer')."""
+    with pytest.raises(ValueError, match=r"sample\(t\): t must be a finite time"):
+        lib["v0.30_s1"].sample(t)
+
+
+def test_select_outside_the_range_raises_unless_clamped(lib):
+    """select(5.0) names the stored speeds (it silently returned the fastest entry); clamp=True
+    asks for the nearest; NaN is a ValueError (it returned the slowest entry)."""
+    with pytest.raises(EntryNotFound, match=r"outside the stored speeds \[0.3, 0.5\]"):
+        lib.select(5.0)
+    assert lib.select(5.0, clamp=True).key == "v0.50_s1"
+    with pytest.raises(ValueError, match="finite speed"):
+        lib.select(float("nan"))
+
+
+def test_channels_by_name_with_units(lib):
+    """Samples and windows read channels by name, with the units stored in the file."""
+    e = lib["v0.50_s1"]
+    s, w = e.sample(0.4), e.window(0.4, 5, 0.05)
+    assert s["board_vx"] == s.state[24] and s["f_RL_z"] == s.control[8]
+    assert np.array_equal(w["board_vx"], w.state[:, 24]) and np.array_equal(w["qd_FL_hip"], w.control[:, 13])
+    assert s.unit("board_vx") == w.unit("board_vx") == e.unit("board_vx") == "m/s" and e.unit("f_FL_x") == "N"
+    with pytest.raises(KeyError, match="board_vx"):
+        s["board_speed"]
+
+
+def test_blend_has_its_own_attributes(lib):
+    """A blend carries its own speed, sources and weights, not the lower neighbour's solve figures;
+    strides may be left out as for select."""
+    b = lib.blend(0.4)
+    assert b.target_velocity_mps == 0.4 and b.n_strides == 1 and b.success
+    assert b.attrs["blend_sources"] == ("v0.30_s1", "v0.50_s1")
+    assert b.attrs["blend_weights"] == pytest.approx((0.5, 0.5))
+    assert "final_velocity_mps" not in b.attrs and "iterations" not in b.attrs
+
+
+def test_blend_margin_refuses_a_blend_at_the_friction_cone(tmp_path):
+    """Entries whose deck feet use 99.5 % of the cone blend into one that misses the default 1 %
+    friction margin: strict refuses it, non-strict marks it failed; margin 0 accepts it."""
+    entries = []
+    for v, seed in ((0.3, 1), (0.5, 2)):
+        d = _entry(v, seed=seed)
+        d.arrays["control"][:, 0::3] = 0.995 * 0.6 * 20.0  # f_x at 99.5 % of mu f_z, deck level
+        entries.append(d)
+    p = tmp_path / "edge.h5"
+    root = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",
+            schema.A_GIT_COMMIT: "x", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "", schema.A_CASADI: "x",
+            schema.A_IPOPT: "x", schema.A_PINOCCHIO: "x"}
+    model = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0) | {"friction_mu": 0.6}
+    write_library(p, root, model, {}, {}, entries)
+    edge = MotionLibrary.open(p)
+    with pytest.raises(SkatelibError, match="misses its margins"):
+        edge.blend(0.4, 1)
+    loose = edge.blend(0.4, 1, strict=False)
+    assert not loose.success and loose.check is not None and loose.check.max_friction_use == pytest.approx(0.995)
+    assert edge.blend(0.4, 1, margin=BlendMargin(friction_fraction=0.0)).success
