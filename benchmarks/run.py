@@ -113,6 +113,7 @@ def bench_runtime(path: Path | None = None) -> None:
     t_interp = min(timeit.repeat(lambda: [np.interp(0.613, e.t, e.state[:, j]) for j in range(28)],
                                  number=2000, repeat=5)) / 2000
     t_window = min(timeit.repeat(lambda: e.window(0.61, 10, 1 / 30), number=20000, repeat=5)) / 20000
+    t_contact = min(timeit.repeat(lambda: e.window(0.61, 10, 1 / 30).contact, number=20000, repeat=5)) / 20000
     t_loop = min(timeit.repeat(lambda: [e.sample(0.61 + k / 30) for k in range(10)], number=5000, repeat=5)) / 5000
     print("runtime (best of repeats)")
     print(f"  open (verified, packed):  {t_open * 1e3:7.2f} ms   naive per-entry h5py read {t_naive * 1e3:.2f} ms"
@@ -121,6 +122,7 @@ def bench_runtime(path: Path | None = None) -> None:
           f"  ({t_interp / t_sample:.0f}x)   target <= 3 us")
     print(f"  window(n=10):             {t_window * 1e6:7.2f} us   10 sample() calls {t_loop * 1e6:.1f} us"
           f"  ({t_loop / t_window:.1f}x)   target <= 15 us")
+    print(f"  window(n=10) + .contact:  {t_contact * 1e6:7.2f} us   (the contact schedule is made on first access)")
 
 
 def bench_rerun(path: Path | None = None) -> None:

@@ -80,28 +80,52 @@ class Sample(NamedTuple):
         return self.get(key) if isinstance(key, str) else tuple.__getitem__(self, key)
 
 
-class Window(NamedTuple):
+class Window:
     """References over an MPC horizon at ``t[k] = t0 + k dt``: ``state`` (n, 28), ``control`` (n, 24),
-    ``contact`` (n, 4) codes per step and leg (held like controls; ``None`` without a contact plan).
-    ``window["board_vx"]`` is that channel over the horizon, (n,)."""
+    ``contact`` (n, 4) codes per step and leg (held like controls; ``None`` without a contact plan),
+    ``t`` (n,) [s]. ``window["board_vx"]`` is that channel over the horizon, (n,). ``t`` and
+    ``contact`` are made on first access, so a caller pays only for what it reads."""
 
-    t: np.ndarray
-    state: np.ndarray
-    control: np.ndarray
-    contact: np.ndarray | None
-    channels: Channels
+    __slots__ = ("_contact", "_ctable", "_dt", "_idx", "_t", "_t0", "channels", "control", "state")
+
+    def __init__(self, t0: float, dt: float, state: np.ndarray, control: np.ndarray, idx: np.ndarray,
+                 ctable: np.ndarray | None, channels: Channels):
+        self._t0, self._dt, self._idx, self._ctable = t0, dt, idx, ctable
+        self._t: np.ndarray | None = None
+        self._contact: np.ndarray | None = None
+        self.state, self.control, self.channels = state, control, channels
+
+    @property
+    def t(self) -> np.ndarray:
+        if self._t is None:
+            self._t = self._t0 + self._dt * np.arange(len(self.state), dtype=float)
+            self._t.flags.writeable = False
+        return self._t
+
+    @property
+    def contact(self) -> np.ndarray | None:
+        if self._contact is None and self._ctable is not None:
+            self._contact = np.take(self._ctable, self._idx, axis=0)
+            self._contact.flags.writeable = False
+        return self._contact
+
+    def __len__(self) -> int:
+        return len(self.state)
 
     def get(self, name: str) -> np.ndarray:
         """One state or control channel over the horizon by name (KeyError lists the valid names)."""
         which, j = self.channels.locate(name)
         return (self.control if which else self.state)[:, j]
 
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.get(name)
+
     def unit(self, name: str) -> str:
         self.channels.locate(name)
         return self.channels.units[name]
 
-    def __getitem__(self, key: Any) -> Any:
-        return self.get(key) if isinstance(key, str) else tuple.__getitem__(self, key)
+    def __repr__(self) -> str:
+        return f"Window(t0={self._t0}, n={len(self.state)}, dt={self._dt})"
 
 
 @dataclass(frozen=True)
@@ -278,7 +302,7 @@ class Entry:
             u = j + (tc - self.t[j]) / span
         i = u.astype(np.intp)
         # Contacts hold like controls, the last knot's code at the end (index K-1 before clamping).
-        contact = np.take(self._ctable, i, axis=0) if self._ctable is not None else None
+        contact_idx = i.copy() if self._ctable is not None else i
         np.minimum(i, self._last, out=i)
         u -= i
         rows = np.take(self._table, i, axis=0)
@@ -288,12 +312,7 @@ class Entry:
         state = rows[:, :a]
         state += slope
         rows.flags.writeable = False  # views made from here on are read-only too
-        times = self._ar[:n] * dt if n <= len(self._ar) else np.arange(n, dtype=float) * dt
-        times += t0
-        times.flags.writeable = False
-        if contact is not None:
-            contact.flags.writeable = False
-        return Window(times, rows[:, :a], rows[:, b:], contact, self.channels)
+        return Window(t0, dt, rows[:, :a], rows[:, b:], contact_idx, self._ctable, self.channels)
 
     def __repr__(self) -> str:
         return (f"Entry({self.key!r}, v={self.target_velocity_mps} m/s, strides={self.n_strides}, "
