@@ -6,13 +6,14 @@ STAMP  := $(VENV)/.skatelib-installed
 CONFIG ?=
 OUT    ?=
 
-.PHONY: all venv library test lint bench clean help
+.PHONY: all venv library test lint bench clean help cpp
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5)"
 	@echo "make test      run the test suite"
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
+	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "skatelib needs Python >= 3.11; found " + sys.version.split()[0] + ": set PYTHON=python3.11 (or newer)")'
@@ -43,3 +44,14 @@ bench: venv
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache
+
+# The C++ reader (runtime/cpp): header-only; this builds its dump and bench tools. Installs the
+# Debian packages it needs when they are missing (as root, or through sudo).
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+cpp:
+	@{ command -v cmake && command -v c++ && { test -f /usr/include/hdf5/serial/hdf5.h || test -f /usr/include/hdf5.h; } \
+	   && test -f /usr/include/nlohmann/json.hpp; } >/dev/null 2>&1 || { \
+	  echo "installing cmake, g++, libhdf5-dev, nlohmann-json3-dev"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq cmake g++ libhdf5-dev nlohmann-json3-dev >/dev/null; }
+	cmake -S runtime/cpp -B build/cpp -DCMAKE_BUILD_TYPE=Release >/dev/null
+	cmake --build build/cpp -j2

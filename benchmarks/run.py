@@ -123,6 +123,14 @@ def bench_runtime(path: Path | None = None) -> None:
     print(f"  window(n=10):             {t_window * 1e6:7.2f} us   10 sample() calls {t_loop * 1e6:.1f} us"
           f"  ({t_loop / t_window:.1f}x)   target <= 15 us")
     print(f"  window(n=10) + .contact:  {t_contact * 1e6:7.2f} us   (the contact schedule is made on first access)")
+    cpp = Path("build/cpp/skatelib_bench")
+    if cpp.exists():
+        import subprocess
+
+        out = subprocess.run([str(cpp), str(path), "0.5", "2"], capture_output=True, text=True).stdout.strip()
+        print(f"  C++ reader (runtime/cpp): {out}")
+    else:
+        print("  C++ reader: not built (make cpp)")
 
 
 def bench_rerun(path: Path | None = None) -> None:
