@@ -4,16 +4,25 @@ The writer stores a fixed-length placeholder in the root attribute ``content_sha
 the finished file with those 64 bytes set to ASCII zeros, then writes the digest over the
 placeholder in place. Any changed byte anywhere (data, metadata or HDF5 bookkeeping) changes
 the digest; h5py alone reads a zeroed block back silently.
+
+Readers verify the raw bytes *before* handing the file to HDF5 (:func:`verify_raw`): a damaged
+file can send HDF5's parser into an endless loop (a zeroed 4 KB block in the attribute heap did,
+in the reliability fuzz test), so no byte of a file is parsed until its digest matches.
 """
 
 from __future__ import annotations
 
 import hashlib
+import re
 import secrets
 from pathlib import Path
 
 DIGEST_LEN = 64
 _ZEROS = b"0" * DIGEST_LEN
+_HEX64 = re.compile(rb"[0-9a-f]{64}")
+# The attribute value follows its name in the attribute message (name, datatype and dataspace
+# messages, then the 64 bytes); 256 bytes is generous for every HDF5 attribute-message version.
+_NAME_TO_VALUE_MAX = 256
 
 
 def placeholder() -> bytes:
@@ -34,6 +43,27 @@ def file_digest(raw: bytes | bytearray | memoryview, field: bytes) -> str | None
     h.update(_ZEROS)
     h.update(mv[pos + DIGEST_LEN :])
     return h.hexdigest()
+
+
+def verify_raw(raw: bytes, name: bytes) -> bool | None:
+    """Check a file's bytes against its stored digest without parsing HDF5.
+
+    Looks for the attribute ``name`` (``b"content_sha256"``) in the raw bytes and for the 64 hex
+    digits of its value right after it; True when one such value is the file's digest, False when
+    values are there but none matches (the file is corrupt), None when no value is found (the
+    attribute is missing or its bytes are damaged).
+    """
+    found = False
+    start = raw.find(name)
+    while start >= 0:
+        seg = raw[start + len(name): start + len(name) + _NAME_TO_VALUE_MAX]
+        m = _HEX64.search(seg)
+        if m is not None:
+            found = True
+            if file_digest(raw, m.group()) == m.group().decode():
+                return True
+        start = raw.find(name, start + 1)
+    return False if found else None
 
 
 def seal(path: Path, marker: bytes) -> str:

@@ -60,3 +60,41 @@ class LibraryFormatError(SkatelibError):
         self.field = field
         self.message = message
         super().__init__(f"{self.path}: {field}: {message}")
+
+
+class OutputError(SkatelibError):
+    """An output path cannot or must not be written (a directory, the input itself, a foreign file,
+    an unwritable folder); raised before any work starts.
+
+    Attributes:
+        path: The output path.
+        message: What is wrong and what to do.
+    """
+
+    def __init__(self, path: Path | str, message: str) -> None:
+        self.path = Path(path)
+        self.message = message
+        super().__init__(f"{self.path}: {message}")
+
+
+class Interrupted(SkatelibError):
+    """The user (Ctrl-C) or the system (SIGTERM) stopped a command; finished work is kept."""
+
+
+# Exit codes of the ``skatelib`` command (README "Exit codes").
+EXIT_FAILED = 1  # entries failed to solve or validate
+EXIT_USAGE = 2  # bad usage, config or output path
+EXIT_LIBRARY = 3  # a library file is missing, corrupt, incomplete or of another major version
+EXIT_DEPENDENCY = 4  # an optional package is missing (install the extra named in the message)
+EXIT_INTERRUPTED = 130  # Ctrl-C or SIGTERM
+
+
+def exit_code(error: BaseException) -> int:
+    """The documented exit code for an error that reached the command line."""
+    if isinstance(error, Interrupted):
+        return EXIT_INTERRUPTED
+    if isinstance(error, LibraryFormatError):
+        return EXIT_LIBRARY
+    if isinstance(error, ImportError):
+        return EXIT_DEPENDENCY
+    return EXIT_USAGE

@@ -19,11 +19,13 @@ from typing import Any
 import h5py
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.digest import file_digest
+from skatelib.library.digest import file_digest, verify_raw
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.writer import jsonable
 
 _H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError)  # what h5py raises on damaged files
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+_USERBLOCK_MAX = 1 << 16  # HDF5 looks for its signature at 0, 512, 1024, ... (a user block before it)
 
 
 @dataclass(frozen=True)
@@ -101,6 +103,8 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
     if not path.is_file():
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
     raw = path.read_bytes()
+    if verify_checksum:
+        _verify_before_parsing(path, raw)
     try:
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
             fmt = f.attrs.get(schema.A_FORMAT)
@@ -171,6 +175,45 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         model_text=model_text,
         entries=_entries(path, kind, index, arrays),
     )
+
+
+def _verify_before_parsing(path: Path, raw: bytes) -> None:
+    """Refuse a damaged file before HDF5 parses any of it (see :mod:`skatelib.library.digest`)."""
+    ok = verify_raw(raw, schema.A_CHECKSUM.encode())
+    if ok:
+        return
+    field = f"/@{schema.A_CHECKSUM}"
+    if ok is False:
+        raise LibraryFormatError(path, field, "the file does not match its checksum: it is corrupt; rebuild it")
+    if not raw.startswith(_HDF5_SIGNATURE) and _HDF5_SIGNATURE not in raw[:_USERBLOCK_MAX]:
+        raise LibraryFormatError(path, "/", "not an HDF5 file (truncated, corrupt or of another type); "
+                                            "give a library written by 'skatelib build'")
+    eof = _hdf5_end_of_file(raw)
+    if eof is not None and eof > len(raw):
+        raise LibraryFormatError(path, "/", f"truncated: {len(raw)} of its {eof} bytes are there; "
+                                            "copy it again or rebuild it with 'skatelib build'")
+    if schema.FORMAT_NAME.encode() not in raw:
+        raise LibraryFormatError(path, f"/@{schema.A_FORMAT}",
+                                 "not a skatelib motion library (an HDF5 file without its format name)")
+    raise LibraryFormatError(path, field, "checksum attribute missing or damaged: the file is corrupt; rebuild it")
+
+
+def _hdf5_end_of_file(raw: bytes) -> int | None:
+    """The file length HDF5's superblock (at offset 0, 8-byte addresses) records, or None."""
+    if not raw.startswith(_HDF5_SIGNATURE) or len(raw) < 64:
+        return None
+    version = raw[8]
+    if version in (0, 1):
+        if raw[13] != 8:  # size of offsets
+            return None
+        at = 24 + (4 if version == 1 else 0) + 16  # fixed fields, base and free-space addresses
+    elif version in (2, 3):
+        if raw[9] != 8:
+            return None
+        at = 12 + 16  # fixed fields, base and superblock-extension addresses
+    else:
+        return None
+    return int.from_bytes(raw[at:at + 8], "little")
 
 
 def _parse_index(path: Path, blob: np.ndarray) -> dict[str, Any]:

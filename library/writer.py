@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -57,7 +58,9 @@ def jsonable(v: Any) -> Any:
 def atomic_path(path: Path) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder; on success it replaces ``path``, on error it is removed."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    # The writer's pid is in the name, so a later run can tell a dead writer's leftover (kill -9)
+    # from a concurrent writer's file in progress (remove_stale_temporaries).
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         yield Path(tmp)
@@ -69,6 +72,38 @@ def atomic_path(path: Path) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def remove_stale_temporaries(folder: Path, prefix: str = "") -> list[Path]:
+    """Remove temporary files and folders (``.NAME.PID.*.tmp`` of :func:`atomic_path`, or
+    ``PREFIX-PID-*`` folders) left in ``folder`` by processes that no longer exist; returns them."""
+    removed: list[Path] = []
+    if not folder.is_dir():
+        return removed
+    for p in folder.iterdir():
+        parts = p.name.split(".") if p.name.endswith(".tmp") else p.name.split("-")
+        is_ours = p.name.endswith(".tmp") and p.name.startswith(".") and len(parts) >= 5
+        is_ours = is_ours or bool(prefix and p.name.startswith(f"{prefix}-") and len(parts) >= 3)
+        pid_part = parts[-3] if p.name.endswith(".tmp") else parts[1] if len(parts) > 1 else ""
+        if not is_ours or not pid_part.isdigit() or _alive(int(pid_part)):
+            continue
+        with contextlib.suppress(OSError):
+            if p.is_dir():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
+            removed.append(p)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _stored(group: h5py.Group, name: str, data: np.ndarray) -> np.ndarray:

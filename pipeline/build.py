@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig
 from skatelib.pipeline.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
 from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
 from skatelib.pipeline.pushoff import problem_for
@@ -30,7 +30,7 @@ class BuildReport:
         return [o for o in self.outcomes if not o.result.success]
 
 
-def default_output(config: QuadrupedConfig) -> Path:
+def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
     return Path("out") / f"{config.meta.name}.h5"
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
@@ -11,11 +12,13 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
-from skatelib.library.errors import SkatelibError
+from skatelib.library.errors import Interrupted, SkatelibError
+from skatelib.pipeline.config import SweepConfig, field_range
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
 console = Console()
+err_console = Console(stderr=True)
 
 # Vendor single-rigid-body figures (ROBOT_DATA.md), printed beside ours for comparison.
 VENDOR_MASS_KG = 8.3644
@@ -25,8 +28,21 @@ VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 
 @app.callback()
 def _root() -> None:
-    """Offline motion-library pipeline for legged robots on skateboards."""
+    """Offline motion-library pipeline for legged robots on skateboards.
 
+    Exit codes: 0 ok, 1 entries failed, 2 usage/config/output error, 3 bad library file,
+    4 missing optional package, 130 interrupted. Add --debug for a traceback instead of a message.
+    """
+
+
+class Backend(enum.StrEnum):
+    """Where build workers run."""
+
+    loky = "loky"
+    dask = "dask"
+
+
+VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, defined with the config
 
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 
@@ -73,29 +89,38 @@ def build(
     config: ConfigArg = None,
     out: OutOpt = None,
     jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
-    backend: Annotated[str, typer.Option(help="'loky' (this machine) or 'dask' (a cluster).")] = "loky",
+    backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
+                       ] = Backend.loky,
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, tcp://HOST:PORT.")] = None,
     progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
     frontier: Annotated[bool, typer.Option(
         "--frontier", help="Also search the reachable-speed frontier of every stride count and store it.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite an output file that is not a skatelib library.")
+                     ] = False,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
     from skatelib.pipeline.build import build_library, default_output
     from skatelib.pipeline.config import HumanoidConfig, load_any_config
+    from skatelib.pipeline.preflight import check_cache_dir, check_output, check_scheduler
     from skatelib.pipeline.sweep import chains_for
 
     any_cfg = load_any_config(config)
+    target = out or default_output(any_cfg)
+    check_output(target, [any_cfg.path], force)
     if isinstance(any_cfg, HumanoidConfig):
-        _build_humanoid(any_cfg, out, allow_failures)
+        _build_humanoid(any_cfg, target, allow_failures)
         return
     cfg = any_cfg
-    if backend == "dask" and scheduler is None:
-        raise typer.BadParameter("--backend dask needs --scheduler tcp://HOST:PORT")
+    if backend is Backend.dask:
+        if scheduler is None:
+            raise typer.BadParameter("--backend dask needs --scheduler tcp://HOST:PORT")
+        check_scheduler(scheduler)
+    if cache or cfg.optimization.compile:
+        check_cache_dir()
     total = sum(len(c.velocities) for c in chains_for(cfg))
-    target = out or default_output(cfg)
     console.print(f"building {total} entries of {escape(str(cfg.path))} -> {escape(str(target))}")
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -103,14 +128,20 @@ def build(
                   console=console, disable=not progress) as bar:
         task = bar.add_task("solving", total=total)
 
+        done = []
+
         def on_entry(key: str, outcome: Any) -> None:
-            r = outcome.result
-            bar.update(task, advance=1, description=f"{key}: {r.status}")
+            done.append(key)
+            bar.update(task, advance=1, description=f"{key}: {outcome.result.status}")
 
         from skatelib.pipeline.frontier import FrontierSearch
 
-        report = build_library(cfg, target, jobs=jobs, backend=backend, scheduler=scheduler, use_cache=cache,
-                               on_entry=on_entry, frontier=FrontierSearch() if frontier else None)
+        try:
+            report = build_library(cfg, target, jobs=jobs, backend=backend.value, scheduler=scheduler,
+                                   use_cache=cache, on_entry=on_entry, frontier=FrontierSearch() if frontier else None)
+        except KeyboardInterrupt:
+            kept = f"{len(done)} of {total} entries are cached" if cache else "nothing is cached (--no-cache)"
+            raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
     _summary(report.outcomes)
     if report.frontier is not None:
         _frontier_table(report.frontier)
@@ -207,7 +238,8 @@ def frontier(
 
 @app.command()
 def solve(
-    velocity: Annotated[float, typer.Option(min=0.01, max=5.0, help="Target board speed [m/s].")],
+    velocity: Annotated[float, typer.Option(min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
+                                            help="Target board speed, m/s (the range of sweep.velocities_mps).")],
     strides: Annotated[int, typer.Option(min=1, max=20, help="Number of push strides.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="One-entry library to write (.h5).")],
     config: Annotated[Path | None, typer.Option(help="Build config (TOML); default when omitted.")] = None,
@@ -215,8 +247,10 @@ def solve(
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build import build_library
     from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.preflight import check_output
 
     cfg = load_config(config)
+    check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, jobs=1, use_cache=False)
     _summary(report.outcomes)
@@ -275,22 +309,47 @@ def inspect(
     save: Annotated[Path | None, typer.Option(help="Write a Rerun recording (.rrd).")] = None,
     spawn: Annotated[bool, typer.Option(help="Open a Rerun viewer.")] = False,
     overlay: Annotated[bool, typer.Option(help="Overlay entries instead of side by side.")] = False,
+    force: Annotated[bool, typer.Option(help="Overwrite --save even if it is not a Rerun recording.")] = False,
 ) -> None:
     """Look at trajectories in Rerun: robot, board, forces and plots, with a default layout."""
+    from skatelib.pipeline.preflight import check_output
+
     try:
         from skatelib.pipeline.inspect_rerun import inspect_library
     except ImportError as e:
-        raise typer.BadParameter(f"Rerun is not installed ({e}); pip install rerun-sdk") from e
+        raise ImportError(f"Rerun is not installed ({e}); pip install rerun-sdk") from e
     if save is None and not spawn:
         save = library.with_suffix(".rrd")
+    if save is not None:
+        check_output(save, [library], force, what="recording")
     roots = inspect_library(library, entry, save, spawn, overlay)
     console.print(f"logged {len(roots)} entries" + (escape(f" to {save}; open it with: rerun {save}") if save else ""))
 
 
+def _sigterm(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
+
+
 def main() -> None:
-    """Entry point: turn skatelib errors into a message and exit code 2, not a traceback."""
+    """Entry point: errors become a one-paragraph message on stderr and a documented exit code
+    (README "Exit codes"), not a traceback; ``--debug`` anywhere on the line shows the traceback."""
+    import signal
+    import sys
+
+    from skatelib.library.errors import EXIT_INTERRUPTED, exit_code
+
+    debug = "--debug" in sys.argv
+    if debug:
+        sys.argv.remove("--debug")
+    signal.signal(signal.SIGTERM, _sigterm)
     try:
         app()
-    except SkatelibError as e:
-        console.print(f"[bold red]error:[/] {escape(str(e))}")
-        raise SystemExit(2) from None
+    except SystemExit as e:
+        if e.code == EXIT_INTERRUPTED:  # typer's answer to Ctrl-C in a command that does not say more
+            err_console.print("interrupted")
+        raise
+    except (SkatelibError, ImportError) as e:
+        if debug:
+            raise
+        err_console.print(f"[bold red]error:[/] {escape(str(e))}")
+        raise SystemExit(exit_code(e)) from None

@@ -302,7 +302,7 @@ def load_any_config(path: Path | str | None = None) -> QuadrupedConfig | Humanoi
     if path is None:
         return load_config(None)
     data, _ = read_toml(Path(path))
-    kind = data.get("meta", {}).get("kind")
+    kind = _meta(Path(path), data).get("kind")
     if kind == "humanoid":
         return load_humanoid_config(path)
     if kind == "quadruped":
@@ -324,18 +324,30 @@ def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def read_toml(path: Path) -> tuple[dict[str, Any], str]:
+def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any], str]:
     """Read a TOML file, following ``extends`` chains; returns (merged table, own text).
 
     Raises:
-        ConfigError: When the file is missing or not valid TOML.
+        ConfigError: When the file is missing, a folder, not UTF-8 text (a library file, say), not
+            valid TOML, or its ``extends`` chain comes back to a file already in it.
     """
     path = Path(path)
+    if path.resolve() in chain:
+        names = " -> ".join(p.name for p in (*chain, path.resolve()))
+        raise ConfigError(chain[0], "extends", f"the extends chain is a cycle: {names}; break it")
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except OSError as e:
-        raise ConfigError(path, "-", f"cannot read the config file ({e.strerror}); "
+        what = "is a folder, not a config file" if path.is_dir() else f"cannot be read ({e.strerror})"
+        raise ConfigError(path, "-", f"{what}; "
                           f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
+    if raw.startswith(b"\x89HDF"):
+        raise ConfigError(path, "-", "is an HDF5 file (a motion library?), not a TOML config; "
+                          "'skatelib info' and 'skatelib validate' read libraries")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ConfigError(path, "-", f"is not UTF-8 text (byte {e.start}); a config is a TOML text file") from e
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -348,7 +360,7 @@ def read_toml(path: Path) -> tuple[dict[str, Any], str]:
     if parent is not None:
         if not isinstance(parent, str):
             raise ConfigError(path, "extends", "must be a file name (string)")
-        base, _ = read_toml((path.parent / parent).resolve())
+        base, _ = read_toml((path.parent / parent).resolve(), (*chain, path.resolve()))
         data = _merge(base, data)
     return data, text
 
@@ -434,7 +446,7 @@ def load_config(path: Path | str | None = None) -> QuadrupedConfig:
     """
     path = Path(path) if path is not None else CONFIG_DIR / DEFAULT_CONFIG
     data, text = read_toml(path)
-    meta = data.get("meta", {})
+    meta = _meta(path, data)
     if meta.get("kind") != "quadruped":
         raise ConfigError(path, "meta.kind", f"expected 'quadruped', got {meta.get('kind')!r}")
     cfg = QuadrupedConfig(path=path.resolve(), text=text, **_sections(path, data, _SECTIONS))
@@ -471,6 +483,8 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
                           f"{cfg.optimization.friction_model!r}: use one of {', '.join(FRICTION_MODELS)}")
     if cfg.optimization.mu_strategy not in ("monotone", "adaptive"):
         raise ConfigError(p, "optimization.mu_strategy", "use 'monotone' or 'adaptive'")
+    if cfg.urdf_path.is_dir():
+        raise ConfigError(p, "robot.urdf", f"{cfg.urdf_path} is a folder; name the URDF file in it")
     if not cfg.urdf_path.is_file():
         raise ConfigError(p, "robot.urdf", f"file {cfg.urdf_path} does not exist")
     if not cfg.sweep.velocities_mps or not cfg.sweep.strides:
@@ -498,3 +512,16 @@ def check_unique_keys(path: Path, velocities: tuple[float, ...]) -> None:
                               f"{seen[key]} and {v} m/s both name entry speed v{key} (entry keys keep 2 decimals); "
                               "list speeds that differ by at least 0.01 m/s, each once")
         seen[key] = v
+
+
+def field_range(cls: type, name: str) -> tuple[float, float]:
+    """The allowed [lo, hi] of a config field, as declared once in its dataclass."""
+    meta = {f.name: f.metadata for f in dataclasses.fields(cls)}[name]
+    return float(meta["lo"]), float(meta["hi"])
+
+
+def _meta(path: Path, data: dict[str, Any]) -> dict[str, Any]:
+    meta = data.get("meta", {})
+    if not isinstance(meta, dict):
+        raise ConfigError(path, "meta", f"must be a table ([meta] with kind and name), got {meta!r}")
+    return meta

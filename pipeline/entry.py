@@ -8,7 +8,8 @@ from __future__ import annotations
 import importlib.util
 import sys
 
-EXIT_MISSING_DEPENDENCY = 4
+from skatelib.library.errors import EXIT_DEPENDENCY  # standard library only
+
 PIPELINE_MODULES = ("typer", "rich", "casadi", "pinocchio", "joblib")
 
 
@@ -20,7 +21,7 @@ def main() -> None:
             f"skatelib: the command line needs the build pipeline's packages; missing: {', '.join(missing)}.\n"
             "This is a runtime-only install (numpy + h5py, enough for skatelib.runtime on a robot).\n"
             "To build, validate or inspect libraries: pip install 'skatelib[pipeline]'\n")
-        raise SystemExit(EXIT_MISSING_DEPENDENCY)
+        raise SystemExit(EXIT_DEPENDENCY)
     from skatelib.pipeline.cli import main as cli_main
 
     cli_main()

@@ -22,6 +22,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from skatelib.library.writer import remove_stale_temporaries
 
 CACHE_ENV = "SKATELIB_CACHE_DIR"
 
@@ -80,7 +81,8 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags
         for f in (fns.value, fns.grad, fns.jac, fns.hess):
             gen.add(f)
         lib.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=lib.parent) as tmp:
+        remove_stale_temporaries(lib.parent, "compile")  # a compile killed earlier left its stage.c
+        with tempfile.TemporaryDirectory(prefix=f"compile-{os.getpid()}-", dir=lib.parent) as tmp:
             c_file = Path(tmp) / "stage.c"
             c_file.write_text(gen.dump())
             so_tmp = Path(tmp) / "stage.so"

@@ -14,6 +14,7 @@ import json
 import os
 import pickle
 import threading
+import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -144,11 +145,34 @@ def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
     return result, len(ladder)
 
 
-def run_chain(chain: Chain, use_cache: bool = True, events: Any = None) -> list[EntryOutcome]:
+def exit_with_parent(parent_pid: int | None, poll_s: float = 0.5) -> None:
+    """In a worker process: exit at once when the build process ``parent_pid`` is gone (killed with
+    SIGKILL, it cannot stop its workers itself). Started once per process; a no-op without a pid or
+    when this process is not the build's child (a dask worker, for instance)."""
+    global _WATCHDOG_STARTED
+    if parent_pid is None or _WATCHDOG_STARTED or os.getppid() != parent_pid:
+        return
+    _WATCHDOG_STARTED = True
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(poll_s)
+        os._exit(1)  # reparented: the build is gone, and its work with it
+
+    threading.Thread(target=watch, name="skatelib-parent-watchdog", daemon=True).start()
+
+
+_WATCHDOG_STARTED = False  # per process: workers start one watchdog thread
+
+
+def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
+              parent_pid: int | None = None) -> list[EntryOutcome]:
     """Solve one warm-start chain (a module-level function, so worker processes can import it).
 
-    ``events`` is an optional queue that receives one ``(key, outcome)`` per finished entry.
+    ``events`` is an optional queue that receives one ``(key, outcome)`` per finished entry;
+    ``parent_pid``: the build process, whose death ends this worker (:func:`exit_with_parent`).
     """
+    exit_with_parent(parent_pid)
     for var in THREAD_VARS:
         os.environ[var] = "1"
     out: list[EntryOutcome] = []
@@ -222,18 +246,20 @@ def _drain(events: Any, on_entry: Callable[[str, EntryOutcome], None] | None, st
 
 def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
               on_entry: Callable[[str, EntryOutcome], None] | None) -> list[EntryOutcome]:
-    import multiprocessing
+    from multiprocessing.managers import SyncManager
 
     from joblib import Parallel, delayed
 
-    with multiprocessing.Manager() as manager:
+    manager = SyncManager()
+    manager.start(initializer=exit_with_parent, initargs=(os.getpid(),))  # the queue's server dies with us too
+    with manager:
         events = manager.Queue()
         stop = threading.Event()
         drain = threading.Thread(target=_drain, args=(events, on_entry, stop), daemon=True)
         drain.start()
         try:
             results = Parallel(n_jobs=min(jobs, len(chains)), backend="loky", return_as="generator_unordered")(
-                delayed(run_chain)(c, use_cache, events) for c in chains)
+                delayed(run_chain)(c, use_cache, events, os.getpid()) for c in chains)
             outcomes = [o for chain_out in results for o in chain_out]
         finally:
             stop.set()

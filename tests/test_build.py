@@ -70,7 +70,8 @@ def test_info_and_validate_commands(built):
 
 
 def test_validate_rejects_a_corrupt_file(built, tmp_path):
-    """A library with a damaged byte fails `skatelib validate` with exit 2 and the file named."""
+    """A library with a damaged byte fails `skatelib validate` with exit 3 (a bad library file) and
+    a message on stderr naming the file."""
     out, _ = built
     bad = tmp_path / "bad.h5"
     data = bytearray(out.read_bytes())
@@ -78,8 +79,8 @@ def test_validate_rejects_a_corrupt_file(built, tmp_path):
     bad.write_bytes(bytes(data))
     r = subprocess.run([*CLI, "validate", str(bad)], capture_output=True, text=True,
                        env={**os.environ, "COLUMNS": "300"})
-    assert r.returncode == 2
-    assert "bad.h5" in r.stdout
+    assert r.returncode == 3
+    assert "bad.h5" in r.stderr and "checksum" in r.stderr and r.stdout == ""
 
 
 def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path):

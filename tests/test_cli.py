@@ -22,13 +22,13 @@ def test_model_prints_srb_beside_vendor_figures():
 
 @pytest.mark.parametrize("bad", ["missing.toml", "bad_key.toml"])
 def test_bad_config_exits_nonzero_with_file_and_key(tmp_path: Path, bad: str):
-    """A missing file or an unknown key exits with code 2 and a message naming the file."""
+    """A missing file or an unknown key exits with code 2 and a message on stderr naming the file."""
     path = tmp_path / bad
     if bad == "bad_key.toml":
         path.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[board]\nmass_kilo = 1\n')
     env = {**os.environ, "COLUMNS": "300"}
     r = subprocess.run([*SKATELIB, "model", str(path)], capture_output=True, text=True, env=env)
     assert r.returncode == 2
-    assert bad in r.stdout
+    assert bad in r.stderr and r.stdout == ""
     if bad == "bad_key.toml":
-        assert "board.mass_kilo" in r.stdout
+        assert "board.mass_kilo" in r.stderr

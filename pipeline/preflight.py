@@ -1,0 +1,108 @@
+"""Checks made before any solve or compile, so that a build fails in a second with a clear
+message instead of after all the solving: the output path, the overwrite rule, the cache
+folder, the dask scheduler's address and reachability, leftovers of killed builds."""
+
+from __future__ import annotations
+
+import re
+import socket
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+from skatelib.library.errors import ConfigError, OutputError
+from skatelib.library.schema import FORMAT_NAME
+from skatelib.library.writer import remove_stale_temporaries
+from skatelib.pipeline.stagewise import CACHE_ENV, cache_dir
+
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?P<port>\d{1,5})$")
+
+
+def is_skatelib_library(path: Path) -> bool:
+    """True when ``path`` is an HDF5 file that names itself a skatelib motion library, even a
+    damaged one. Reads the raw bytes only: a damaged file can hang HDF5's parser."""
+    try:
+        raw = path.read_bytes()
+    except OSError:
+        return False
+    return raw.startswith(_HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
+
+
+def is_rerun_recording(path: Path) -> bool:
+    """True when ``path`` starts with the Rerun recording signature."""
+    try:
+        with path.open("rb") as f:
+            return f.read(3) == b"RRF"
+    except OSError:
+        return False
+
+
+def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, what: str = "library") -> None:
+    """Refuse an output that is a folder, one of the inputs, an existing file of another type
+    (unless ``force``), or in a folder that cannot be written; remove stale temporaries there.
+
+    Args:
+        what: ``"library"`` (an HDF5 motion library) or ``"recording"`` (a Rerun ``.rrd``).
+
+    Raises:
+        OutputError: Saying what to do.
+    """
+    out = Path(out)
+    example = "library.h5" if what == "library" else "recording.rrd"
+    if out.is_dir():
+        raise OutputError(out, f"is a folder; name the {what} file, e.g. {out / example}")
+    resolved = out.resolve()
+    for p in inputs:
+        if Path(p).resolve() == resolved:
+            raise OutputError(out, "is an input of this command; choose another output file")
+    same_type = is_skatelib_library if what == "library" else is_rerun_recording
+    if out.exists() and not force and not same_type(out):
+        raise OutputError(out, f"exists and is not a {'skatelib library' if what == 'library' else 'Rerun recording'}; "
+                               "refusing to overwrite it (choose another file, or pass --force)")
+    folder = out.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".skatelib-probe-"):
+            pass
+    except OSError as e:
+        raise OutputError(out, f"its folder {folder} cannot be written ({e.strerror}); choose another output") from e
+    remove_stale_temporaries(folder)
+
+
+def check_cache_dir() -> Path:
+    """The cache folder exists (or can be made) and is writable.
+
+    Raises:
+        OutputError: Naming the folder and ``$SKATELIB_CACHE_DIR``.
+    """
+    d = cache_dir()
+    try:
+        (d / "entries").mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
+            pass
+    except OSError as e:
+        raise OutputError(d, f"the cache folder cannot be used ({e.strerror}); set ${CACHE_ENV} to a writable "
+                             "folder, or pass --no-cache") from e
+    remove_stale_temporaries(d / "entries")
+    return d
+
+
+def check_scheduler(address: str, timeout_s: float = 3.0) -> None:
+    """The dask scheduler address is ``tcp://HOST:PORT`` (or ``tls://``) and something listens there.
+
+    Raises:
+        ConfigError: On a malformed or unreachable address (key ``--scheduler``).
+    """
+    m = SCHEDULER_RE.match(address)
+    if m is None:
+        raise ConfigError("--scheduler", "--scheduler", f"{address!r} is not an address like tcp://HOST:PORT")
+    host, port = m["host"].strip("[]"), int(m["port"])
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as e:
+        raise ConfigError("--scheduler", "--scheduler",
+                          f"no dask scheduler answers at {address} within {timeout_s:.0f} s ({e.strerror or e}); "
+                          "start one with 'dask scheduler' or check the address") from e
+
