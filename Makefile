@@ -19,15 +19,15 @@ $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "skatelib needs Python >= 3.11; found " + sys.version.split()[0] + ": set PYTHON=python3.11 (or newer)")'
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
-	$(BIN)/python -m pip install -q -e '.[pipeline,dask,dev]' --config-settings editable_mode=strict
-	@ls pipeline/*.py library/*.py runtime/*.py > $(VENV)/.skatelib-modules
+	$(BIN)/python -m pip install -q -e '.[pipeline,control,dask,dev]' --config-settings editable_mode=strict
+	@ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules
 	touch $@
 
 # The strict editable install links each module; relink when a module is added or removed.
 venv: $(STAMP)
-	@ls pipeline/*.py library/*.py runtime/*.py | cmp -s - $(VENV)/.skatelib-modules || { \
+	@ls pipeline/*.py library/*.py runtime/*.py control/*.py | cmp -s - $(VENV)/.skatelib-modules || { \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
-	  ls pipeline/*.py library/*.py runtime/*.py > $(VENV)/.skatelib-modules; }
+	  ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules; }
 
 library: venv
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
@@ -36,8 +36,8 @@ test: venv
 	$(BIN)/python -m pytest
 
 lint: venv
-	$(BIN)/ruff check pipeline library runtime tests benchmarks
-	$(BIN)/mypy pipeline library runtime
+	$(BIN)/ruff check pipeline library runtime control tests benchmarks
+	$(BIN)/mypy pipeline library runtime control
 
 bench: venv
 	$(BIN)/python -m benchmarks.run

@@ -326,6 +326,51 @@ def inspect(
     console.print(f"logged {len(roots)} entries" + (escape(f" to {save}; open it with: rerun {save}") if save else ""))
 
 
+@app.command()
+def track(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
+                     ] = None,
+    perturb: Annotated[str, typer.Option(
+        help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
+             "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")
+    ] = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5",
+    solver: Annotated[str, typer.Option(help="QP solver: proxqp (condensed, dense) or osqp (sparse).")] = "proxqp",
+    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+) -> None:
+    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a nonlinear plant
+    with model error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails)."""
+    try:
+        from skatelib.control.closed_loop import TrackSettings
+        from skatelib.control.mpc import MpcConfig
+        from skatelib.control.track import track_library
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    results = track_library(library, entry, "" if perturb == "none" else perturb, MpcConfig(solver=solver),
+                            TrackSettings(seed=seed), jobs)
+    t = Table(title=escape(f"closed loop, plant: {perturb}"))
+    for col in ("entry", "label", "v +1 s", "delivered", "error", "roll max", "pos err", "att err", "min f_n",
+                "slips", "MPC ms med/max", "verdict"):
+        t.add_column(escape(col), justify="right")
+    failed = 0
+    for r in results:
+        failed += not r.passed
+        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.speed_after_1s_mps:.3f}", f"{r.delivered_mps:.3f}",
+                  f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
+                  f"{1e3 * r.max_position_error_m:.1f} mm",
+                  f"{r.max_attitude_error_rad:.3f}", f"{r.min_normal_N:.1f}", str(r.slips),
+                  f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+    console.print(t)
+    for r in results:
+        if not r.passed:
+            console.print(escape(f"{r.key}: {r.reasons}"))
+    if failed:
+        console.print(f"[bold red]{failed} of {len(results)} entries failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
 def _sigterm(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
 

@@ -1,0 +1,331 @@
+"""Closed loop: the MPC fed by ``skatelib.runtime`` drives the plant through one library entry,
+then through the push leg's transfer back onto the deck and four-leg riding, and a verdict.
+
+Timeline (Sec. IV-A): the entry's strides; then ``transfer_s`` with the push leg swinging back to
+the deck (three legs on the board, its foot on a Bezier curve, which carries no force in the
+single-rigid-body plant); then four-leg riding at the speed reached, ``ride_s`` long.
+
+The reference positions are re-anchored to the board at every update: the robot controls where
+its body is over the deck (what its feet measure), not where the optimization's world frame was.
+
+Verdict (fails on any of):
+* speed: the speed delivered, one second after the entry ends, more than 5 % from the label.
+  Delivered speed = the plant's momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) at that time
+  plus the speed that rolling friction took in that second (any coasting board loses it; the
+  entry cannot be blamed for it). Both are reported;
+* a fall: body height over the deck or roll/pitch beyond limits, a foot farther from the body
+  than the entry ever put it (it would leave the deck), deck roll beyond the wheel limit;
+* a slip: a commanded force outside the plant's Coulomb cone.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
+from skatelib.control.mpc import Discretizer, MpcConfig, QpSolveFailed, build_problem, make_solver
+from skatelib.control.params import Disturbances, SkateParams
+from skatelib.control.plant import NB, Plant
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NU, NX, SWING
+from skatelib.runtime import Entry, MotionLibrary
+
+SPEED_TOLERANCE = 0.05
+HEIGHT_LIMIT_M = 0.05  # body height over the deck may leave its reference by this much
+TILT_LIMIT_RAD = 0.35
+REACH_MARGIN_M = 0.05
+
+
+@dataclass(frozen=True)
+class TrackSettings:
+    """Closed-loop run settings.
+
+    Attributes:
+        plant_substeps: Plant RK4 steps per MPC update (30 Hz x 17 = 510 Hz).
+        transfer_s: Push leg back onto the deck after the entry [s] (Sec. IV-A: 0.4 s).
+        ride_s: Four-leg riding after the transfer [s].
+        seed: Random seed of the feedback noise.
+        board_mass_always: The MPC models the board with its mass (Eq. 9) also while balancing;
+            False uses the paper's balancing model Eq. (5a) there (the board follows the robot),
+            with which the default model-error set falls after the push-off (README "Closed loop").
+    """
+
+    plant_substeps: int = 17
+    board_mass_always: bool = True
+    transfer_s: float = 0.4
+    ride_s: float = 1.5
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class TrackResult:
+    """One entry's closed-loop run (JSON-able numbers; ``trace`` holds the time series)."""
+
+    key: str
+    label_mps: float
+    speed_after_1s_mps: float
+    momentum_after_1s_mps: float
+    delivered_mps: float
+    speed_error: float
+    max_deck_roll_rad: float
+    max_position_error_m: float
+    max_attitude_error_rad: float
+    min_normal_N: float
+    max_friction_use: float
+    slips: int
+    mpc_median_ms: float
+    mpc_max_ms: float
+    fall: str
+    passed: bool
+    reasons: str
+
+    def as_dict(self) -> dict[str, float | str | bool | int]:
+        return asdict(self)
+
+
+@dataclass
+class Trace:
+    """Time series of a run, for plots and Rerun: t (M,), plant state (M, 31), reference (M, 28),
+    applied forces (M, 3, 4), contact (M, 4)."""
+
+    t: np.ndarray
+    state: np.ndarray
+    reference: np.ndarray
+    forces: np.ndarray
+    contact: np.ndarray
+
+
+def _interp_rows(t: float, ts: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    t = min(max(t, float(ts[0])), float(ts[-1]))
+    i = int(np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2))
+    a = (t - ts[i]) / (ts[i + 1] - ts[i])
+    return rows[i] + a * (rows[i + 1] - rows[i])
+
+
+class EntryReference:
+    """The reference of one entry and of what follows it, from the runtime and the library model."""
+
+    def __init__(self, lib: MotionLibrary, entry: Entry, p: SkateParams, settings: TrackSettings):
+        self.e = entry
+        self.p = p
+        self.t0 = float(entry.t[0])
+        self.t_end = float(entry.t[-1])
+        self.transfer_end = self.t_end + settings.transfer_s
+        self.board_mass_always = settings.board_mass_always
+        self.t_stop = self.transfer_end + settings.ride_s
+        self.last = np.array(entry.state[-1], dtype=np.float64)
+        self.board_pos = np.asarray(entry.board_pos, dtype=np.float64)
+        self.q_board = np.asarray(lib.model_arrays["stance_q_board_rad"], dtype=np.float64).reshape(12)
+        self.rel_last = self.last[0:3] - self.board_pos[-1, 0:3]
+        feet = np.asarray(entry.foot_pos, dtype=np.float64)  # (K, 4, 3)
+        self.feet = feet
+        contact = np.asarray(entry.contact)
+        com = np.asarray(entry.state, dtype=np.float64)[:, None, 0:3]
+        loaded = contact != SWING
+        self.max_reach = float(np.max(np.linalg.norm((feet - com)[loaded], axis=-1)))
+
+    def touchdown_point(self, t: float, leg: int) -> np.ndarray:
+        """Where the entry puts ``leg`` on the ground for the stance that starts at about ``t``."""
+        ts = np.asarray(self.e.t)
+        contact = np.asarray(self.e.contact)
+        k = int(np.searchsorted(ts, t - 1e-6))
+        on = np.nonzero(contact[k:, leg] == GROUND)[0]
+        k = min(k + int(on[0]) if len(on) else k, len(ts) - 1)
+        return self.feet[k, leg].copy()
+
+    def board_xy(self, t: float) -> np.ndarray:
+        return _interp_rows(t, np.asarray(self.e.t), self.board_pos)[0:2]
+
+    def contact(self, t: float) -> np.ndarray:
+        if t < self.t_end:
+            c = self.e.sample(t).contact
+            return np.asarray(c, dtype=np.int8)
+        c = np.full(4, BOARD, dtype=np.int8)
+        if t < self.transfer_end:
+            c[self.p.push_leg] = SWING
+        return c
+
+    def _after(self, t: float, board_xy: np.ndarray, t_now: float, v_ride: float) -> tuple[np.ndarray, np.ndarray]:
+        x = self.last.copy()
+        yaw = x[5]
+        heading = np.array([np.cos(yaw), np.sin(yaw)])
+        x[0:2] = board_xy + heading * v_ride * (t - t_now) + self.rel_last[0:2]
+        x[3:5] = 0.0
+        x[6:8] = heading * v_ride
+        x[8] = 0.0
+        x[9:12] = 0.0
+        w = min(max((t - self.t_end) / max(self.transfer_end - self.t_end, 1e-9), 0.0), 1.0)
+        x[12:24] = (1 - w) * self.last[12:24] + w * self.q_board
+        x[24:26] = heading * v_ride
+        x[I_BOARD_ROLL:] = 0.0
+        u = np.zeros(NU)
+        c = self.contact(t)
+        n = max(int(np.sum(c != SWING)), 1)
+        for i in range(4):
+            if c[i] != SWING:
+                u[3 * i + 2] = self.p.mass_kg * self.p.gravity_mps2 / n
+        return x, u
+
+    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """X_ref(k+1), U_ref(k), contact(k) and the acceleration mode for k = 0..n-1, positions
+        re-anchored to the board."""
+        w = self.e.window(t, n + 1, dt)
+        x_ref = np.array(w.state[1:], dtype=np.float64)
+        u_ref = np.array(w.control[:n], dtype=np.float64)
+        contact = np.array([self.contact(t + k * dt) for k in range(n)], dtype=np.int8)
+        shift = board_xy - self.board_xy(t)
+        x_ref[:, 0:2] += shift
+        for k in range(n):
+            tk = t + (k + 1) * dt
+            if tk > self.t_end:
+                x_ref[k], _ = self._after(tk, board_xy, t, v_ride)
+            if t + k * dt >= self.t_end:
+                _, u_ref[k] = self._after(t + k * dt, board_xy, t, v_ride)
+        accelerating = np.ones(n, dtype=bool) if self.board_mass_always else t + dt * np.arange(n) < self.t_end
+        return x_ref, u_ref, contact, accelerating
+
+
+def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: SkateParams,
+                dist: Disturbances | None = None, cfg: MpcConfig | None = None,
+                settings: TrackSettings | None = None, keep_trace: bool = False
+                ) -> tuple[TrackResult, Trace | None]:
+    """Run one entry in closed loop and judge it (see the module docstring)."""
+    dist = dist or Disturbances()
+    cfg = cfg or MpcConfig()
+    settings = settings or TrackSettings()
+    entry = lib[key]
+    ref = EntryReference(lib, entry, model, settings)
+    rng = np.random.default_rng(settings.seed)
+    com_shift = np.array([0.0, dist.com_offset_m, 0.0])
+    plant = Plant(plant_params, com_shift)
+    disc = Discretizer(model, cfg.dt)
+    solver = make_solver(cfg)
+    h = cfg.dt / settings.plant_substeps
+    # Initial plant state: the entry's first state (true COM shifted), board origin from the entry.
+    s = np.zeros(NB)
+    s[:NX] = np.asarray(entry.state[0], dtype=np.float64)
+    s[NX:NX + 3] = ref.board_pos[0, 0:3]
+    s[0:3] += rpy_matrix(s[3:6]) @ com_shift
+    s[1] += dist.init_error_m
+    s[2] += dist.init_error_m
+    ground = np.zeros((3, 4))
+    prev_contact = ref.contact(ref.t0)
+    feet0 = ref.feet[0].T
+    for i in range(4):
+        if prev_contact[i] == GROUND:
+            ground[:, i] = feet0[:, i]
+    label = float(entry.attrs["target_velocity_mps"])
+    times: list[float] = []
+    trace_t, trace_s, trace_r, trace_f, trace_c = [], [], [], [], []
+    max_pos_err = max_att_err = max_roll = 0.0
+    fall = ""
+    friction_loss = 0.0
+    t = ref.t0
+    n_updates = round((ref.t_stop - ref.t0) / cfg.dt)
+    speed_1s = mom_1s = float("nan")
+    t_1s = ref.t_end + 1.0
+    for _ in range(n_updates):
+        # Feedback: what the estimator reports (the model's COM, noise).
+        x_fb = s[:NX].copy()
+        R = rpy_matrix(x_fb[3:6])
+        x_fb[0:3] -= R @ com_shift
+        if dist.noise_std > 0:
+            x_fb[0:6] += rng.normal(0.0, dist.noise_std, 6)
+            x_fb[6:12] += rng.normal(0.0, 5 * dist.noise_std, 6)
+        contact_now = ref.contact(t)
+        pts = plant.contact_points(s, contact_now, ground)
+        R_B = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5])
+        r_board = R_B @ np.vstack([model.deck_points_m, np.zeros(4)])
+        fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board)
+        yaw = x_fb[5]
+        v_ride = float(np.array([np.cos(yaw), np.sin(yaw)]) @ x_fb[24:26])
+        x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
+        t_start = time.perf_counter()
+        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating)
+        try:
+            U = solver.solve(qp)
+        except QpSolveFailed as e:
+            fall = f"the MPC's QP failed at t = {t:.2f} s ({e})"
+            break
+        times.append(time.perf_counter() - t_start)
+        forces = U[:12].reshape(4, 3).T
+        qd = U[12:24]
+        x_now_ref = x_ref[0]
+        for _sub in range(settings.plant_substeps):
+            c = ref.contact(t)
+            for i in range(4):
+                if c[i] == GROUND and prev_contact[i] != GROUND:  # touch-down where the entry puts it
+                    ground[:, i] = ref.touchdown_point(t, i) + np.r_[s[NX:NX + 2] - ref.board_xy(t), 0.0]
+            prev_contact = c
+            ext = None
+            if dist.impulse_Ns and abs(t - dist.impulse_t_s) < h / 2:
+                ext = np.array([0.0, dist.impulse_Ns / h, 0.0])
+            s_new = plant.step(s, forces, qd, c, ground, h, t, ext)
+            if t >= ref.t_end and t < t_1s:
+                v_f = float(np.array([np.cos(s[5]), np.sin(s[5])]) @ s[24:26])
+                friction_loss += plant_params.rolling_N * np.tanh(plant_params.tanh_scale_s_per_m * v_f) * h
+            s = s_new
+            t += h
+            if np.isnan(speed_1s) and t >= t_1s - 1e-9:
+                speed_1s = float(np.array([np.cos(s[5]), np.sin(s[5])]) @ s[24:26])
+                mom_1s = plant.momentum_speed(s)
+            if keep_trace:
+                trace_t.append(t)
+                trace_s.append(s.copy())
+                trace_r.append(x_now_ref.copy())
+                trace_f.append(plant.admissible(s, forces, c, t, record=False))
+                trace_c.append(c.copy())
+            max_roll = max(max_roll, abs(float(s[I_BOARD_ROLL])))
+            if not np.all(np.isfinite(s)):
+                fall = fall or f"the state diverged at t = {t:.2f} s"
+                break
+        if fall:
+            break
+        # Errors against the reference of this update's first step (re-anchored).
+        pos_err = float(np.linalg.norm(s[0:3] - rpy_matrix(s[3:6]) @ com_shift - x_ref[0, 0:3]))
+        att_err = float(np.max(np.abs(s[3:6] - x_ref[0, 3:6])))
+        max_pos_err = max(max_pos_err, pos_err)
+        max_att_err = max(max_att_err, att_err)
+        height = s[2] - s[NX + 2]
+        ref_height = x_ref[0, 2] - ref.board_pos[-1, 2]
+        if not fall:
+            c = prev_contact  # the contacts the plant's last step used
+            pts = plant.contact_points(s, c, ground)
+            reach = max((float(np.linalg.norm(pts[:, i] - s[0:3])) for i in range(4) if c[i] != SWING), default=0.0)
+            if abs(height - ref_height) > HEIGHT_LIMIT_M:
+                fall = f"body height over the deck {height:.3f} m, reference {ref_height:.3f} m, at t = {t:.2f} s"
+            elif max(abs(s[3]), abs(s[4])) > TILT_LIMIT_RAD:
+                fall = f"body tilted {max(abs(s[3]), abs(s[4])):.2f} rad at t = {t:.2f} s"
+            elif abs(s[I_BOARD_ROLL]) > plant_params.roll_limit_rad:
+                fall = f"deck roll {s[I_BOARD_ROLL]:.3f} rad beyond the wheel limit at t = {t:.2f} s"
+            elif reach > ref.max_reach + REACH_MARGIN_M:
+                fall = f"a foot {reach:.3f} m from the COM (entry at most {ref.max_reach:.3f}) at t = {t:.2f} s"
+        if fall:
+            break
+    total = plant_params.mass_kg + plant_params.board_mass_kg
+    delivered = mom_1s + friction_loss / total
+    err = (delivered - label) / label if label else float("nan")
+    reasons = []
+    if not np.isfinite(err) or abs(err) > SPEED_TOLERANCE:
+        reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
+    if fall:
+        reasons.append(f"fall: {fall}")
+    if plant.log.slips:
+        reasons.append(f"{plant.log.slips} slipping plant steps (force up to {plant.log.slip_excess_N:.2f} N outside "
+                       f"the cone of mu {plant_params.mu:.2f})")
+    ms = np.array(times) * 1e3
+    result = TrackResult(
+        key=key, label_mps=label, speed_after_1s_mps=speed_1s, momentum_after_1s_mps=mom_1s,
+        delivered_mps=delivered, speed_error=err, max_deck_roll_rad=max_roll,
+        max_position_error_m=max_pos_err, max_attitude_error_rad=max_att_err,
+        min_normal_N=float(plant.log.min_normal_N), max_friction_use=plant.log.max_friction_use,
+        slips=plant.log.slips, mpc_median_ms=float(np.median(ms)) if len(ms) else float("nan"),
+        mpc_max_ms=float(np.max(ms)) if len(ms) else float("nan"), fall=fall, passed=not reasons,
+        reasons="; ".join(reasons),
+    )
+    trace = None
+    if keep_trace and trace_t:
+        trace = Trace(np.array(trace_t), np.array(trace_s), np.array(trace_r), np.array(trace_f), np.array(trace_c))
+    return result, trace

@@ -1,0 +1,157 @@
+"""Physical parameters of the controller's model and of the simulated plant, read from a library,
+and the model errors (``--perturb``) that make the plant differ from the model."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from skatelib.library.errors import SkatelibError
+
+
+class PerturbationError(SkatelibError, ValueError):
+    """A ``--perturb`` item is malformed or names an unknown key."""
+
+
+@dataclass(frozen=True)
+class SkateParams:
+    """Everything Eq. (3)-(9) need, in SI units.
+
+    Attributes:
+        mass_kg: Robot mass m_R.
+        inertia_kgm2: (3, 3) robot inertia I_R about the COM, trunk frame.
+        com_offset_m: (3,) COM in the trunk frame (the feedback reports the trunk's idea of it).
+        board_mass_kg: m_B (moves along the deck x axis only).
+        roll_inertia_kgm2: I_Bx.
+        kb_Nm_per_rad: K_B, Eq. (6).
+        bb_Nms_per_rad: B_B, Eq. (6).
+        rolling_N: f_fri, Eq. (9b).
+        tanh_scale_s_per_m: k of Eq. (10).
+        mu: Friction coefficient of feet on deck and ground.
+        gravity_mps2: g.
+        deck_points_m: (2, 4) foot contact points x, y on the deck (Eq. 8), legs FL FR RL RR.
+        roll_limit_rad: Deck roll at which the deck touches the wheels.
+        joint_velocity_limit_radps: |qd| bound.
+        push_leg: Index of the pushing leg (0..3).
+    """
+
+    mass_kg: float
+    inertia_kgm2: np.ndarray
+    com_offset_m: np.ndarray
+    board_mass_kg: float
+    roll_inertia_kgm2: float
+    kb_Nm_per_rad: float
+    bb_Nms_per_rad: float
+    rolling_N: float
+    tanh_scale_s_per_m: float
+    mu: float
+    gravity_mps2: float
+    deck_points_m: np.ndarray
+    roll_limit_rad: float
+    joint_velocity_limit_radps: float
+    push_leg: int
+
+    @staticmethod
+    def from_library(lib: Any) -> SkateParams:
+        """The nominal parameters a quadruped library was built with (its /model group)."""
+        m, a = lib.model, lib.model_arrays
+        legs = ("FL", "FR", "RL", "RR")
+        return SkateParams(
+            mass_kg=float(m["robot_mass_kg"]),
+            inertia_kgm2=np.asarray(a["robot_inertia_kgm2"], dtype=float).reshape(3, 3),
+            com_offset_m=np.asarray(a["robot_com_offset_m"], dtype=float).reshape(3),
+            board_mass_kg=float(m["board_mass_kg"]),
+            roll_inertia_kgm2=float(m["board_roll_inertia_kgm2"]),
+            kb_Nm_per_rad=float(m["board_roll_stiffness_Nm_per_rad"]),
+            bb_Nms_per_rad=float(m["board_roll_damping_Nms_per_rad"]),
+            rolling_N=float(m["board_rolling_friction_N"]),
+            tanh_scale_s_per_m=float(m.get("board_tanh_scale_s_per_m", 50.0)),
+            mu=float(m["friction_mu"]),
+            gravity_mps2=float(m["gravity_mps2"]),
+            deck_points_m=np.asarray(a["stance_deck_points_m"], dtype=float).reshape(2, 4),
+            roll_limit_rad=float(m.get("board_roll_limit_rad", 0.2)),
+            joint_velocity_limit_radps=float(m.get("joint_velocity_limit_radps", 31.0)),
+            push_leg=legs.index(str(m.get("push_leg", "RL"))),
+        )
+
+
+# key -> (field, kind): kind "scale" multiplies (a relative value applies to it), "offset" is a vector.
+PERTURB_KEYS: dict[str, str] = {
+    "mass": "mass_kg",
+    "inertia": "inertia_kgm2",
+    "board_mass": "board_mass_kg",
+    "kb": "kb_Nm_per_rad",
+    "bb": "bb_Nms_per_rad",
+    "rolling": "rolling_N",
+    "mu": "mu",
+}
+EXTRA_KEYS = ("com", "noise", "impulse", "impulse_t", "init")
+
+
+@dataclass(frozen=True)
+class Disturbances:
+    """What happens to the plant beyond its parameters.
+
+    Attributes:
+        com_offset_m: Shift of the true COM from the model's, trunk frame y [m] (lateral).
+        noise_std: Standard deviation of the feedback noise on positions [m] and angles [rad]
+            (velocities get 5x that per second of it, joint angles none).
+        impulse_Ns: Lateral impulse on the trunk [N s], applied over one plant step.
+        impulse_t_s: When, from the start of the entry [s].
+        init_error_m: Initial lateral and vertical base position error [m].
+    """
+
+    com_offset_m: float = 0.0
+    noise_std: float = 0.0
+    impulse_Ns: float = 0.0
+    impulse_t_s: float = 1.0
+    init_error_m: float = 0.0
+
+
+def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Disturbances]:
+    """Apply ``KEY=VALUE,...`` to the nominal parameters: ``+10%`` or ``-20%`` is relative, a plain
+    number absolute (``mu=0.5``, ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
+    ``impulse_t`` [s], ``init=0.01`` [m]).
+
+    Raises:
+        PerturbationError: Naming the item and the valid keys.
+    """
+    changes: dict[str, Any] = {}
+    extra: dict[str, float] = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or (key not in PERTURB_KEYS and key not in EXTRA_KEYS):
+            raise PerturbationError(
+                f"--perturb {item!r}: expected KEY=VALUE with KEY one of {', '.join([*PERTURB_KEYS, *EXTRA_KEYS])}")
+        value = value.strip()
+        relative = value.endswith("%")
+        try:
+            number = float(value[:-1] if relative else value)
+        except ValueError:
+            raise PerturbationError(f"--perturb {item!r}: {value!r} is not a number or a percentage") from None
+        if not math.isfinite(number):
+            raise PerturbationError(f"--perturb {item!r}: must be finite")
+        if key in EXTRA_KEYS:
+            if relative:
+                raise PerturbationError(f"--perturb {item!r}: {key} takes an absolute value")
+            extra[key] = number
+            continue
+        field = PERTURB_KEYS[key]
+        base = getattr(nominal, field)
+        new = base * (1.0 + number / 100.0) if relative else (base * 0 + number if key != "inertia" else base * number)
+        if np.any(np.asarray(new) <= 0) and key != "rolling":
+            raise PerturbationError(f"--perturb {item!r}: {key} would be {new}; it must stay positive")
+        changes[field] = new
+    dist = Disturbances(
+        com_offset_m=extra.get("com", 0.0), noise_std=extra.get("noise", 0.0),
+        impulse_Ns=extra.get("impulse", 0.0), impulse_t_s=extra.get("impulse_t", 1.0),
+        init_error_m=extra.get("init", 0.0),
+    )
+    return dataclasses.replace(nominal, **changes), dist
+
+
+DEFAULT_PERTURBATION = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"

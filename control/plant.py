@@ -1,0 +1,161 @@
+"""The simulated plant: the nonlinear single rigid body and board of Eq. (3), (7) and (9),
+integrated with RK4 at a fine step, which is not the MPC's model.
+
+Differences from the MPC's linear model, on purpose:
+
+* the full rigid-body rotation (the gyroscopic term, attitudes and lever arms that move);
+* the board always has its mass along its x axis (Eq. 9 in every mode): deck forces cannot move
+  robot and board together, so horizontal momentum changes only by ground pushes and rolling
+  friction (the balancing model Eq. 5a lets the robot drag the board along);
+* Coulomb's cone with the plant's own mu: a commanded force outside it is clipped to it (a slip,
+  counted), a pulling normal force is set to zero;
+* parameters that differ from the model's (``--perturb``), a COM that is not where the model
+  thinks, feedback noise and a lateral impulse.
+
+Feet in contact stay at their contact points: deck points (Eq. 8) for feet on the board, the
+touch-down point for the push foot. Swinging feet carry no force (massless legs); the joint
+angles integrate the commanded joint velocities.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from skatelib.control.linear_model import board_rotation, euler_rate_map, rpy_matrix
+from skatelib.control.params import SkateParams
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NX, SWING
+
+NB = NX + 3  # plant state: the 28 channels, then the board origin x, y and the deck height z
+
+
+@dataclass
+class ContactLog:
+    """Per plant step: slips, the smallest normal force of a loaded foot, friction use."""
+
+    slips: int = 0
+    slip_excess_N: float = 0.0
+    min_normal_N: float = np.inf
+    max_friction_use: float = 0.0
+    clipped_steps: list[float] = field(default_factory=list)
+
+
+class Plant:
+    """Nonlinear skateboarding dynamics with contacts held in place.
+
+    Args:
+        p: The plant's true parameters (the MPC may hold others).
+        com_shift_m: (3,) true COM minus the model's COM, trunk frame.
+    """
+
+    def __init__(self, p: SkateParams, com_shift_m: np.ndarray | None = None):
+        self.p = p
+        self.com_shift = np.zeros(3) if com_shift_m is None else np.asarray(com_shift_m, float)
+        self.I = p.inertia_kgm2
+        self.I_inv = np.linalg.inv(p.inertia_kgm2)
+        self.log = ContactLog()
+
+    def contact_points(self, s: np.ndarray, contact: np.ndarray, ground_points: np.ndarray) -> np.ndarray:
+        """(3, 4) world contact points: deck points moved with the board, ground points fixed."""
+        R_B = board_rotation(s[I_BOARD_ROLL], s[5])
+        out = np.array(ground_points, dtype=float, copy=True)
+        origin = s[NX:NX + 3]
+        for i in range(4):
+            if contact[i] == BOARD:
+                out[:, i] = origin + R_B @ np.array([self.p.deck_points_m[0, i], self.p.deck_points_m[1, i], 0.0])
+        return out
+
+    def admissible(self, s: np.ndarray, forces: np.ndarray, contact: np.ndarray, t: float,
+                   record: bool) -> np.ndarray:
+        """The forces the contacts can give: zero for swinging feet, inside Coulomb's cone (mu of
+        the plant) about the deck normal or the ground normal; clipping is counted as a slip."""
+        out = np.zeros((3, 4))
+        n_deck = board_rotation(s[I_BOARD_ROLL], s[5])[:, 2]
+        for i in range(4):
+            if contact[i] == SWING:
+                continue
+            n = n_deck if contact[i] == BOARD else np.array([0.0, 0.0, 1.0])
+            f = forces[:, i]
+            fn = float(f @ n)
+            if fn <= 0.0:
+                continue  # the surface cannot pull: the foot unloads
+            ft = f - fn * n
+            t_norm = float(np.linalg.norm(ft))
+            limit = self.p.mu * fn
+            if record:
+                self.log.min_normal_N = min(self.log.min_normal_N, fn)
+                self.log.max_friction_use = max(self.log.max_friction_use, t_norm / fn)
+            if t_norm > limit:
+                if record and t_norm - limit > 1e-3 * max(fn, 1.0):
+                    self.log.slips += 1
+                    self.log.slip_excess_N = max(self.log.slip_excess_N, t_norm - limit)
+                    self.log.clipped_steps.append(t)
+                ft = ft * (limit / t_norm)
+            out[:, i] = fn * n + ft
+        return out
+
+    def derivative(self, s: np.ndarray, forces: np.ndarray, qd: np.ndarray, contact: np.ndarray,
+                   ground_points: np.ndarray, external_N: np.ndarray | None = None) -> np.ndarray:
+        """ds/dt of the plant state (28 channels, board origin) under admissible forces (3, 4)."""
+        p = self.p
+        rpy, v, w = s[3:6], s[6:9], s[9:12]
+        R = rpy_matrix(rpy)
+        com = s[0:3]
+        pts = self.contact_points(s, contact, ground_points)
+        total = forces.sum(axis=1) + (external_N if external_N is not None else 0.0)
+        torque_world = np.zeros(3)
+        for i in range(4):
+            if contact[i] != SWING:
+                torque_world += np.cross(pts[:, i] - com, forces[:, i])
+        acc = total / p.mass_kg + np.array([0.0, 0.0, -p.gravity_mps2])
+        w_dot = self.I_inv @ (R.T @ torque_world - np.cross(w, self.I @ w))
+        yaw = rpy[2]
+        heading = np.array([np.cos(yaw), np.sin(yaw)])
+        R_B = board_rotation(s[I_BOARD_ROLL], yaw)
+        f_board = np.zeros(3)
+        torque_board = np.zeros(3)
+        origin = s[NX:NX + 3]
+        for i in range(4):
+            if contact[i] == BOARD:
+                f_board += forces[:, i]
+                torque_board += np.cross(pts[:, i] - origin, forces[:, i])
+        v_fwd = float(heading @ s[24:26])
+        friction = p.rolling_N * np.tanh(p.tanh_scale_s_per_m * v_fwd)
+        a_fwd = (-(R_B.T @ f_board)[0] - friction) / p.board_mass_kg  # Eq. (9b) in every mode
+        psi_dot = (-(R_B.T @ torque_board)[0] - p.kb_Nm_per_rad * s[I_BOARD_ROLL]
+                   - p.bb_Nms_per_rad * s[I_BOARD_ROLL_RATE]) / p.roll_inertia_kgm2
+        ds = np.zeros(NB)
+        ds[0:3] = v
+        ds[3:6] = euler_rate_map(rpy) @ w
+        ds[6:9] = acc
+        ds[9:12] = w_dot
+        ds[12:24] = qd
+        ds[24:26] = heading * a_fwd
+        ds[I_BOARD_ROLL] = s[I_BOARD_ROLL_RATE]
+        ds[I_BOARD_ROLL_RATE] = psi_dot
+        ds[NX:NX + 2] = s[24:26]
+        return ds
+
+    def step(self, s: np.ndarray, forces_cmd: np.ndarray, qd: np.ndarray, contact: np.ndarray,
+             ground_points: np.ndarray, h: float, t: float, external_N: np.ndarray | None = None) -> np.ndarray:
+        """One RK4 step of ``h`` seconds; the commanded forces are made admissible at the start of
+        the step and held (the whole-body controller's torques hold them between its updates)."""
+        f = self.admissible(s, forces_cmd, contact, t, record=True)
+
+        def d(x: np.ndarray) -> np.ndarray:
+            return self.derivative(x, f, qd, contact, ground_points, external_N)
+
+        k1 = d(s)
+        k2 = d(s + h / 2 * k1)
+        k3 = d(s + h / 2 * k2)
+        k4 = d(s + h * k3)
+        return s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def momentum_speed(self, s: np.ndarray) -> float:
+        """(m_R v_R + m_B v_B) / (m_R + m_B) along the heading [m/s]."""
+        heading = np.array([np.cos(s[5]), np.sin(s[5])])
+        m, mb = self.p.mass_kg, self.p.board_mass_kg
+        return float((m * heading @ s[6:8] + mb * heading @ s[24:26]) / (m + mb))
+
+
+__all__ = ["GROUND", "NB", "ContactLog", "Plant"]

@@ -1,0 +1,45 @@
+"""Track every entry of a library in closed loop, in parallel over entries (joblib, like build)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from skatelib.control.closed_loop import TrackResult, TrackSettings, track_entry
+from skatelib.control.mpc import MpcConfig
+from skatelib.control.params import SkateParams, parse_perturbation
+from skatelib.library.errors import SkatelibError
+
+
+def _one(path: str, key: str, perturb: str, cfg: MpcConfig, settings: TrackSettings) -> TrackResult:
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(path)
+    nominal = SkateParams.from_library(lib)
+    plant, dist = parse_perturbation(perturb, nominal)
+    result, _ = track_entry(lib, key, nominal, plant, dist, cfg, settings)
+    return result
+
+
+def track_library(path: Path, keys: Sequence[str] | None, perturb: str, cfg: MpcConfig | None = None,
+                  settings: TrackSettings | None = None, jobs: int = 2) -> list[TrackResult]:
+    """Closed-loop results of the chosen entries (all successful ones by default).
+
+    Raises:
+        SkatelibError: A library that is not a quadruped one, or an unknown entry key.
+    """
+    from joblib import Parallel, delayed
+    from skatelib.runtime import MotionLibrary
+
+    cfg = cfg or MpcConfig()
+    settings = settings or TrackSettings()
+    lib = MotionLibrary.open(path)
+    if lib.kind != "quadruped":
+        raise SkatelibError(f"{path}: closed-loop tracking is for quadruped libraries; this one is {lib.kind}")
+    nominal = SkateParams.from_library(lib)
+    parse_perturbation(perturb, nominal)  # refuse a bad --perturb before any work
+    chosen = list(keys) if keys else [e.key for e in lib if e.success]
+    for k in chosen:
+        lib[k]
+    return list(Parallel(n_jobs=min(jobs, len(chosen)) or 1)(
+        delayed(_one)(str(path), k, perturb, cfg, settings) for k in chosen))

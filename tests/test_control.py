@@ -1,0 +1,174 @@
+"""The reference controller against independent references: the linear model against the
+nonlinear plant's derivative and finite differences, the exact discretization against a full
+matrix exponential, the QP of one solver against the other's, and closed-loop runs on a really
+solved entry (tracking with exact parameters; a slippery plant that must be caught)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from skatelib.library.channels import BOARD, GROUND, NU, NX, SWING
+
+pytest.importorskip("proxsuite")
+pytest.importorskip("osqp")
+
+from scipy.linalg import expm
+from skatelib.control.closed_loop import TrackSettings, track_entry
+from skatelib.control.linear_model import Discretizer, Feedback, board_rotation, continuous_model
+from skatelib.control.mpc import MpcConfig, build_problem, make_solver, qp_objective
+from skatelib.control.params import PerturbationError, SkateParams, parse_perturbation
+from skatelib.control.plant import NB, Plant
+from skatelib.runtime import MotionLibrary
+
+TINY = Path(__file__).parent / "configs" / "tiny.toml"
+CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+
+
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    """One really solved push-off (0.4 m/s, one stride) of the tiny config."""
+    out = tmp_path_factory.mktemp("ctl") / "one.h5"
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path_factory.mktemp("cache"))}
+    r = subprocess.run([*CLI, "solve", "--config", str(TINY), "--velocity", "0.4", "--strides", "1", "-o", str(out)],
+                       capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return MotionLibrary.open(out)
+
+
+def _params() -> SkateParams:
+    return SkateParams(
+        mass_kg=8.9, inertia_kgm2=np.diag([0.05, 0.2, 0.22]), com_offset_m=np.zeros(3), board_mass_kg=2.2,
+        roll_inertia_kgm2=0.009, kb_Nm_per_rad=80.0, bb_Nms_per_rad=1.7, rolling_N=1.1, tanh_scale_s_per_m=50.0,
+        mu=0.6, gravity_mps2=9.81, deck_points_m=np.array([[0.17, 0.17, -0.17, -0.17], [0.11, -0.11, 0.11, -0.11]]),
+        roll_limit_rad=0.2, joint_velocity_limit_radps=31.0, push_leg=2)
+
+
+def _state(rng: np.random.Generator) -> np.ndarray:
+    s = np.zeros(NB)
+    s[0:3] = [0.1, 0.02, 0.27]
+    s[3:6] = rng.normal(0, 0.05, 3)
+    s[6:9] = [0.5, 0.01, -0.02]
+    s[9:12] = 0.0  # the MPC drops [w]x(I w); it vanishes with its derivative at w = 0
+    s[24:26] = [0.5 * np.cos(s[5]), 0.5 * np.sin(s[5])]  # fast enough that tanh(k v) = sign(v)
+    s[26:28] = [0.03, -0.2]
+    s[28:31] = [0.1, 0.0, 0.11]
+    return s
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_linear_model_is_the_nonlinear_derivative_with_arms_frozen(seed):
+    """In the acceleration mode, A x + B u + C equals the plant's derivative (Eq. 3, 7, 9) at the
+    feedback point, and B equals the plant's finite-difference Jacobian in the forces; in the
+    balancing mode the board row is Eq. (5a), the robot's acceleration along its own x axis."""
+    rng = np.random.default_rng(seed)
+    p = _params()
+    plant = Plant(p)
+    s = _state(rng)
+    contact = np.array([BOARD, BOARD, GROUND, BOARD])
+    ground = np.zeros((3, 4))
+    ground[:, 2] = [-0.15, 0.17, 0.0]
+    pts = plant.contact_points(s, contact, ground)
+    R_B = board_rotation(s[26], s[5])
+    fb = Feedback(x=s[:NX], r_robot=pts - s[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]))
+    A, B, C = continuous_model(p, fb, contact, accelerating=True)
+    f = rng.normal(0, 5, (3, 4)) + np.array([[0.0], [0.0], [22.0]])
+    u = np.concatenate([f.T.reshape(-1), rng.normal(0, 1, 12)])
+    exact = plant.derivative(s, f, u[12:], contact, ground)[:NX]
+    np.testing.assert_allclose(A @ s[:NX] + B @ u + C, exact, atol=1e-9)
+    eps = 1e-6
+    for j in range(12):
+        du = np.zeros(12)
+        du[j] = eps
+        fp = f + du.reshape(4, 3).T
+        fd = (plant.derivative(s, fp, u[12:], contact, ground) - plant.derivative(s, f, u[12:], contact, ground))[:NX]
+        np.testing.assert_allclose(B[:, j], fd / eps, atol=1e-5)
+    contact4 = np.array([BOARD] * 4)
+    A4, B4, C4 = continuous_model(p, fb, contact4, accelerating=False)
+    xdot = A4 @ s[:NX] + B4 @ u + C4
+    from skatelib.control.linear_model import rpy_matrix
+    acc_local = rpy_matrix(s[3:6]).T @ xdot[6:9]
+    np.testing.assert_allclose(xdot[24:26], np.array([np.cos(s[5]), np.sin(s[5])]) * acc_local[0], atol=1e-12)
+
+
+def test_discretization_is_the_exact_zero_order_hold():
+    """A_d, B_d, c_d equal the blocks of expm([[A, B, C], [0, 0, 0]] dt) (computed in full)."""
+    p = _params()
+    rng = np.random.default_rng(3)
+    s = _state(rng)
+    fb = Feedback(x=s[:NX], r_robot=rng.normal(0, 0.2, (3, 4)), r_board=rng.normal(0, 0.1, (3, 4)))
+    A, B, C = continuous_model(p, fb, np.array([BOARD, SWING, GROUND, BOARD]), accelerating=True)
+    dt = 1 / 30
+    Ad, Bd, cd = Discretizer(p, dt)(A, B, C)
+    M = np.zeros((NX + NU + 1, NX + NU + 1))
+    M[:NX, :NX], M[:NX, NX:NX + NU], M[:NX, -1] = A, B, C
+    E = expm(M * dt)
+    np.testing.assert_allclose(Ad, E[:NX, :NX], atol=1e-12)
+    np.testing.assert_allclose(Bd, E[:NX, NX:NX + NU], atol=1e-12)
+    np.testing.assert_allclose(cd, E[:NX, -1], atol=1e-12)
+
+
+def test_the_two_qp_solvers_agree(lib):
+    """The condensed dense QP (ProxQP) and the sparse multiple-shooting QP (OSQP) of one real
+    update give the same controls and objective."""
+    key = lib.keys()[0]
+    e = lib[key]
+    p = SkateParams.from_library(lib)
+    cfg = MpcConfig()
+    t = float(e.t[0]) + 0.3
+    x0 = np.asarray(e.sample(t).state, float)
+    pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
+    R_B = board_rotation(x0[26], x0[5])
+    fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]))
+    w = e.window(t, cfg.horizon + 1, cfg.dt)
+    qp = build_problem(p, cfg, Discretizer(p, cfg.dt), fb, np.array(w.state[1:]), np.array(w.control[:-1]),
+                       np.array(w.contact[:-1]), np.ones(cfg.horizon, bool))
+    Ua = make_solver(MpcConfig(solver="proxqp")).solve(qp)
+    Ub = make_solver(MpcConfig(solver="osqp")).solve(qp)
+    ja, jb = qp_objective(qp, Ua), qp_objective(qp, Ub)
+    assert abs(ja - jb) <= 1e-5 * max(1.0, abs(ja))
+    np.testing.assert_allclose(Ua[:12], Ub[:12], atol=2e-2)  # forces [N]
+    swing = np.nonzero(np.asarray(w.contact[0]) == SWING)[0]
+    for i in swing:
+        assert np.all(Ua[3 * i:3 * i + 3] == 0.0)
+
+
+def test_exact_parameters_follow_the_entry_without_falling(lib):
+    """The MPC with the library's own parameters and no disturbance follows the entry, the
+    transfer and the ride without a fall or a slip, base within 15 mm and 0.02 rad of the
+    board-anchored reference (measured: 10.6 mm, README "Closed loop")."""
+    p = SkateParams.from_library(lib)
+    r, _ = track_entry(lib, lib.keys()[0], p, p, settings=TrackSettings(ride_s=1.2))
+    assert r.slips == 0 and not r.fall, r
+    assert r.max_position_error_m < 0.015 and r.max_attitude_error_rad < 0.02, r
+
+
+@pytest.mark.xfail(strict=True, reason="issue 10 asks for a few millimetres with exact parameters; measured "
+                                       "10.6 mm and -7.9 % delivered speed on this entry (README 'Closed loop')")
+def test_exact_parameters_track_within_millimetres_and_pass(lib):
+    """What issue 10 asks: within a few millimetres (5 mm here), and the entry's verdict passes."""
+    p = SkateParams.from_library(lib)
+    r, _ = track_entry(lib, lib.keys()[0], p, p, settings=TrackSettings(ride_s=1.2))
+    assert r.max_position_error_m < 0.005 and r.passed, r
+
+
+def test_a_slippery_plant_is_caught(lib):
+    """A plant with mu 0.2 cannot give the push force: the run counts slips and fails."""
+    p = SkateParams.from_library(lib)
+    slippery, dist = parse_perturbation("mu=0.2", p)
+    r, _ = track_entry(lib, lib.keys()[0], p, slippery, dist, settings=TrackSettings(ride_s=1.2))
+    assert r.slips > 0 and not r.passed and "slipping" in r.reasons
+
+
+def test_perturbations_parse_and_refuse():
+    p = _params()
+    q, d = parse_perturbation("mass=+10%,kb=-20%,rolling=+100%,mu=0.5,com=0.01", p)
+    assert q.mass_kg == pytest.approx(9.79) and q.kb_Nm_per_rad == pytest.approx(64.0)
+    assert q.rolling_N == pytest.approx(2.2) and q.mu == 0.5 and d.com_offset_m == 0.01
+    for bad in ("weight=+10%", "mass", "mass=abc", "mu=nan", "mass=-100%"):
+        with pytest.raises(PerturbationError):
+            parse_perturbation(bad, p)
