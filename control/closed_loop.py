@@ -29,6 +29,7 @@ from skatelib.control.mpc import Discretizer, MpcConfig, QpSolveFailed, build_pr
 from skatelib.control.params import Disturbances, SkateParams
 from skatelib.control.plant import NB, Plant
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NU, NX, SWING
+from skatelib.library.margins import forward_speed
 from skatelib.runtime import Entry, MotionLibrary
 
 SPEED_TOLERANCE = 0.05
@@ -239,8 +240,7 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
         R_B = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5])
         r_board = R_B @ np.vstack([model.deck_points_m, np.zeros(4)])
         fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board)
-        yaw = x_fb[5]
-        v_ride = float(np.array([np.cos(yaw), np.sin(yaw)]) @ x_fb[24:26])
+        v_ride = float(forward_speed(x_fb))
         x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
         t_start = time.perf_counter()
         qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating)
@@ -264,12 +264,12 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
                 ext = np.array([0.0, dist.impulse_Ns / h, 0.0])
             s_new = plant.step(s, forces, qd, c, ground, h, t, ext)
             if t >= ref.t_end and t < t_1s:
-                v_f = float(np.array([np.cos(s[5]), np.sin(s[5])]) @ s[24:26])
+                v_f = float(forward_speed(s))
                 friction_loss += plant_params.rolling_N * np.tanh(plant_params.tanh_scale_s_per_m * v_f) * h
             s = s_new
             t += h
             if np.isnan(speed_1s) and t >= t_1s - 1e-9:
-                speed_1s = float(np.array([np.cos(s[5]), np.sin(s[5])]) @ s[24:26])
+                speed_1s = float(forward_speed(s))
                 mom_1s = plant.momentum_speed(s)
             if keep_trace:
                 trace_t.append(t)

@@ -22,28 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NU, NX, SWING
+from skatelib.library.margins import board_rotations, forward_speed, rpy_matrices
 
 _SIGN_DEADBAND_MPS = 0.02  # |v| below this: sign() = 0 (the board is at rest)
 
 
-def rot_x(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def rot_y(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def rot_z(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll): trunk frame to world (Z-Y-X Euler angles)."""
-    return rot_z(rpy[2]) @ rot_y(rpy[1]) @ rot_x(rpy[0])
+    return rpy_matrices(np.asarray(rpy, dtype=np.float64))
 
 
 def euler_rate_map(rpy: np.ndarray) -> np.ndarray:
@@ -55,7 +41,7 @@ def euler_rate_map(rpy: np.ndarray) -> np.ndarray:
 
 def board_rotation(roll: float, yaw: float) -> np.ndarray:
     """R_B: deck frame to world, roll about x after yaw (Eq. 7)."""
-    return rot_z(yaw) @ rot_x(roll)
+    return board_rotations(float(yaw), float(roll))
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -103,7 +89,7 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
     C[6:9] = g
     I_inv = np.linalg.inv(p.inertia_kgm2)
     yaw = rpy[2]
-    T_vB = rot_z(yaw)[:2, :2] @ np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # Eq. (5b)
+    T_vB = board_rotation(0.0, yaw)[:2, :2] @ np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # Eq. (5b)
     S_xy_RB_Sx = R_B[:2, :] @ np.diag([1.0, 0.0, 0.0])
     for i in range(4):
         if contact[i] == SWING:
@@ -118,7 +104,7 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
         if not accelerating:
             B[24:26, cols] = T_vB @ R.T / p.mass_kg
     if accelerating:
-        v_fwd = float(np.array([np.cos(yaw), np.sin(yaw)]) @ x[24:26])
+        v_fwd = float(forward_speed(x))
         sign = 0.0 if abs(v_fwd) < _SIGN_DEADBAND_MPS else float(np.sign(v_fwd))
         C[24:26] = -S_xy_RB_Sx @ np.array([sign * p.rolling_N, 0.0, 0.0]) / p.board_mass_kg
     else:

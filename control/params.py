@@ -78,7 +78,7 @@ class SkateParams:
         )
 
 
-# key -> (field, kind): kind "scale" multiplies (a relative value applies to it), "offset" is a vector.
+# --perturb key -> the SkateParams field it changes.
 PERTURB_KEYS: dict[str, str] = {
     "mass": "mass_kg",
     "inertia": "inertia_kgm2",
@@ -113,7 +113,7 @@ class Disturbances:
 
 def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Disturbances]:
     """Apply ``KEY=VALUE,...`` to the nominal parameters: ``+10%`` or ``-20%`` is relative, a plain
-    number absolute (``mu=0.5``, ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
+    number absolute (``mu=0.5``; for ``inertia`` a factor; ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
     ``impulse_t`` [s], ``init=0.01`` [m]).
 
     Raises:
@@ -142,7 +142,12 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
             continue
         field = PERTURB_KEYS[key]
         base = getattr(nominal, field)
-        new = base * (1.0 + number / 100.0) if relative else (base * 0 + number if key != "inertia" else base * number)
+        if relative:
+            new = base * (1.0 + number / 100.0)
+        elif key == "inertia":
+            new = base * number  # a matrix: a plain number is a factor
+        else:
+            new = number
         if np.any(np.asarray(new) <= 0) and key != "rolling":
             raise PerturbationError(f"--perturb {item!r}: {key} would be {new}; it must stay positive")
         changes[field] = new

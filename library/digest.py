@@ -45,13 +45,13 @@ def file_digest(raw: bytes | bytearray | memoryview, field: bytes) -> str | None
     return h.hexdigest()
 
 
-def verify_raw(raw: bytes, name: bytes) -> bool | None:
+def verify_raw(raw: bytes, name: bytes) -> tuple[bool, str | None]:
     """Check a file's bytes against its stored digest without parsing HDF5.
 
     Looks for the attribute ``name`` (``b"content_sha256"``) in the raw bytes and for the 64 hex
-    digits of its value right after it; True when one such value is the file's digest, False when
-    values are there but none matches (the file is corrupt), None when no value is found (the
-    attribute is missing or its bytes are damaged).
+    digits of its value right after it. Returns whether any such value was found (False: the
+    attribute is missing or its bytes are damaged) and the one that is the file's digest (None
+    when none is: the file is corrupt).
     """
     found = False
     start = raw.find(name)
@@ -61,9 +61,9 @@ def verify_raw(raw: bytes, name: bytes) -> bool | None:
         if m is not None:
             found = True
             if file_digest(raw, m.group()) == m.group().decode():
-                return True
+                return True, m.group().decode()
         start = raw.find(name, start + 1)
-    return False if found else None
+    return found, None
 
 
 def seal(path: Path, marker: bytes) -> str:

@@ -1,5 +1,6 @@
-"""Numpy helpers shared by the physics checks, the Rerun views and the runtime (numpy only):
-the board rotation, Coulomb friction margins and forward speed of stored trajectories."""
+"""Numpy helpers shared by the physics checks, the Rerun views, the runtime and the reference
+controller (numpy only): the trunk and board rotations, Coulomb friction margins and forward speed
+of stored trajectories."""
 
 from __future__ import annotations
 
@@ -9,8 +10,17 @@ from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, S_BOARD_V, S_
 UNLOADED_N = 1e-3  # [N]
 
 
-def board_rotations(yaw: np.ndarray, roll: np.ndarray) -> np.ndarray:
-    """R_B = Rz(yaw) Rx(roll) for arrays of angles: (K, 3, 3), deck frame to world."""
+def rpy_matrices(rpy: np.ndarray) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll), trunk frame to world, for Z-Y-X angles (..., 3): (..., 3, 3)."""
+    r, p, y = rpy[..., 0], rpy[..., 1], rpy[..., 2]
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
+                     np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
+                     np.stack([-sp, cp * sr, cp * cr], -1)], axis=-2)
+
+
+def board_rotations(yaw: np.ndarray | float, roll: np.ndarray | float) -> np.ndarray:
+    """R_B = Rz(yaw) Rx(roll) for arrays of angles (or scalars): (..., 3, 3), deck frame to world."""
     cy, sy, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(roll), np.sin(roll)
     z = np.zeros_like(yaw)
     return np.stack([np.stack([cy, -sy * cr, sy * sr], -1), np.stack([sy, cy * cr, -cy * sr], -1),

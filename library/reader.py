@@ -19,12 +19,11 @@ from typing import Any
 import h5py
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.digest import file_digest, verify_raw
+from skatelib.library.digest import verify_raw
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.writer import jsonable
 
 _H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError)  # what h5py raises on damaged files
-_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _USERBLOCK_MAX = 1 << 16  # HDF5 looks for its signature at 0, 512, 1024, ... (a user block before it)
 
 
@@ -103,8 +102,7 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
     if not path.is_file():
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
     raw = path.read_bytes()
-    if verify_checksum:
-        _verify_before_parsing(path, raw)
+    digest = _verify_before_parsing(path, raw) if verify_checksum else None
     try:
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
             fmt = f.attrs.get(schema.A_FORMAT)
@@ -132,7 +130,7 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
                 if stored_sum is None:
                     raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
                 field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
-                if file_digest(raw, field) != field.decode(errors="replace"):
+                if field.decode(errors="replace") != digest:  # the attribute HDF5 reads is the verified one
                     raise LibraryFormatError(
                         path,
                         f"/@{schema.A_CHECKSUM}",
@@ -177,15 +175,16 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
     )
 
 
-def _verify_before_parsing(path: Path, raw: bytes) -> None:
-    """Refuse a damaged file before HDF5 parses any of it (see :mod:`skatelib.library.digest`)."""
-    ok = verify_raw(raw, schema.A_CHECKSUM.encode())
-    if ok:
-        return
+def _verify_before_parsing(path: Path, raw: bytes) -> str:
+    """Refuse a damaged file before HDF5 parses any of it (see :mod:`skatelib.library.digest`);
+    returns the verified digest."""
+    found, digest = verify_raw(raw, schema.A_CHECKSUM.encode())
+    if digest is not None:
+        return digest
     field = f"/@{schema.A_CHECKSUM}"
-    if ok is False:
+    if found:
         raise LibraryFormatError(path, field, "the file does not match its checksum: it is corrupt; rebuild it")
-    if not raw.startswith(_HDF5_SIGNATURE) and _HDF5_SIGNATURE not in raw[:_USERBLOCK_MAX]:
+    if not raw.startswith(schema.HDF5_SIGNATURE) and schema.HDF5_SIGNATURE not in raw[:_USERBLOCK_MAX]:
         raise LibraryFormatError(path, "/", "not an HDF5 file (truncated, corrupt or of another type); "
                                             "give a library written by 'skatelib build'")
     eof = _hdf5_end_of_file(raw)
@@ -200,7 +199,7 @@ def _verify_before_parsing(path: Path, raw: bytes) -> None:
 
 def _hdf5_end_of_file(raw: bytes) -> int | None:
     """The file length HDF5's superblock (at offset 0, 8-byte addresses) records, or None."""
-    if not raw.startswith(_HDF5_SIGNATURE) or len(raw) < 64:
+    if not raw.startswith(schema.HDF5_SIGNATURE) or len(raw) < 64:
         return None
     version = raw[8]
     if version in (0, 1):

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
+HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
 FORMAT_VERSION: Final = (1, 1)  # 1.1: friction model, terminal state, cache_key, frontier_json
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ConfigError
+from skatelib.library.schema import HDF5_SIGNATURE
 
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT_CONFIG = "cyberdog2.toml"
@@ -341,7 +342,7 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
         what = "is a folder, not a config file" if path.is_dir() else f"cannot be read ({e.strerror})"
         raise ConfigError(path, "-", f"{what}; "
                           f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
-    if raw.startswith(b"\x89HDF"):
+    if raw.startswith(HDF5_SIGNATURE):
         raise ConfigError(path, "-", "is an HDF5 file (a motion library?), not a TOML config; "
                           "'skatelib info' and 'skatelib validate' read libraries")
     try:

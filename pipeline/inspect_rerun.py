@@ -21,7 +21,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from skatelib.library.channels import BOARD, GROUND, LEGS
 from skatelib.library.errors import LibraryFormatError
-from skatelib.library.margins import board_rotations, friction_margins
+from skatelib.library.margins import board_rotations, friction_margins, rpy_matrices
 from skatelib.library.writer import atomic_path
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -85,16 +85,6 @@ class _Robot:
         return trans, quats, tau
 
 
-def _rpy(rpy: np.ndarray) -> np.ndarray:
-    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    R = np.empty((len(rpy), 3, 3))
-    R[:, 0] = np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=1)
-    R[:, 1] = np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=1)
-    R[:, 2] = np.stack([-sp, cp * sr, cp * cr], axis=1)
-    return R
-
-
 def _quat_rows(R: np.ndarray) -> np.ndarray:
     return np.array([pin.Quaternion(Ri).coeffs() for Ri in R])
 
@@ -104,7 +94,7 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     t, x, u = e.t, e.state, e.control
     assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
     K = len(t)
-    R = _rpy(x[:, 3:6])
+    R = rpy_matrices(x[:, 3:6])
     com_off = lib.model_arrays.get("robot_com_offset_m", np.zeros(3))
     trunk = x[:, 0:3] - np.einsum("kij,j->ki", R, com_off) + offset
     trans, quats, jac = robot.poses(trunk, R, x[:, 12:24])

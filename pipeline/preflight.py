@@ -11,11 +11,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from skatelib.library.errors import ConfigError, OutputError
-from skatelib.library.schema import FORMAT_NAME
+from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
 from skatelib.library.writer import remove_stale_temporaries
 from skatelib.pipeline.stagewise import CACHE_ENV, cache_dir
 
-_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?P<port>\d{1,5})$")
 
 
@@ -26,7 +25,7 @@ def is_skatelib_library(path: Path) -> bool:
         raw = path.read_bytes()
     except OSError:
         return False
-    return raw.startswith(_HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
+    return raw.startswith(HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
 
 
 def is_rerun_recording(path: Path) -> bool:
