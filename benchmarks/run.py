@@ -9,7 +9,10 @@ Push-off TO (issue #3): build + solve of 0.5 m/s, 2 strides, dt 0.03 s, one core
 Motion library (issue #4): the default library built serially and cold (baseline) and with two
 workers over warm-start chains; runtime open, sample and window against naive baselines.
 
-``python -m benchmarks.run [pushoff|library|runtime ...]`` runs a subset.
+Closed loop (issue #10): one MPC update (build + solve) along an entry for each QP solver, the
+sparse OSQP form as the baseline; ``skatelib track`` over the default library on two workers.
+
+``python -m benchmarks.run [pushoff|library|runtime|mpc ...]`` runs a subset.
 """
 
 from __future__ import annotations
@@ -236,10 +239,60 @@ def bench_humanoid(repeats: int = 21) -> None:
     print(f"  SLSQP converged: {res.success} ({res.message}); targets: <= 5 ms, >= 40x faster than SLSQP")
 
 
+def bench_mpc(path: Path | None = None) -> None:
+    import numpy as np
+    from skatelib.control.closed_loop import EntryReference, TrackSettings
+    from skatelib.control.linear_model import Feedback, board_rotation
+    from skatelib.control.mpc import SOLVERS, Discretizer, MpcConfig, build_problem, make_solver
+    from skatelib.control.params import SkateParams
+    from skatelib.control.track import track_library
+    from skatelib.runtime import MotionLibrary
+
+    if path is None:
+        from skatelib.pipeline.build import build_library
+
+        path = build_library(load_config(), Path("out") / "bench-default.h5").path
+    lib = MotionLibrary.open(path)
+    e = lib.select(0.5, 2)
+    p = SkateParams.from_library(lib)
+    cfg = MpcConfig()
+    ref = EntryReference(lib, e, p, TrackSettings())
+    disc = Discretizer(p, cfg.dt)
+    updates = []
+    for t in np.arange(ref.t0, ref.t_end, cfg.dt):
+        x0 = np.asarray(e.sample(t).state, float)
+        k = int(np.clip(np.searchsorted(e.t, t), 0, len(e.t) - 1))
+        r_board = board_rotation(x0[26], x0[5]) @ np.vstack([p.deck_points_m, np.zeros(4)])
+        fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board)
+        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0)))
+    t0 = time.perf_counter()
+    qps = [build_problem(p, cfg, disc, fb, xr, ur, ct, acc) for fb, xr, ur, ct, acc in updates]
+    t_build = (time.perf_counter() - t0) / len(qps)
+    solve = {}
+    for name in SOLVERS:
+        solver = make_solver(dataclasses.replace(cfg, solver=name))
+        times = []
+        for qp in qps:
+            t1 = time.perf_counter()
+            solver.solve(qp)
+            times.append(time.perf_counter() - t1)
+        solve[name] = statistics.median(times)
+    print(f"MPC update along v0.50_s2 ({len(qps)} updates at 30 Hz, N = {cfg.horizon}; median)")
+    print(f"  build (linearize, discretize, condense, joint part): {t_build * 1e3:6.2f} ms (mean)")
+    for name, t in solve.items():
+        print(f"  solve {name:7s} {t * 1e3:6.2f} ms   build + solve {(t_build + t) * 1e3:6.2f} ms   "
+              f"{solve['osqp'] / t:5.1f}x the sparse OSQP baseline")
+    print("  target (issue #10): build + solve <= 2 ms median")
+    t0 = time.perf_counter()
+    results = track_library(Path(path), None, "", cfg, TrackSettings(), jobs=2)
+    print(f"skatelib track, {len(results)} entries, exact plant, 2 workers: {time.perf_counter() - t0:5.1f} s "
+          f"({sum(r.passed for r in results)} pass); target <= 60 s")
+
+
 if __name__ == "__main__":
     import sys
 
-    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid", "rerun"]
+    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid", "rerun", "mpc"]
     lib_path = None
     if "pushoff" in parts:
         bench_pushoff()
@@ -249,6 +302,8 @@ if __name__ == "__main__":
         bench_humanoid()
     if "rerun" in parts:
         bench_rerun(lib_path)
+    if "mpc" in parts:
+        bench_mpc(lib_path)
     if "runtime" in parts:
         # Measured in a fresh process: the build's idle worker processes would disturb it.
         import subprocess

@@ -25,7 +25,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
-from skatelib.control.mpc import Discretizer, MpcConfig, QpSolveFailed, build_problem, make_solver
+from skatelib.control.mpc import (
+    Discretizer,
+    DisturbanceObserver,
+    MpcConfig,
+    QpSolveFailed,
+    build_problem,
+    make_solver,
+)
 from skatelib.control.params import Disturbances, SkateParams
 from skatelib.control.plant import NB, Plant
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NU, NX, SWING
@@ -203,6 +210,7 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     plant = Plant(plant_params, com_shift)
     disc = Discretizer(model, cfg.dt)
     solver = make_solver(cfg)
+    observer = DisturbanceObserver(cfg.disturbance_gain)
     h = cfg.dt / settings.plant_substeps
     # Initial plant state: the entry's first state (true COM shifted), board origin from the entry.
     s = np.zeros(NB)
@@ -243,12 +251,14 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
         v_ride = float(forward_speed(x_fb))
         x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
         t_start = time.perf_counter()
-        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating)
+        bias = observer.update(v_ride, cfg.dt)
+        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating, bias)
         try:
             U = solver.solve(qp)
         except QpSolveFailed as e:
             fall = f"the MPC's QP failed at t = {t:.2f} s ({e})"
             break
+        observer.predict(qp, U)
         times.append(time.perf_counter() - t_start)
         forces = U[:12].reshape(4, 3).T
         qd = U[12:24]

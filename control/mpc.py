@@ -8,13 +8,24 @@ them, not for holding the robot up (with |U| the weight would pull every force t
 Constraints per step and leg, from the schedule of the reference window:
 * a swinging leg: zero force;
 * a leg in contact: normal force in [f_min, f_max] along the surface normal (deck normal R_B e_z,
-  or world z on the ground) and a 4-facet pyramid |f_t1|, |f_t2| <= mu_mpc / sqrt(2) f_n, which is
-  inside Coulomb's cone of mu_mpc;
+  or world z on the ground) and the pyramid of the polygon with ``facets`` sides inscribed in
+  Coulomb's cone of mu_mpc (8 by default, as the optimization plans; 4 is |f_t1|, |f_t2| <=
+  mu_mpc / sqrt(2) f_n);
 * |qd| <= the joint-velocity limit.
 
-Two formulations and solvers, chosen by measurement (``make bench``):
-* ``proxqp``: condensed (states eliminated), dense, ProxSuite's ProxQP, warm-started;
+Structure: the 12 joint angles are pure integrators of the 12 joint velocities (Eq. 17), and
+neither enters any other row or constraint, while Q and R are diagonal. So the QP splits exactly
+into (a) the forces with the 16 other states and the contact constraints, a QP of 12 N variables,
+and (b) one box-constrained least-squares problem of N variables per joint, solved in closed form
+(and by a bounded solve only when a joint-velocity bound is active). Part (a), by measurement
+(``make bench``), with:
+* ``daqp``: condensed (states eliminated), dense, DAQP's active-set method (cold: its Python
+  call takes no starting set), the default: fastest in ``make bench``;
+* ``proxqp``: the same condensed QP with ProxSuite's ProxQP, warm-started;
 * ``osqp``: sparse multiple-shooting form (states kept, dynamics as equalities), OSQP, warm-started.
+
+Offset-free: :class:`DisturbanceObserver` estimates the board's forward acceleration that the
+model misses (rolling friction and masses differ on the robot) and the prediction carries it.
 """
 
 from __future__ import annotations
@@ -24,9 +35,37 @@ from dataclasses import dataclass, field
 import numpy as np
 from skatelib.control.linear_model import Discretizer, Feedback, board_rotation, continuous_model
 from skatelib.control.params import SkateParams
-from skatelib.library.channels import BOARD, I_BOARD_ROLL, NU, NX, SWING
+from skatelib.library.channels import BOARD, I_BOARD_ROLL, NU, NX, S_Q, SWING
 
-SOLVERS = ("proxqp", "osqp")
+SOLVERS = ("daqp", "proxqp", "osqp")
+NF = 12  # force variables per step
+REDUCED = np.r_[0:S_Q.start, S_Q.stop:NX]  # the 16 states the forces drive (all but the joint angles)
+BOARD_V_REDUCED = slice(S_Q.start, S_Q.start + 2)  # board_vx, board_vy among them
+
+
+def board_heading(x: np.ndarray) -> np.ndarray:
+    """(2,) the board's forward direction in the world (its yaw is the robot's)."""
+    return np.array([np.cos(x[5]), np.sin(x[5])])
+
+
+class DisturbanceObserver:
+    """Estimates the board's unmodelled forward acceleration from what the model predicted for
+    the last update and what the feedback then showed, low-pass filtered with ``gain`` per update."""
+
+    def __init__(self, gain: float):
+        self.gain = gain
+        self.bias_mps2 = 0.0
+        self._predicted: float | None = None
+
+    def update(self, v_forward_measured: float, dt: float) -> float:
+        if self._predicted is not None:
+            self.bias_mps2 += self.gain * (v_forward_measured - self._predicted) / dt
+        return self.bias_mps2
+
+    def predict(self, qp: MpcProblem, U: np.ndarray) -> None:
+        """Remember the model's forward board speed one step after ``U`` is applied."""
+        x1 = qp.Ad[0] @ qp.x0 + qp.Bd[0] @ U[:NF] + qp.cd[0]
+        self._predicted = float(board_heading(qp.x0_full) @ x1[BOARD_V_REDUCED])
 
 
 @dataclass(frozen=True)
@@ -36,18 +75,23 @@ class MpcConfig:
     Attributes:
         rate_hz: Update rate (the paper: 30 Hz).
         horizon: Steps N (the paper's MIT-Cheetah lineage: 10).
-        mu: Friction coefficient the MPC assumes (its pyramid is inside this cone).
+        mu: Friction coefficient the MPC assumes (its pyramid is inside this cone); None: the
+            one the library was planned with (``friction_mu_plan``, a margin inside ``friction_mu``).
+        facets: Sides of the friction pyramid (4 or more).
         f_min_N / f_max_N: Normal force bounds of a loaded foot.
         q_weights / r_weights: Diagonals of Q (28) and R (24).
-        solver: ``proxqp`` or ``osqp``.
+        solver: ``daqp``, ``proxqp`` or ``osqp`` (module docstring).
+        disturbance_gain: Gain of the board-acceleration disturbance observer per update (0: off).
     """
 
     rate_hz: float = 30.0
     horizon: int = 10
-    mu: float = 0.45
+    mu: float | None = None
+    facets: int = 8
     f_min_N: float = 0.0
     f_max_N: float = 120.0
-    solver: str = "proxqp"
+    solver: str = "daqp"
+    disturbance_gain: float = 0.3
     q_weights: tuple[float, ...] = field(default_factory=lambda: (
         (4e4, 4e4, 4e4) + (4e3, 4e3, 2e3) + (300.0, 300.0, 300.0) + (20.0, 20.0, 20.0) + (1.0,) * 12
         + (2e3, 2e3) + (2e3, 5.0)))
@@ -60,8 +104,10 @@ class MpcConfig:
 
 @dataclass(frozen=True)
 class MpcProblem:
-    """One update's QP in condensed form: min 1/2 u'Hu + g'u, l <= Cu <= u, lb <= u <= ub,
-    and the prediction X = Sx x0 + Su U + Sc (for the sparse form and for checks)."""
+    """One update's QP. Forces: min 1/2 f'Hf + g'f, l <= Cf <= u, lb <= f <= ub over the N x 12
+    forces, with the reduced model (``Ad``, ``Bd``, ``cd`` on the 16 states :data:`REDUCED`) for
+    the sparse form and for checks. Joints: ``qd`` (N, 12), already solved (see the module
+    docstring)."""
 
     H: np.ndarray
     g: np.ndarray
@@ -74,127 +120,200 @@ class MpcProblem:
     Bd: list[np.ndarray]
     cd: list[np.ndarray]
     x0: np.ndarray
+    x0_full: np.ndarray
     x_ref: np.ndarray
-    u_ref: np.ndarray
+    f_ref: np.ndarray
+    q_weights: np.ndarray
+    f_weights: np.ndarray
+    qd: np.ndarray
 
 
-def _legs_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray,
-               contact: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rows of the friction pyramid and normal bounds for one step's forces (12 columns)."""
-    mu_f = cfg.mu / np.sqrt(2.0)
-    R_B = board_rotation(x0[I_BOARD_ROLL], x0[5])
-    rows, lo, hi = [], [], []
+def _legs_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarray,
+               rolls: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows of the friction pyramid and normal bounds for one step's forces (12 columns). A foot on
+    the deck gets the pyramid about the deck normal at each of ``rolls`` (the first step's force
+    is held while the deck rolls on: its pyramid must hold at both ends of the update)."""
+    mu = p.mu_plan if cfg.mu is None else cfg.mu
+    angles = np.arange(cfg.facets) * (2.0 * np.pi / cfg.facets)
+    inscribed = mu * np.cos(np.pi / cfg.facets)
+    ground = [board_rotation(0.0, x0[5])]
+    deck = [board_rotation(r, x0[5]) for r in rolls]
+    rows: list[np.ndarray] = []
+    lo: list[float] = []
+    hi: list[float] = []
     for i in range(4):
         if contact[i] == SWING:
             continue
-        frame = R_B if contact[i] == BOARD else board_rotation(0.0, x0[5])
-        t1, t2, n = frame[:, 0], frame[:, 1], frame[:, 2]
-        for a in (t1 - mu_f * n, -t1 - mu_f * n, t2 - mu_f * n, -t2 - mu_f * n):
-            r = np.zeros(12)
-            r[3 * i:3 * i + 3] = a
-            rows.append(r)
-            lo.append(-np.inf)
-            hi.append(0.0)
-        r = np.zeros(12)
-        r[3 * i:3 * i + 3] = n
-        rows.append(r)
-        lo.append(cfg.f_min_N)
-        hi.append(cfg.f_max_N)
-    return np.array(rows).reshape(-1, 12), np.array(lo), np.array(hi)
+        frames = deck if contact[i] == BOARD else ground
+        for j, frame in enumerate(frames):
+            t1, t2, n = frame[:, 0], frame[:, 1], frame[:, 2]
+            block = np.zeros((cfg.facets + 1, 12))
+            block[:cfg.facets, 3 * i:3 * i + 3] = (np.cos(angles)[:, None] * t1 + np.sin(angles)[:, None] * t2
+                                                   - inscribed * n)
+            block[cfg.facets, 3 * i:3 * i + 3] = n
+            rows.append(block if j == 0 else block[:cfg.facets])
+            lo.extend((-np.inf,) * cfg.facets + ((cfg.f_min_N,) if j == 0 else ()))
+            hi.extend((0.0,) * cfg.facets + ((cfg.f_max_N,) if j == 0 else ()))
+    return (np.vstack(rows) if rows else np.zeros((0, 12))), np.array(lo), np.array(hi)
+
+
+def solve_joints(q0: np.ndarray, q_ref: np.ndarray, qd_ref: np.ndarray, w_q: np.ndarray, w_qd: np.ndarray,
+                 dt: float, limit: float) -> np.ndarray:
+    """The joint part of the QP: per joint j, min sum_k w_q (q_k+1 - q_ref_k)^2 + w_qd (qd_k - qd_ref_k)^2
+    with q_k+1 = q0 + dt sum_(i<=k) qd_i and |qd_k| <= limit. Returns qd (N, 12).
+
+    Unconstrained: (dt^2 w_q L'L + w_qd I) qd = dt w_q L'(q_ref - q0) + w_qd qd_ref, L lower
+    triangular ones; a joint whose solution leaves the bound is solved again with the bound (a
+    bounded least-squares problem)."""
+    N = len(q_ref)
+    L = np.tril(np.ones((N, N)))
+    LtL = L.T @ L
+    H = dt * dt * w_q[:, None, None] * LtL[None] + w_qd[:, None, None] * np.eye(N)[None]  # (12, N, N)
+    rhs = (dt * w_q[:, None] * ((q_ref - q0).T @ L)) + w_qd[:, None] * qd_ref.T  # (12, N): L'(.) per joint
+    qd = np.linalg.solve(H, rhs[:, :, None])[:, :, 0]
+    for j in np.nonzero(np.abs(qd).max(axis=1) > limit)[0]:
+        from scipy.optimize import lsq_linear
+
+        A = np.vstack([np.sqrt(w_q[j]) * dt * L, np.sqrt(w_qd[j]) * np.eye(N)])
+        b = np.concatenate([np.sqrt(w_q[j]) * (q_ref[:, j] - q0[j]), np.sqrt(w_qd[j]) * qd_ref[:, j]])
+        qd[j] = lsq_linear(A, b, bounds=(-limit, limit)).x
+    return qd.T
 
 
 def build_problem(p: SkateParams, cfg: MpcConfig, disc: Discretizer, fb: Feedback, x_ref: np.ndarray,
-                  u_ref: np.ndarray, contact: np.ndarray, accelerating: np.ndarray) -> MpcProblem:
-    """The QP of one update.
+                  u_ref: np.ndarray, contact: np.ndarray, accelerating: np.ndarray,
+                  board_bias_mps2: float = 0.0) -> MpcProblem:
+    """The QP of one update (its joint part solved).
 
     Args:
         x_ref: (N, 28) X_ref(k+1), k = 0..N-1.
         u_ref: (N, 24) feed-forward controls.
         contact: (N, 4) codes of step k.
         accelerating: (N,) bool, the acceleration mode at step k (see :func:`continuous_model`).
+        board_bias_mps2: An estimated constant forward acceleration of the board that the model
+            misses (rolling friction, mass errors: :class:`DisturbanceObserver`), added to every
+            step (offset-free MPC).
     """
     N = cfg.horizon
+    S = REDUCED
+    ns = len(S)
     Ad_l, Bd_l, cd_l = [], [], []
     cache: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for k in range(N):
         key = contact[k].tobytes() + bytes([bool(accelerating[k])])
         if key not in cache:
-            cache[key] = disc(*continuous_model(p, fb, contact[k], bool(accelerating[k])))
+            Ad, Bd, cd = disc(*continuous_model(p, fb, contact[k], bool(accelerating[k])))
+            cache[key] = (Ad[np.ix_(S, S)], Bd[S, :NF], cd[S])
         Ad, Bd, cd = cache[key]
+        if board_bias_mps2:
+            cd = cd.copy()
+            cd[BOARD_V_REDUCED] += board_heading(fb.x) * board_bias_mps2 * disc.dt  # vB rows: Gamma = dt I
         Ad_l.append(Ad)
         Bd_l.append(Bd)
         cd_l.append(cd)
-    # Condensing: X(k+1) = Phi_k x0 + sum_j G_kj U_j + s_k.
-    Su = np.zeros((N * NX, N * NU))
-    Sx = np.zeros((N * NX, NX))
-    sc = np.zeros(N * NX)
-    Phi = np.eye(NX)
-    s = np.zeros(NX)
+    # Condensing: X(k+1) = Phi_k x0 + sum_j G_kj F_j + s_k.
+    Su = np.zeros((N * ns, N * NF))
+    free = np.zeros(N * ns)
+    x = fb.x[S]
     for k in range(N):
-        rk = slice(k * NX, (k + 1) * NX)
-        Phi = Ad_l[k] @ Phi
-        s = Ad_l[k] @ s + cd_l[k]
-        Sx[rk] = Phi
-        sc[rk] = s
+        rk = slice(k * ns, (k + 1) * ns)
+        x = Ad_l[k] @ x + cd_l[k]
+        free[rk] = x
         if k > 0:
-            Su[rk, :k * NU] = Ad_l[k] @ Su[(k - 1) * NX:k * NX, :k * NU]
-        Su[rk, k * NU:(k + 1) * NU] = Bd_l[k]
-    q = np.tile(np.asarray(cfg.q_weights, float), N)
-    r = np.tile(np.asarray(cfg.r_weights, float), N)
-    free = Sx @ fb.x + sc - x_ref.reshape(-1)
-    SuQ = Su.T * q
-    H = SuQ @ Su + np.diag(r)
-    g = SuQ @ free - r * u_ref.reshape(-1)
-    H = 0.5 * (H + H.T)
-    lb = np.full(N * NU, -np.inf)
-    ub = np.full(N * NU, np.inf)
-    blocks, lo, hi = [], [], []
+            Su[rk, :k * NF] = Ad_l[k] @ Su[(k - 1) * ns:k * ns, :k * NF]
+        Su[rk, k * NF:(k + 1) * NF] = Bd_l[k]
+    w_all = np.asarray(cfg.q_weights, float)
+    r_all = np.asarray(cfg.r_weights, float)
+    q = np.tile(w_all[S], N)
+    r = np.tile(r_all[:NF], N)
+    xr = x_ref[:, S]
+    fr = u_ref[:, :NF]
+    sq = np.sqrt(q)
+    W = Su * sq[:, None]  # H = Su' Q Su + R as W'W + R: one product, symmetric
+    H = W.T @ W
+    H[np.diag_indices_from(H)] += r
+    g = W.T @ (sq * (free - xr.reshape(-1))) - r * fr.reshape(-1)
+    lb = np.full(N * NF, -np.inf)
+    ub = np.full(N * NF, np.inf)
+    swing = np.repeat(contact == SWING, 3, axis=1).reshape(-1)
+    lb[swing] = 0.0
+    ub[swing] = 0.0
+    rows_cache: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    per_step = []
+    roll, roll_rate = fb.x[I_BOARD_ROLL], fb.x[I_BOARD_ROLL + 1]
     for k in range(N):
-        base = k * NU
-        lb[base + 12: base + 24] = -p.joint_velocity_limit_radps
-        ub[base + 12: base + 24] = p.joint_velocity_limit_radps
-        for i in range(4):
-            if contact[k, i] == SWING:
-                lb[base + 3 * i: base + 3 * i + 3] = 0.0
-                ub[base + 3 * i: base + 3 * i + 3] = 0.0
-        rows, l_k, h_k = _legs_rows(p, cfg, fb.x, contact[k])
-        full = np.zeros((len(rows), N * NU))
-        full[:, base: base + 12] = rows
-        blocks.append(full)
-        lo.append(l_k)
-        hi.append(h_k)
-    C = np.vstack(blocks)
+        key = contact[k].tobytes() + bytes([k == 0])
+        if key not in rows_cache:
+            rolls = (roll, roll + roll_rate * disc.dt) if k == 0 else (roll,)
+            rows_cache[key] = _legs_rows(p, cfg, fb.x, contact[k], rolls)
+        per_step.append(rows_cache[key])
+    C = np.zeros((sum(len(rows) for rows, _, _ in per_step), N * NF))  # block diagonal over steps
+    at = 0
+    for k, (rows, _, _) in enumerate(per_step):
+        C[at:at + len(rows), k * NF:(k + 1) * NF] = rows
+        at += len(rows)
+    lo = [l_k for _, l_k, _ in per_step]
+    hi = [h_k for _, _, h_k in per_step]
+    qd = solve_joints(fb.x[S_Q], x_ref[:, S_Q], u_ref[:, NF:], w_all[S_Q], r_all[NF:], disc.dt,
+                      p.joint_velocity_limit_radps)
     return MpcProblem(H=H, g=g, C=C, l=np.concatenate(lo), u=np.concatenate(hi), lb=lb, ub=ub,
-                      Ad=Ad_l, Bd=Bd_l, cd=cd_l, x0=fb.x, x_ref=x_ref, u_ref=u_ref)
+                      Ad=Ad_l, Bd=Bd_l, cd=cd_l, x0=fb.x[S], x0_full=fb.x, x_ref=xr, f_ref=fr, q_weights=w_all[S],
+                      f_weights=r_all[:NF], qd=qd)
+
+
+def _controls(qp: MpcProblem, forces: np.ndarray) -> np.ndarray:
+    """The full N x 24 control vector from the solved forces and the joint part."""
+    N = len(qp.qd)
+    return np.hstack([forces.reshape(N, NF), qp.qd]).reshape(-1)
 
 
 class QpSolveFailed(RuntimeError):
     """The QP solver did not return a solution."""
 
 
-class ProxQpSolver:
-    """The condensed QP with ProxSuite's dense ProxQP, warm-started from the previous update's
-    solution shifted by one step."""
+class DaqpSolver:
+    """The condensed force QP with DAQP (dense active set)."""
 
-    def __init__(self, n: int):
-        self.n = n
+    def solve(self, qp: MpcProblem) -> np.ndarray:
+        """Controls U (N x 24, flattened) of the update."""
+        from ctypes import c_int
+
+        import daqp
+
+        big = 1e30  # DAQP's infinity
+        upper = np.concatenate([np.minimum(qp.ub, big), np.minimum(qp.u, big)])
+        lower = np.concatenate([np.maximum(qp.lb, -big), np.maximum(qp.l, -big)])
+        sense = np.zeros(len(upper), dtype=c_int)  # the first n rows are simple bounds on f
+        f, _, flag, _ = daqp.solve(qp.H, qp.g, qp.C, upper, lower, sense)
+        if flag != 1:
+            raise QpSolveFailed(f"DAQP: exit flag {flag}")
+        return _controls(qp, np.asarray(f))
+
+
+class ProxQpSolver:
+    """The condensed force QP with ProxSuite's dense ProxQP, warm-started from the previous
+    update's solution shifted by one step."""
+
+    def __init__(self) -> None:
         self.prev: np.ndarray | None = None
 
     def solve(self, qp: MpcProblem) -> np.ndarray:
+        """Controls U (N x 24, flattened) of the update."""
         import proxsuite
 
-        n_in = qp.C.shape[0]
-        solver = proxsuite.proxqp.dense.QP(self.n, 0, n_in, True)
+        n, n_in = len(qp.g), qp.C.shape[0]
+        solver = proxsuite.proxqp.dense.QP(n, 0, n_in, True)
         solver.settings.eps_abs = 1e-6
         solver.settings.eps_rel = 0.0
         solver.settings.verbose = False
-        lb = np.where(np.isfinite(qp.lb), qp.lb, -1e20)
-        ub = np.where(np.isfinite(qp.ub), qp.ub, 1e20)
-        lo = np.where(np.isfinite(qp.l), qp.l, -1e20)
-        hi = np.where(np.isfinite(qp.u), qp.u, 1e20)
-        solver.init(qp.H, qp.g, None, None, qp.C, lo, hi, lb, ub)
+
+        def finite(a: np.ndarray, fill: float) -> np.ndarray:
+            return np.where(np.isfinite(a), a, fill)
+
+        solver.init(qp.H, qp.g, None, None, qp.C, finite(qp.l, -1e20), finite(qp.u, 1e20),
+                    finite(qp.lb, -1e20), finite(qp.ub, 1e20))
         solved = proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED
-        if self.prev is not None:
+        if self.prev is not None and len(self.prev) == n:
             solver.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
             solver.solve(self.prev, None, None)
         if self.prev is None or solver.results.info.status != solved:  # cold start (again)
@@ -204,50 +323,50 @@ class ProxQpSolver:
         if status != solved:
             self.prev = None
             raise QpSolveFailed(f"ProxQP: {status}")
-        x = np.array(solver.results.x)
-        self.prev = np.concatenate([x[NU:], x[-NU:]])
-        return x
+        f = np.array(solver.results.x)
+        self.prev = np.concatenate([f[NF:], f[-NF:]])
+        return _controls(qp, f)
 
 
 class OsqpSolver:
-    """The sparse multiple-shooting QP with OSQP: variables (U_0, X_1, U_1, ..., X_N), dynamics as
-    equalities; warm-started from the previous solution shifted by one step."""
+    """The sparse multiple-shooting force QP with OSQP: variables (F_0, X_1, F_1, ..., X_N) on the
+    16 reduced states, dynamics as equalities; warm-started from the previous solution shifted."""
 
-    def __init__(self, n: int, q_weights: np.ndarray, r_weights: np.ndarray):
-        self.n = n
-        self.q_weights, self.r_weights = q_weights, r_weights
+    def __init__(self) -> None:
         self.prev: np.ndarray | None = None
 
     def solve(self, qp: MpcProblem) -> np.ndarray:
+        """Controls U (N x 24, flattened) of the update."""
         import osqp
         import scipy.sparse as sp
 
-        N = len(qp.Ad)
-        nz = N * (NU + NX)
-        col_u = [k * (NU + NX) for k in range(N)]
-        col_x = [c + NU for c in col_u]
+        N, ns = len(qp.Ad), len(qp.x0)
+        step = NF + ns
+        nz = N * step
+        col_f = [k * step for k in range(N)]
+        col_x = [c + NF for c in col_f]
         P = np.zeros(nz)
         q = np.zeros(nz)
         for k in range(N):
-            P[col_u[k]:col_u[k] + NU] = self.r_weights
-            q[col_u[k]:col_u[k] + NU] = -self.r_weights * qp.u_ref[k]
-            P[col_x[k]:col_x[k] + NX] = self.q_weights
-            q[col_x[k]:col_x[k] + NX] = -self.q_weights * qp.x_ref[k]
-        # Dynamics: X_{k+1} - A X_k - B U_k = c (X_0 = x0 is known).
-        dyn = sp.lil_matrix((N * NX, nz))
-        rhs = np.zeros(N * NX)
+            P[col_f[k]:col_f[k] + NF] = qp.f_weights
+            q[col_f[k]:col_f[k] + NF] = -qp.f_weights * qp.f_ref[k]
+            P[col_x[k]:col_x[k] + ns] = qp.q_weights
+            q[col_x[k]:col_x[k] + ns] = -qp.q_weights * qp.x_ref[k]
+        # Dynamics: X_{k+1} - A X_k - B F_k = c (X_0 = x0 is known).
+        dyn = sp.lil_matrix((N * ns, nz))
+        rhs = np.zeros(N * ns)
         for k in range(N):
-            r = slice(k * NX, (k + 1) * NX)
-            dyn[r, col_x[k]:col_x[k] + NX] = np.eye(NX)
-            dyn[r, col_u[k]:col_u[k] + NU] = -qp.Bd[k]
+            r = slice(k * ns, (k + 1) * ns)
+            dyn[r, col_x[k]:col_x[k] + ns] = np.eye(ns)
+            dyn[r, col_f[k]:col_f[k] + NF] = -qp.Bd[k]
             if k == 0:
                 rhs[r] = qp.Ad[0] @ qp.x0 + qp.cd[0]
             else:
-                dyn[r, col_x[k - 1]:col_x[k - 1] + NX] = -qp.Ad[k]
+                dyn[r, col_x[k - 1]:col_x[k - 1] + ns] = -qp.Ad[k]
                 rhs[r] = qp.cd[k]
-        sel = sp.lil_matrix((N * NU, nz))  # contact rows and bounds act on the controls only
+        sel = sp.lil_matrix((N * NF, nz))  # contact rows and bounds act on the forces only
         for k in range(N):
-            sel[k * NU:(k + 1) * NU, col_u[k]:col_u[k] + NU] = sp.identity(NU)
+            sel[k * NF:(k + 1) * NF, col_f[k]:col_f[k] + NF] = sp.identity(NF)
         sel = sel.tocsc()
         A = sp.vstack([dyn.tocsc(), sp.csc_matrix(qp.C) @ sel, sel]).tocsc()
         lo = np.concatenate([rhs, qp.l, qp.lb])
@@ -255,36 +374,28 @@ class OsqpSolver:
         solver = osqp.OSQP()
         solver.setup(sp.diags(P).tocsc(), q, A, lo, hi, verbose=False, eps_abs=1e-7, eps_rel=1e-7,
                      max_iter=20000, polishing=True)
-        if self.prev is not None:
+        if self.prev is not None and len(self.prev) == nz:
             solver.warm_start(x=self.prev)
-        res = solver.solve()
+        res = solver.solve(raise_error=False)  # the status is checked below
         if res.info.status not in ("solved", "solved inaccurate"):
             raise QpSolveFailed(f"OSQP: {res.info.status}")
         z = np.asarray(res.x)
-        self.prev = np.concatenate([z[NU + NX:], z[-(NU + NX):]])
-        return np.concatenate([z[c:c + NU] for c in col_u])
+        self.prev = np.concatenate([z[step:], z[-step:]])
+        return _controls(qp, np.concatenate([z[c:c + NF] for c in col_f]))
 
 
-def make_solver(cfg: MpcConfig) -> ProxQpSolver | OsqpSolver:
+def make_solver(cfg: MpcConfig) -> DaqpSolver | ProxQpSolver | OsqpSolver:
     """The QP solver named in the config."""
-    n = cfg.horizon * NU
+    if cfg.solver == "daqp":
+        return DaqpSolver()
     if cfg.solver == "proxqp":
-        return ProxQpSolver(n)
+        return ProxQpSolver()
     if cfg.solver == "osqp":
-        return OsqpSolver(n, np.asarray(cfg.q_weights, float), np.asarray(cfg.r_weights, float))
+        return OsqpSolver()
     raise ValueError(f"unknown QP solver {cfg.solver!r}; choose one of {', '.join(SOLVERS)}")
 
 
-def predict(qp: MpcProblem, U: np.ndarray) -> np.ndarray:
-    """(N, 28) predicted states X(1..N) under controls U (N * 24) with the QP's model."""
-    x = qp.x0
-    out = []
-    for k, (A, B, c) in enumerate(zip(qp.Ad, qp.Bd, qp.cd, strict=True)):
-        x = A @ x + B @ U[k * NU:(k + 1) * NU] + c
-        out.append(x)
-    return np.array(out)
-
-
 def qp_objective(qp: MpcProblem, U: np.ndarray) -> float:
-    """0.5 U'HU + g'U of the condensed QP (equal for both formulations up to a constant)."""
-    return float(0.5 * U @ qp.H @ U + qp.g @ U)
+    """0.5 f'Hf + g'f of the condensed force QP at the forces of U (N x 24, flattened)."""
+    f = U.reshape(len(qp.qd), NU)[:, :NF].reshape(-1)
+    return float(0.5 * f @ qp.H @ f + qp.g @ f)

@@ -36,6 +36,8 @@ class SkateParams:
         roll_limit_rad: Deck roll at which the deck touches the wheels.
         joint_velocity_limit_radps: |qd| bound.
         push_leg: Index of the pushing leg (0..3).
+        mu_plan: The friction coefficient the optimization planned with (a margin inside ``mu``);
+            the MPC's default, leaving the same margin for the deck's roll within an update.
     """
 
     mass_kg: float
@@ -53,6 +55,7 @@ class SkateParams:
     roll_limit_rad: float
     joint_velocity_limit_radps: float
     push_leg: int
+    mu_plan: float
 
     @staticmethod
     def from_library(lib: Any) -> SkateParams:
@@ -75,6 +78,7 @@ class SkateParams:
             roll_limit_rad=float(m.get("board_roll_limit_rad", 0.2)),
             joint_velocity_limit_radps=float(m.get("joint_velocity_limit_radps", 31.0)),
             push_leg=legs.index(str(m.get("push_leg", "RL"))),
+            mu_plan=float(m.get("friction_mu_plan", m["friction_mu"])),
         )
 
 

@@ -336,7 +336,11 @@ def track(
         help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
              "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")
     ] = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5",
-    solver: Annotated[str, typer.Option(help="QP solver: proxqp (condensed, dense) or osqp (sparse).")] = "proxqp",
+    solver: Annotated[str, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
+                      ] = "daqp",
+    mpc_mu: Annotated[float | None, typer.Option(
+        help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
+             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
 ) -> None:
@@ -348,7 +352,7 @@ def track(
         from skatelib.control.track import track_library
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    results = track_library(library, entry, "" if perturb == "none" else perturb, MpcConfig(solver=solver),
+    results = track_library(library, entry, "" if perturb == "none" else perturb, MpcConfig(solver=solver, mu=mpc_mu),
                             TrackSettings(seed=seed), jobs)
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
     for col in ("entry", "label", "v +1 s", "delivered", "error", "roll max", "pos err", "att err", "min f_n",
