@@ -74,6 +74,7 @@ class TrackResult:
     label_mps: float
     speed_after_1s_mps: float
     momentum_after_1s_mps: float
+    momentum_at_end_mps: float
     delivered_mps: float
     speed_error: float
     max_deck_roll_rad: float
@@ -233,7 +234,7 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     friction_loss = 0.0
     t = ref.t0
     n_updates = round((ref.t_stop - ref.t0) / cfg.dt)
-    speed_1s = mom_1s = float("nan")
+    speed_1s = mom_1s = mom_end = float("nan")
     t_1s = ref.t_end + 1.0
     for _ in range(n_updates):
         # Feedback: what the estimator reports (the model's COM, noise).
@@ -278,6 +279,8 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
                 friction_loss += plant_params.rolling_N * np.tanh(plant_params.tanh_scale_s_per_m * v_f) * h
             s = s_new
             t += h
+            if np.isnan(mom_end) and t >= ref.t_end - 1e-9:
+                mom_end = plant.momentum_speed(s)
             if np.isnan(speed_1s) and t >= t_1s - 1e-9:
                 speed_1s = float(forward_speed(s))
                 mom_1s = plant.momentum_speed(s)
@@ -328,6 +331,7 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     ms = np.array(times) * 1e3
     result = TrackResult(
         key=key, label_mps=label, speed_after_1s_mps=speed_1s, momentum_after_1s_mps=mom_1s,
+        momentum_at_end_mps=mom_end,
         delivered_mps=delivered, speed_error=err, max_deck_roll_rad=max_roll,
         max_position_error_m=max_pos_err, max_attitude_error_rad=max_att_err,
         min_normal_N=float(plant.log.min_normal_N), max_friction_use=plant.log.max_friction_use,

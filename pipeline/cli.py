@@ -355,18 +355,21 @@ def track(
     results = track_library(library, entry, "" if perturb == "none" else perturb, MpcConfig(solver=solver, mu=mpc_mu),
                             TrackSettings(seed=seed), jobs)
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
-    for col in ("entry", "label", "v +1 s", "delivered", "error", "roll max", "pos err", "att err", "min f_n",
-                "slips", "MPC ms med/max", "verdict"):
+    for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
+                "min f_n", "slips", "MPC ms med/max", "verdict"):
         t.add_column(escape(col), justify="right")
     failed = 0
     for r in results:
         failed += not r.passed
-        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.speed_after_1s_mps:.3f}", f"{r.delivered_mps:.3f}",
+        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
+                  f"{r.delivered_mps:.3f}",
                   f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
                   f"{1e3 * r.max_position_error_m:.1f} mm",
                   f"{r.max_attitude_error_rad:.3f}", f"{r.min_normal_N:.1f}", str(r.slips),
                   f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
     console.print(t)
+    console.print(escape("p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends [m/s]; "
+                         "delivered: the momentum speed 1 s later plus what rolling friction took meanwhile"))
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))

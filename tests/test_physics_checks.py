@@ -169,3 +169,26 @@ def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shov
                         str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
     assert r.returncode == 1, r.stdout + r.stderr
     assert "v0.30_s1" in r.stdout and "momentum speed" in r.stdout
+
+
+def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_cfg, system, shove, honest,
+                                                                            tmp_path):
+    """`skatelib track`'s verdict on the same push-off solved both ways, exact plant: the honest
+    entry delivers its label; the shove (board at the label, robot slow and sinking) ends the push-off
+    with the system's momentum far short of the label and fails."""
+    pytest.importorskip("daqp")
+    from skatelib.control.closed_loop import TrackSettings, track_entry
+    from skatelib.control.params import SkateParams
+    from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
+    from skatelib.runtime import MotionLibrary
+
+    verdicts = {}
+    for name, r in (("honest", honest), ("shove", shove)):
+        path = write_quadruped_library(tmp_path / f"{name}.h5", small_cfg, system, [entry_from_result(r)], {})
+        lib = MotionLibrary.open(path)
+        p = SkateParams.from_library(lib)
+        verdicts[name], _ = track_entry(lib, "v0.30_s1", p, p, settings=TrackSettings(ride_s=1.2))
+    assert verdicts["honest"].passed, verdicts["honest"].reasons
+    assert abs(verdicts["honest"].momentum_at_end_mps - 0.3) < 0.05 * 0.3
+    assert not verdicts["shove"].passed and "delivered speed" in verdicts["shove"].reasons
+    assert verdicts["shove"].momentum_at_end_mps < 0.85 * 0.3
