@@ -21,7 +21,8 @@ Verdict (fails on any of):
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
@@ -127,6 +128,7 @@ class EntryReference:
         self.board_pos = np.asarray(entry.board_pos, dtype=np.float64)
         self.q_board = np.asarray(lib.model_arrays["stance_q_board_rad"], dtype=np.float64).reshape(12)
         self.rel_last = self.last[0:3] - self.board_pos[-1, 0:3]
+        self.deck_z = float(self.board_pos[-1, 2])
         feet = np.asarray(entry.foot_pos, dtype=np.float64)  # (K, 4, 3)
         self.feet = feet
         contact = np.asarray(entry.contact)
@@ -142,6 +144,11 @@ class EntryReference:
         on = np.nonzero(contact[k:, leg] == GROUND)[0]
         k = min(k + int(on[0]) if len(on) else k, len(ts) - 1)
         return self.feet[k, leg].copy()
+
+    def initial_ground(self) -> np.ndarray:
+        """(3, 4) where the feet that start on the ground stand (zeros for the others)."""
+        c = self.contact(self.t0)
+        return np.where(c[None, :] == GROUND, self.feet[0].T, 0.0)
 
     def board_xy(self, t: float) -> np.ndarray:
         return _interp_rows(t, np.asarray(self.e.t), self.board_pos)[0:2]
@@ -196,6 +203,152 @@ class EntryReference:
         return x_ref, u_ref, contact, accelerating
 
 
+@dataclass
+class Run:
+    """What a closed-loop simulation measured (the verdicts are made from it).
+
+    Attributes:
+        updates: Per MPC update after its plant steps: time [s], plant state (31,) and the
+            reference of the update's first step (28,).
+    """
+
+    plant: Plant
+    fall: str = ""
+    times_s: list[float] = field(default_factory=list)
+    max_position_error_m: float = 0.0
+    max_attitude_error_rad: float = 0.0
+    max_roll_rad: float = 0.0
+    friction_loss_Ns: float = 0.0  # rolling friction's impulse from the end of the plan to 1 s later
+    momentum_at_end_mps: float = float("nan")
+    speed_after_1s_mps: float = float("nan")
+    momentum_after_1s_mps: float = float("nan")
+    updates: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)
+    trace: Trace | None = None
+
+
+def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: SkateParams, dist: Disturbances,
+             cfg: MpcConfig, settings: TrackSettings, keep_trace: bool = False) -> Run:
+    """Run the MPC against the plant from ``ref.t0`` to ``ref.t_stop``.
+
+    Args:
+        ref: The reference (:class:`EntryReference` or the steering experiment's): ``t0``,
+            ``t_end`` (end of the planned motion), ``t_stop``, ``deck_z``, ``max_reach``,
+            ``contact(t)``, ``horizon(t, n, dt, board_xy, v_ride)``, ``board_xy(t)``,
+            ``touchdown_point(t, leg)`` and ``initial_ground()`` ((3, 4) ground points).
+        x_init: (31,) initial plant state of the model's COM (28 channels, board origin).
+    """
+    rng = np.random.default_rng(settings.seed)
+    com_shift = np.array([0.0, dist.com_offset_m, 0.0])
+    plant = Plant(plant_params, com_shift)
+    run = Run(plant=plant)
+    disc = Discretizer(model, cfg.dt)
+    solver = make_solver(cfg)
+    observer = DisturbanceObserver(cfg.disturbance_gain)
+    h = cfg.dt / settings.plant_substeps
+    s = np.array(x_init, dtype=np.float64)
+    s[0:3] += rpy_matrix(s[3:6]) @ com_shift  # the true COM
+    s[1] += dist.init_error_m
+    s[2] += dist.init_error_m
+    ground = ref.initial_ground()
+    prev_contact = ref.contact(ref.t0)
+    trace_t, trace_s, trace_r, trace_f, trace_c = [], [], [], [], []
+    t = ref.t0
+    t_1s = ref.t_end + 1.0
+    for _ in range(round((ref.t_stop - ref.t0) / cfg.dt)):
+        # Feedback: what the estimator reports (the model's COM, noise).
+        x_fb = s[:NX].copy()
+        x_fb[0:3] -= rpy_matrix(x_fb[3:6]) @ com_shift
+        if dist.noise_std > 0:
+            x_fb[0:6] += rng.normal(0.0, dist.noise_std, 6)
+            x_fb[6:12] += rng.normal(0.0, 5 * dist.noise_std, 6)
+        pts = plant.contact_points(s, ref.contact(t), ground)
+        r_board = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5]) @ np.vstack([model.deck_points_m, np.zeros(4)])
+        fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board)
+        v_ride = float(forward_speed(x_fb))
+        x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
+        t_start = time.perf_counter()
+        bias = observer.update(v_ride, cfg.dt)
+        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating, bias)
+        try:
+            U = solver.solve(qp)
+        except QpSolveFailed as e:
+            run.fall = f"the MPC's QP failed at t = {t:.2f} s ({e})"
+            break
+        observer.predict(qp, U)
+        run.times_s.append(time.perf_counter() - t_start)
+        forces = U[:12].reshape(4, 3).T
+        qd = U[12:24]
+        for _sub in range(settings.plant_substeps):
+            c = ref.contact(t)
+            for i in range(4):
+                if c[i] == GROUND and prev_contact[i] != GROUND:  # touch-down where the plan puts it
+                    ground[:, i] = ref.touchdown_point(t, i) + np.r_[s[NX:NX + 2] - ref.board_xy(t), 0.0]
+            prev_contact = c
+            ext = None
+            if dist.impulse_Ns and abs(t - dist.impulse_t_s) < h / 2:
+                ext = np.array([0.0, dist.impulse_Ns / h, 0.0])
+            s_new = plant.step(s, forces, qd, c, ground, h, t, ext)
+            if ref.t_end <= t < t_1s:
+                v_f = float(forward_speed(s))
+                run.friction_loss_Ns += plant_params.rolling_N * np.tanh(plant_params.tanh_scale_s_per_m * v_f) * h
+            s = s_new
+            t += h
+            if np.isnan(run.momentum_at_end_mps) and t >= ref.t_end - 1e-9:
+                run.momentum_at_end_mps = plant.momentum_speed(s)
+            if np.isnan(run.speed_after_1s_mps) and t >= t_1s - 1e-9:
+                run.speed_after_1s_mps = float(forward_speed(s))
+                run.momentum_after_1s_mps = plant.momentum_speed(s)
+            if keep_trace:
+                trace_t.append(t)
+                trace_s.append(s.copy())
+                trace_r.append(x_ref[0].copy())
+                trace_f.append(plant.admissible(s, forces, c, t, record=False))
+                trace_c.append(c.copy())
+            run.max_roll_rad = max(run.max_roll_rad, abs(float(s[I_BOARD_ROLL])))
+            if not np.all(np.isfinite(s)):
+                run.fall = f"the state diverged at t = {t:.2f} s"
+                break
+        if run.fall:
+            break
+        run.updates.append((t, s.copy(), x_ref[0].copy()))
+        # Errors against the reference of this update's first step (re-anchored).
+        pos_err = float(np.linalg.norm(s[0:3] - rpy_matrix(s[3:6]) @ com_shift - x_ref[0, 0:3]))
+        run.max_position_error_m = max(run.max_position_error_m, pos_err)
+        run.max_attitude_error_rad = max(run.max_attitude_error_rad, float(np.max(np.abs(s[3:6] - x_ref[0, 3:6]))))
+        run.fall = _fall(ref, plant, s, x_ref[0], prev_contact, ground, plant_params.roll_limit_rad, t)
+        if run.fall:
+            break
+    if keep_trace and trace_t:
+        run.trace = Trace(np.array(trace_t), np.array(trace_s), np.array(trace_r), np.array(trace_f),
+                          np.array(trace_c))
+    return run
+
+
+def _fall(ref: Any, plant: Plant, s: np.ndarray, x_ref: np.ndarray, contact: np.ndarray, ground: np.ndarray,
+          roll_limit_rad: float, t: float) -> str:
+    """Why the robot counts as fallen, or ""."""
+    height = s[2] - s[NX + 2]
+    ref_height = x_ref[2] - ref.deck_z
+    pts = plant.contact_points(s, contact, ground)
+    reach = max((float(np.linalg.norm(pts[:, i] - s[0:3])) for i in range(4) if contact[i] != SWING), default=0.0)
+    tilt = max(abs(s[3]), abs(s[4]))
+    if abs(height - ref_height) > HEIGHT_LIMIT_M:
+        return f"body height over the deck {height:.3f} m, reference {ref_height:.3f} m, at t = {t:.2f} s"
+    if tilt > TILT_LIMIT_RAD:
+        return f"body tilted {tilt:.2f} rad at t = {t:.2f} s"
+    if abs(s[I_BOARD_ROLL]) > roll_limit_rad:
+        return f"deck roll {s[I_BOARD_ROLL]:.3f} rad beyond the wheel limit at t = {t:.2f} s"
+    if reach > ref.max_reach + REACH_MARGIN_M:
+        return f"a foot {reach:.3f} m from the COM (the plan at most {ref.max_reach:.3f}) at t = {t:.2f} s"
+    return ""
+
+
+def slip_reason(plant: Plant) -> str:
+    log = plant.log
+    return (f"{log.slips} slipping plant steps (force up to {log.slip_excess_N:.2f} N outside the cone of mu "
+            f"{plant.p.mu:.2f})") if log.slips else ""
+
+
 def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: SkateParams,
                 dist: Disturbances | None = None, cfg: MpcConfig | None = None,
                 settings: TrackSettings | None = None, keep_trace: bool = False
@@ -206,140 +359,29 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     settings = settings or TrackSettings()
     entry = lib[key]
     ref = EntryReference(lib, entry, model, settings)
-    rng = np.random.default_rng(settings.seed)
-    com_shift = np.array([0.0, dist.com_offset_m, 0.0])
-    plant = Plant(plant_params, com_shift)
-    disc = Discretizer(model, cfg.dt)
-    solver = make_solver(cfg)
-    observer = DisturbanceObserver(cfg.disturbance_gain)
-    h = cfg.dt / settings.plant_substeps
-    # Initial plant state: the entry's first state (true COM shifted), board origin from the entry.
-    s = np.zeros(NB)
-    s[:NX] = np.asarray(entry.state[0], dtype=np.float64)
-    s[NX:NX + 3] = ref.board_pos[0, 0:3]
-    s[0:3] += rpy_matrix(s[3:6]) @ com_shift
-    s[1] += dist.init_error_m
-    s[2] += dist.init_error_m
-    ground = np.zeros((3, 4))
-    prev_contact = ref.contact(ref.t0)
-    feet0 = ref.feet[0].T
-    for i in range(4):
-        if prev_contact[i] == GROUND:
-            ground[:, i] = feet0[:, i]
+    x_init = np.zeros(NB)
+    x_init[:NX] = np.asarray(entry.state[0], dtype=np.float64)
+    x_init[NX:NX + 3] = ref.board_pos[0, 0:3]
+    run = simulate(ref, x_init, model, plant_params, dist, cfg, settings, keep_trace)
     label = float(entry.attrs["target_velocity_mps"])
-    times: list[float] = []
-    trace_t, trace_s, trace_r, trace_f, trace_c = [], [], [], [], []
-    max_pos_err = max_att_err = max_roll = 0.0
-    fall = ""
-    friction_loss = 0.0
-    t = ref.t0
-    n_updates = round((ref.t_stop - ref.t0) / cfg.dt)
-    speed_1s = mom_1s = mom_end = float("nan")
-    t_1s = ref.t_end + 1.0
-    for _ in range(n_updates):
-        # Feedback: what the estimator reports (the model's COM, noise).
-        x_fb = s[:NX].copy()
-        R = rpy_matrix(x_fb[3:6])
-        x_fb[0:3] -= R @ com_shift
-        if dist.noise_std > 0:
-            x_fb[0:6] += rng.normal(0.0, dist.noise_std, 6)
-            x_fb[6:12] += rng.normal(0.0, 5 * dist.noise_std, 6)
-        contact_now = ref.contact(t)
-        pts = plant.contact_points(s, contact_now, ground)
-        R_B = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5])
-        r_board = R_B @ np.vstack([model.deck_points_m, np.zeros(4)])
-        fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board)
-        v_ride = float(forward_speed(x_fb))
-        x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
-        t_start = time.perf_counter()
-        bias = observer.update(v_ride, cfg.dt)
-        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating, bias)
-        try:
-            U = solver.solve(qp)
-        except QpSolveFailed as e:
-            fall = f"the MPC's QP failed at t = {t:.2f} s ({e})"
-            break
-        observer.predict(qp, U)
-        times.append(time.perf_counter() - t_start)
-        forces = U[:12].reshape(4, 3).T
-        qd = U[12:24]
-        x_now_ref = x_ref[0]
-        for _sub in range(settings.plant_substeps):
-            c = ref.contact(t)
-            for i in range(4):
-                if c[i] == GROUND and prev_contact[i] != GROUND:  # touch-down where the entry puts it
-                    ground[:, i] = ref.touchdown_point(t, i) + np.r_[s[NX:NX + 2] - ref.board_xy(t), 0.0]
-            prev_contact = c
-            ext = None
-            if dist.impulse_Ns and abs(t - dist.impulse_t_s) < h / 2:
-                ext = np.array([0.0, dist.impulse_Ns / h, 0.0])
-            s_new = plant.step(s, forces, qd, c, ground, h, t, ext)
-            if t >= ref.t_end and t < t_1s:
-                v_f = float(forward_speed(s))
-                friction_loss += plant_params.rolling_N * np.tanh(plant_params.tanh_scale_s_per_m * v_f) * h
-            s = s_new
-            t += h
-            if np.isnan(mom_end) and t >= ref.t_end - 1e-9:
-                mom_end = plant.momentum_speed(s)
-            if np.isnan(speed_1s) and t >= t_1s - 1e-9:
-                speed_1s = float(forward_speed(s))
-                mom_1s = plant.momentum_speed(s)
-            if keep_trace:
-                trace_t.append(t)
-                trace_s.append(s.copy())
-                trace_r.append(x_now_ref.copy())
-                trace_f.append(plant.admissible(s, forces, c, t, record=False))
-                trace_c.append(c.copy())
-            max_roll = max(max_roll, abs(float(s[I_BOARD_ROLL])))
-            if not np.all(np.isfinite(s)):
-                fall = fall or f"the state diverged at t = {t:.2f} s"
-                break
-        if fall:
-            break
-        # Errors against the reference of this update's first step (re-anchored).
-        pos_err = float(np.linalg.norm(s[0:3] - rpy_matrix(s[3:6]) @ com_shift - x_ref[0, 0:3]))
-        att_err = float(np.max(np.abs(s[3:6] - x_ref[0, 3:6])))
-        max_pos_err = max(max_pos_err, pos_err)
-        max_att_err = max(max_att_err, att_err)
-        height = s[2] - s[NX + 2]
-        ref_height = x_ref[0, 2] - ref.board_pos[-1, 2]
-        if not fall:
-            c = prev_contact  # the contacts the plant's last step used
-            pts = plant.contact_points(s, c, ground)
-            reach = max((float(np.linalg.norm(pts[:, i] - s[0:3])) for i in range(4) if c[i] != SWING), default=0.0)
-            if abs(height - ref_height) > HEIGHT_LIMIT_M:
-                fall = f"body height over the deck {height:.3f} m, reference {ref_height:.3f} m, at t = {t:.2f} s"
-            elif max(abs(s[3]), abs(s[4])) > TILT_LIMIT_RAD:
-                fall = f"body tilted {max(abs(s[3]), abs(s[4])):.2f} rad at t = {t:.2f} s"
-            elif abs(s[I_BOARD_ROLL]) > plant_params.roll_limit_rad:
-                fall = f"deck roll {s[I_BOARD_ROLL]:.3f} rad beyond the wheel limit at t = {t:.2f} s"
-            elif reach > ref.max_reach + REACH_MARGIN_M:
-                fall = f"a foot {reach:.3f} m from the COM (entry at most {ref.max_reach:.3f}) at t = {t:.2f} s"
-        if fall:
-            break
-    total = plant_params.mass_kg + plant_params.board_mass_kg
-    delivered = mom_1s + friction_loss / total
+    delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
     err = (delivered - label) / label if label else float("nan")
     reasons = []
     if not np.isfinite(err) or abs(err) > SPEED_TOLERANCE:
         reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
-    if fall:
-        reasons.append(f"fall: {fall}")
-    if plant.log.slips:
-        reasons.append(f"{plant.log.slips} slipping plant steps (force up to {plant.log.slip_excess_N:.2f} N outside "
-                       f"the cone of mu {plant_params.mu:.2f})")
-    ms = np.array(times) * 1e3
+    if run.fall:
+        reasons.append(f"fall: {run.fall}")
+    if run.plant.log.slips:
+        reasons.append(slip_reason(run.plant))
+    ms = np.array(run.times_s) * 1e3
     result = TrackResult(
-        key=key, label_mps=label, speed_after_1s_mps=speed_1s, momentum_after_1s_mps=mom_1s,
-        momentum_at_end_mps=mom_end,
-        delivered_mps=delivered, speed_error=err, max_deck_roll_rad=max_roll,
-        max_position_error_m=max_pos_err, max_attitude_error_rad=max_att_err,
-        min_normal_N=float(plant.log.min_normal_N), max_friction_use=plant.log.max_friction_use,
-        slips=plant.log.slips, mpc_median_ms=float(np.median(ms)) if len(ms) else float("nan"),
-        mpc_max_ms=float(np.max(ms)) if len(ms) else float("nan"), fall=fall, passed=not reasons,
+        key=key, label_mps=label, speed_after_1s_mps=run.speed_after_1s_mps,
+        momentum_after_1s_mps=run.momentum_after_1s_mps, momentum_at_end_mps=run.momentum_at_end_mps,
+        delivered_mps=delivered, speed_error=err, max_deck_roll_rad=run.max_roll_rad,
+        max_position_error_m=run.max_position_error_m, max_attitude_error_rad=run.max_attitude_error_rad,
+        min_normal_N=float(run.plant.log.min_normal_N), max_friction_use=run.plant.log.max_friction_use,
+        slips=run.plant.log.slips, mpc_median_ms=float(np.median(ms)) if len(ms) else float("nan"),
+        mpc_max_ms=float(np.max(ms)) if len(ms) else float("nan"), fall=run.fall, passed=not reasons,
         reasons="; ".join(reasons),
     )
-    trace = None
-    if keep_trace and trace_t:
-        trace = Trace(np.array(trace_t), np.array(trace_s), np.array(trace_r), np.array(trace_f), np.array(trace_c))
-    return result, trace
+    return result, run.trace

@@ -31,9 +31,11 @@ NB = NX + 3  # plant state: the 28 channels, then the board origin x, y and the 
 
 @dataclass
 class ContactLog:
-    """Per plant step: slips, the smallest normal force of a loaded foot, friction use."""
+    """Per plant step: slips, unloaded feet (a foot in contact whose commanded force does not press
+    on the surface), the smallest normal force of a loaded foot, friction use."""
 
     slips: int = 0
+    unloaded_steps: int = 0
     slip_excess_N: float = 0.0
     min_normal_N: float = np.inf
     max_friction_use: float = 0.0
@@ -78,6 +80,8 @@ class Plant:
             f = forces[:, i]
             fn = float(f @ n)
             if fn <= 0.0:
+                if record:
+                    self.log.unloaded_steps += 1
                 continue  # the surface cannot pull: the foot unloads
             ft = f - fn * n
             t_norm = float(np.linalg.norm(ft))

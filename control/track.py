@@ -1,4 +1,5 @@
-"""Track every entry of a library in closed loop, in parallel over entries (joblib, like build)."""
+"""Track every entry of a library in closed loop, in parallel over entries (joblib, like build);
+the steering experiment at several speeds."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 from skatelib.control.closed_loop import TrackResult, TrackSettings, track_entry
 from skatelib.control.mpc import MpcConfig
 from skatelib.control.params import SkateParams, parse_perturbation
+from skatelib.control.steer import SteerResult, steer
 from skatelib.library.errors import SkatelibError
 
 
@@ -43,3 +45,29 @@ def track_library(path: Path, keys: Sequence[str] | None, perturb: str, cfg: Mpc
         lib[k]
     return list(Parallel(n_jobs=min(jobs, len(chosen)) or 1)(
         delayed(_one)(str(path), k, perturb, cfg, settings) for k in chosen))
+
+
+def _steer_one(path: str, speed: float, perturb: str, cfg: MpcConfig, settings: TrackSettings) -> SteerResult:
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(path)
+    nominal = SkateParams.from_library(lib)
+    plant, dist = parse_perturbation(perturb, nominal)
+    return steer(lib, nominal, plant, speed, dist=dist, cfg=cfg, settings=settings)
+
+
+def steer_library(path: Path, speeds: Sequence[float], perturb: str, cfg: MpcConfig | None = None,
+                  settings: TrackSettings | None = None, jobs: int = 2) -> list[SteerResult]:
+    """The steering experiment (:mod:`skatelib.control.steer`) at each speed, with the library's
+    model and stance."""
+    from joblib import Parallel, delayed
+    from skatelib.runtime import MotionLibrary
+
+    cfg = cfg or MpcConfig()
+    settings = settings or TrackSettings()
+    lib = MotionLibrary.open(path)
+    if lib.kind != "quadruped":
+        raise SkatelibError(f"{path}: the steering experiment is for quadruped libraries; this one is {lib.kind}")
+    parse_perturbation(perturb, SkateParams.from_library(lib))
+    return list(Parallel(n_jobs=min(jobs, len(speeds)) or 1)(
+        delayed(_steer_one)(str(path), v, perturb, cfg, settings) for v in speeds))

@@ -262,6 +262,11 @@ def solve(
 LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
 
 
+class Maneuver(enum.StrEnum):
+    entries = "entries"
+    steer = "steer"
+
+
 @app.command()
 def info(library: LibArg) -> None:
     """Summarize a motion library: provenance, model and entries."""
@@ -343,17 +348,24 @@ def track(
              "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+    maneuver: Annotated[Maneuver, typer.Option(
+        help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
+             "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a nonlinear plant
     with model error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails)."""
     try:
         from skatelib.control.closed_loop import TrackSettings
         from skatelib.control.mpc import MpcConfig
-        from skatelib.control.track import track_library
+        from skatelib.control.track import steer_library, track_library
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    results = track_library(library, entry, "" if perturb == "none" else perturb, MpcConfig(solver=solver, mu=mpc_mu),
-                            TrackSettings(seed=seed), jobs)
+    plant_error = "" if perturb == "none" else perturb
+    mpc = MpcConfig(solver=solver, mu=mpc_mu)
+    if maneuver is Maneuver.steer:
+        _steer_table(steer_library(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed), jobs), perturb)
+        return
+    results = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs)
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
     for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
                 "min f_n", "slips", "MPC ms med/max", "verdict"):
@@ -375,6 +387,23 @@ def track(
             console.print(escape(f"{r.key}: {r.reasons}"))
     if failed:
         console.print(f"[bold red]{failed} of {len(results)} entries failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
+def _steer_table(results: list[Any], perturb: str) -> None:
+    t = Table(title=escape(f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}"))
+    for col in ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
+                "unloaded", "slips", "MPC ms", "verdict"):
+        t.add_column(escape(col), justify="right")
+    for r in results:
+        t.add_row(f"{r.speed_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
+                  f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
+                  f"{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+    console.print(t)
+    failed = [r for r in results if not r.passed]
+    for r in failed:
+        console.print(escape(f"{r.speed_mps:.2f} m/s: {r.reasons}"))
+    if failed:
         raise typer.Exit(1)
 
 
