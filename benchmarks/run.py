@@ -284,7 +284,7 @@ def bench_mpc(path: Path | None = None) -> None:
               f"{solve['osqp'] / t:5.1f}x the sparse OSQP baseline")
     print("  target (issue #10): build + solve <= 2 ms median")
     t0 = time.perf_counter()
-    results = track_library(Path(path), None, "", cfg, TrackSettings(), jobs=2)
+    results = [r for r, _ in track_library(Path(path), None, "", cfg, TrackSettings(), jobs=2)]
     print(f"skatelib track, {len(results)} entries, exact plant, 2 workers: {time.perf_counter() - t0:5.1f} s "
           f"({sum(r.passed for r in results)} pass); target <= 60 s")
 

@@ -36,7 +36,8 @@ from skatelib.control.mpc import (
 )
 from skatelib.control.params import Disturbances, SkateParams
 from skatelib.control.plant import NB, Plant
-from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NU, NX, SWING
+from skatelib.library import schema
+from skatelib.library.channels import BOARD, CONTROL_NAMES, GROUND, I_BOARD_ROLL, LEGS, NU, NX, STATE_NAMES, SWING
 from skatelib.library.margins import forward_speed
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -96,14 +97,35 @@ class TrackResult:
 
 @dataclass
 class Trace:
-    """Time series of a run, for plots and Rerun: t (M,), plant state (M, 31), reference (M, 28),
-    applied forces (M, 3, 4), contact (M, 4)."""
+    """Time series of a run, per plant step, for plots and Rerun: t (M,), plant state (M, 31),
+    reference (M, 28), applied forces (M, 3, 4), joint velocities (M, 12), contact (M, 4) and
+    contact points (M, 3, 4)."""
 
     t: np.ndarray
     state: np.ndarray
     reference: np.ndarray
     forces: np.ndarray
+    qd: np.ndarray
     contact: np.ndarray
+    feet: np.ndarray
+
+    def as_entry(self, key: str, label_mps: float, stride: int = 1) -> Entry:
+        """The run as a library entry (every ``stride``-th plant step; control k acts on
+        [t_k, t_k+1), so one row fewer), for the same views as the library's entries."""
+        sl = slice(None, None, stride)
+        n = len(self.t[sl])
+        forces = np.transpose(self.forces[sl], (0, 2, 1)).reshape(n, 12)  # f_<leg>_<axis>, legs in order
+        state = self.state[sl]
+        arrays = {
+            schema.D_T: self.t[sl], schema.D_STATE: state[:, :NX],
+            schema.D_CONTROL: np.hstack([forces, self.qd[sl]])[:-1],
+            schema.D_CONTACT: self.contact[sl], schema.D_FOOT_POS: np.transpose(self.feet[sl], (0, 2, 1)),
+            schema.D_BOARD_POS: np.column_stack([state[:, NX:NX + 3], state[:, 5]]),
+        }
+        columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
+                   schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: ("board_x", "board_y", "board_z", "board_yaw")}
+        attrs = {"target_velocity_mps": label_mps, "n_strides": 0, "success": True, "status": "closed loop"}
+        return Entry(key, attrs, arrays, columns)
 
 
 def _interp_rows(t: float, ts: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -251,7 +273,7 @@ def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: Ska
     s[2] += dist.init_error_m
     ground = ref.initial_ground()
     prev_contact = ref.contact(ref.t0)
-    trace_t, trace_s, trace_r, trace_f, trace_c = [], [], [], [], []
+    trace_t, trace_s, trace_r, trace_f, trace_qd, trace_c, trace_p = [], [], [], [], [], [], []
     t = ref.t0
     t_1s = ref.t_end + 1.0
     for _ in range(round((ref.t_stop - ref.t0) / cfg.dt)):
@@ -303,7 +325,9 @@ def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: Ska
                 trace_s.append(s.copy())
                 trace_r.append(x_ref[0].copy())
                 trace_f.append(plant.admissible(s, forces, c, t, record=False))
+                trace_qd.append(qd)
                 trace_c.append(c.copy())
+                trace_p.append(plant.contact_points(s, c, ground))
             run.max_roll_rad = max(run.max_roll_rad, abs(float(s[I_BOARD_ROLL])))
             if not np.all(np.isfinite(s)):
                 run.fall = f"the state diverged at t = {t:.2f} s"
@@ -320,7 +344,7 @@ def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: Ska
             break
     if keep_trace and trace_t:
         run.trace = Trace(np.array(trace_t), np.array(trace_s), np.array(trace_r), np.array(trace_f),
-                          np.array(trace_c))
+                          np.array(trace_qd), np.array(trace_c), np.array(trace_p))
     return run
 
 

@@ -348,6 +348,8 @@ def track(
              "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+    save: Annotated[Path | None, typer.Option(
+        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run.")] = None,
     maneuver: Annotated[Maneuver, typer.Option(
         help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
              "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
@@ -365,7 +367,18 @@ def track(
     if maneuver is Maneuver.steer:
         _steer_table(steer_library(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed), jobs), perturb)
         return
-    results = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs)
+    if save is not None:
+        from skatelib.pipeline.preflight import check_output
+
+        check_output(save, [library], what="recording")
+    runs = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs, keep_runs=save is not None)
+    results = [r for r, _ in runs]
+    if save is not None:
+        from skatelib.pipeline.inspect_rerun import save_closed_loop
+        from skatelib.runtime import MotionLibrary
+
+        save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
+        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
     for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
                 "min f_n", "slips", "MPC ms med/max", "verdict"):

@@ -218,6 +218,28 @@ def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | N
     return roots
 
 
+def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Path) -> list[str]:
+    """Each entry's reference beside its closed-loop run (``skatelib track --save``), with the views
+    of ``inspect``: the reference at ``/<key>/reference``, the run 0.6 m beside it at
+    ``/<key>/closed_loop``. Written atomically."""
+    robot = _Robot(lib.urdf)
+    rec = rr.RecordingStream(f"skatelib-track-{lib.path.stem}")
+    roots = []
+    with atomic_path(save) as tmp:
+        rec.save(str(tmp))
+        rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for n, (key, run) in enumerate(runs):
+            offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
+            log_quadruped_entry(rec, lib, lib[key], robot, f"/{key}/reference", offset)
+            beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
+            log_quadruped_entry(rec, lib, run, robot, f"/{key}/closed_loop", beside)
+            roots += [f"/{key}/reference", f"/{key}/closed_loop"]
+        rec.send_blueprint(blueprint(lib, roots))
+        rec.flush()
+        rec.disconnect()
+    return roots
+
+
 def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn: bool, overlay: bool) -> list[str]:
     """Open a library and log it to a file (written atomically) and/or a spawned viewer."""
     lib = MotionLibrary.open(path)

@@ -103,3 +103,25 @@ def test_unknown_entry_writes_nothing(quad_lib, tmp_path):
     with pytest.raises(EntryNotFound, match=r"v0\.30_s1"):
         inspect_library(quad_lib, ["v9.99_s9"], tmp_path / "y.rrd", spawn=False, overlay=False)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_track_save_puts_the_run_beside_its_reference(quad_lib, tmp_path):
+    """`skatelib track LIB --save x.rrd`: each entry's reference and closed-loop run under
+    /<key>/reference and /<key>/closed_loop; the run starts where the reference starts, lasts the
+    entry plus transfer and ride at the MPC's 30 Hz, and `rerun rrd verify` accepts the file."""
+    pytest.importorskip("daqp")
+    out = tmp_path / "t.rrd"
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    r = subprocess.run([*cli, "track", str(quad_lib), "-e", "v0.30_s1", "--perturb", "none", "--save", str(out)],
+                       capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
+    assert r.returncode in (0, 1) and out.exists(), r.stdout + r.stderr
+    cols = _columns(out)
+    e = MotionLibrary.open(quad_lib)["v0.30_s1"]
+    ref = np.array([v[0] for v in cols["/v0.30_s1/reference/plots/board_speed/actual"]["Scalars:scalars"]])
+    run = np.array([v[0] for v in cols["/v0.30_s1/closed_loop/plots/board_speed/actual"]["Scalars:scalars"]])
+    assert len(ref) == len(e.t)
+    assert abs(len(run) - round((e.duration_s + 0.4 + 1.5) * 30)) <= 1
+    assert abs(run[0] - ref[0]) < 0.01 and "/v0.30_s1/closed_loop/robot/trunk_0" in cols
+    v = subprocess.run([str(Path(sys.executable).parent / "rerun"), "rrd", "verify", str(out)],
+                       capture_output=True, text=True)
+    assert v.returncode == 0, v.stdout + v.stderr
