@@ -294,16 +294,48 @@ def info(library: LibArg) -> None:
     console.print(t)
 
 
+PerturbOpt = Annotated[str, typer.Option(
+    help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
+         "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")]
+DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
+
+
 @app.command()
-def validate(library: LibArg) -> None:
+def validate(
+    library: LibArg,
+    closed_loop: Annotated[bool, typer.Option(
+        "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
+                              "verdict in the library (entry attribute closed_loop_json).")] = False,
+    perturb: PerturbOpt = DEFAULT_PERTURB,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries tracked in parallel.")] = 2,
+) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
     from skatelib.pipeline.validate import validate_library
 
     problems = validate_library(library, lambda key, msg: console.print(escape(f"{key}: {msg}")))
     if problems:
         console.print(f"[bold red]{problems} entries failed validation[/]")
+    else:
+        console.print("[green]all entries valid[/]")
+    failed = 0
+    if closed_loop:
+        import datetime
+        import json
+
+        from skatelib.library.amend import amend_library
+
+        try:
+            from skatelib.control.track import track_library
+        except ImportError as e:
+            raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+        results = [r for r, _ in track_library(library, None, "" if perturb == "none" else perturb, jobs=jobs)]
+        failed = _track_table(results, perturb)
+        amend_library(library, {"closed_loop_plant": perturb,
+                                "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
+                      {r.key: {"closed_loop_json": json.dumps(r.as_dict(), sort_keys=True)} for r in results})
+        console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    if problems or failed:
         raise typer.Exit(1)
-    console.print("[green]all entries valid[/]")
 
 
 @app.command()
@@ -337,10 +369,7 @@ def track(
     entry: Annotated[list[str] | None,
                      typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
                      ] = None,
-    perturb: Annotated[str, typer.Option(
-        help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
-             "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")
-    ] = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5",
+    perturb: PerturbOpt = DEFAULT_PERTURB,
     solver: Annotated[str, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
                       ] = "daqp",
     mpc_mu: Annotated[float | None, typer.Option(
@@ -379,13 +408,19 @@ def track(
 
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
         console.print(escape(f"wrote {save}; open it with: rerun {save}"))
+    failed = _track_table(results, perturb)
+    if failed:
+        console.print(f"[bold red]{failed} of {len(results)} entries failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
+def _track_table(results: list[Any], perturb: str) -> int:
+    """Print the closed-loop verdicts; returns how many failed."""
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
     for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
                 "min f_n", "slips", "MPC ms med/max", "verdict"):
         t.add_column(escape(col), justify="right")
-    failed = 0
     for r in results:
-        failed += not r.passed
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
                   f"{r.delivered_mps:.3f}",
                   f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
@@ -398,9 +433,7 @@ def track(
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))
-    if failed:
-        console.print(f"[bold red]{failed} of {len(results)} entries failed in closed loop[/]")
-        raise typer.Exit(1)
+    return sum(not r.passed for r in results)
 
 
 def _steer_table(results: list[Any], perturb: str) -> None:

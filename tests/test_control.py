@@ -244,3 +244,27 @@ def test_steering_follows_the_deck_roll_and_its_negative_control(lib):
     soft, _ = parse_perturbation("kb=-50%", p)
     bad = steer(lib, p, soft, 0.0, duration_s=4.5)
     assert not bad.passed and "deck roll error" in bad.reasons
+
+
+def test_validate_closed_loop_stores_each_verdict(lib, tmp_path):
+    """`skatelib validate LIB --closed-loop` tracks the entries and stores each verdict in the file:
+    the rewritten file verifies (new checksum), its arrays and earlier attributes are unchanged."""
+    import json
+    import shutil
+
+    path = tmp_path / "v.h5"
+    shutil.copy(lib.path, path)
+    r = subprocess.run([*CLI, "validate", str(path), "--closed-loop", "--perturb", "none", "-j", "1"],
+                       capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"}, timeout=600)
+    assert r.returncode in (0, 1) and "stored 1 closed-loop verdicts" in r.stdout, r.stdout + r.stderr
+    after = MotionLibrary.open(path)
+    key = lib.keys()[0]
+    verdict = json.loads(after[key].attrs["closed_loop_json"])
+    assert verdict["key"] == key and isinstance(verdict["passed"], bool)
+    assert (r.returncode == 0) == verdict["passed"]
+    assert after.attrs["closed_loop_plant"] == "none"
+    for name, arr in lib[key].arrays.items():
+        np.testing.assert_array_equal(after[key].arrays[name], arr)
+    for k, v in lib[key].attrs.items():
+        assert after[key].attrs[k] == v
+    assert after.attrs["git_commit"] == lib.attrs["git_commit"]
