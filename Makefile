@@ -37,7 +37,7 @@ test: venv
 
 lint: venv
 	$(BIN)/ruff check pipeline library runtime control tests benchmarks
-	$(BIN)/mypy pipeline library runtime control
+	$(BIN)/mypy pipeline library runtime control benchmarks
 
 bench: venv
 	$(BIN)/python -m benchmarks.run

@@ -164,17 +164,16 @@ def bench_rerun(path: Path | None = None) -> None:
     entries = list(lib)[:2]
     n_rows = 0
     for e in entries:
-        import numpy as np
-        from skatelib.pipeline.inspect_rerun import _rpy
+        from skatelib.library.margins import rpy_matrices
 
-        R = _rpy(e.state[:, 3:6])
+        R = rpy_matrices(e.state[:, 3:6])
         trans, quats, _ = robot.poses(e.state[:, 0:3], R, e.state[:, 12:24])
         for k, tk in enumerate(e.t):
             rec2.set_time("time", duration=float(tk))
             for i, g in enumerate(robot.geoms.geometryObjects):
                 rec2.log(f"/{e.key}/robot/{g.name}", rr.Transform3D(translation=trans[k, i], quaternion=quats[k, i]))
                 n_rows += 1
-            rec2.log(f"/{e.key}/plots/board_speed", rr.Scalars(float(np.asarray(e.state[k, 24]))))
+            rec2.log(f"/{e.key}/plots/board_speed", rr.Scalars(float(e.state[k, 24])))
     rec2.flush()
     t_rows = time.perf_counter() - t0
     per_entry_rows = t_rows / len(entries)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Protocol
 
 import numpy as np
 from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
@@ -248,15 +248,33 @@ class Run:
     trace: Trace | None = None
 
 
-def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: SkateParams, dist: Disturbances,
+class Reference(Protocol):
+    """What :func:`simulate` asks of a reference (an entry's, or the steering experiment's)."""
+
+    t0: float  # start [s]
+    t_end: float  # end of the planned motion [s] (speeds are judged from here)
+    t_stop: float  # end of the run [s]
+    deck_z: float  # height of the deck's top [m]
+    max_reach: float  # the farthest the plan puts a loaded foot from the COM [m]
+
+    def contact(self, t: float) -> np.ndarray: ...
+
+    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray,
+                v_ride: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+
+    def board_xy(self, t: float) -> np.ndarray: ...
+
+    def touchdown_point(self, t: float, leg: int) -> np.ndarray: ...
+
+    def initial_ground(self) -> np.ndarray: ...
+
+
+def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_params: SkateParams, dist: Disturbances,
              cfg: MpcConfig, settings: TrackSettings, keep_trace: bool = False) -> Run:
     """Run the MPC against the plant from ``ref.t0`` to ``ref.t_stop``.
 
     Args:
-        ref: The reference (:class:`EntryReference` or the steering experiment's): ``t0``,
-            ``t_end`` (end of the planned motion), ``t_stop``, ``deck_z``, ``max_reach``,
-            ``contact(t)``, ``horizon(t, n, dt, board_xy, v_ride)``, ``board_xy(t)``,
-            ``touchdown_point(t, leg)`` and ``initial_ground()`` ((3, 4) ground points).
+        ref: The reference (:class:`EntryReference` or the steering experiment's).
         x_init: (31,) initial plant state of the model's COM (28 channels, board origin).
     """
     rng = np.random.default_rng(settings.seed)
@@ -348,7 +366,7 @@ def simulate(ref: Any, x_init: np.ndarray, model: SkateParams, plant_params: Ska
     return run
 
 
-def _fall(ref: Any, plant: Plant, s: np.ndarray, x_ref: np.ndarray, contact: np.ndarray, ground: np.ndarray,
+def _fall(ref: Reference, plant: Plant, s: np.ndarray, x_ref: np.ndarray, contact: np.ndarray, ground: np.ndarray,
           roll_limit_rad: float, t: float) -> str:
     """Why the robot counts as fallen, or ""."""
     height = s[2] - s[NX + 2]
