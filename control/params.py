@@ -28,7 +28,8 @@ class SkateParams:
         roll_inertia_kgm2: I_Bx.
         kb_Nm_per_rad: K_B, Eq. (6).
         bb_Nms_per_rad: B_B, Eq. (6).
-        rolling_N: f_fri, Eq. (9b).
+        rolling_N: f_fri, Eq. (9b), of the board.
+        rolling_plan_N: The f_fri the optimization planned with (a margin above ``rolling_N``).
         tanh_scale_s_per_m: k of Eq. (10).
         mu: Friction coefficient of feet on deck and ground.
         gravity_mps2: g.
@@ -36,6 +37,7 @@ class SkateParams:
         roll_limit_rad: Deck roll at which the deck touches the wheels.
         joint_velocity_limit_radps: |qd| bound.
         push_leg: Index of the pushing leg (0..3).
+        torque_limit_Nm: |tau| bound of every joint (the MPC's torque rows).
         mu_plan: The friction coefficient the optimization planned with (a margin inside ``mu``);
             the MPC's default, leaving the same margin for the deck's roll within an update.
     """
@@ -48,6 +50,7 @@ class SkateParams:
     kb_Nm_per_rad: float
     bb_Nms_per_rad: float
     rolling_N: float
+    rolling_plan_N: float
     tanh_scale_s_per_m: float
     mu: float
     gravity_mps2: float
@@ -56,6 +59,7 @@ class SkateParams:
     joint_velocity_limit_radps: float
     push_leg: int
     mu_plan: float
+    torque_limit_Nm: float = math.inf
 
     @staticmethod
     def from_library(lib: Any) -> SkateParams:
@@ -71,6 +75,7 @@ class SkateParams:
             kb_Nm_per_rad=float(m["board_roll_stiffness_Nm_per_rad"]),
             bb_Nms_per_rad=float(m["board_roll_damping_Nms_per_rad"]),
             rolling_N=float(m["board_rolling_friction_N"]),
+            rolling_plan_N=float(m.get("board_rolling_friction_plan_N", m["board_rolling_friction_N"])),
             tanh_scale_s_per_m=float(m.get("board_tanh_scale_s_per_m", 50.0)),
             mu=float(m["friction_mu"]),
             gravity_mps2=float(m["gravity_mps2"]),
@@ -79,6 +84,7 @@ class SkateParams:
             joint_velocity_limit_radps=float(m.get("joint_velocity_limit_radps", 31.0)),
             push_leg=legs.index(str(m.get("push_leg", "RL"))),
             mu_plan=float(m.get("friction_mu_plan", m["friction_mu"])),
+            torque_limit_Nm=float(m.get("torque_limit_Nm", math.inf)),
         )
 
 

@@ -24,7 +24,8 @@ class BoardModel:
     roll_inertia_kgm2: float
     roll_stiffness_Nm_per_rad: float  # K_B, Eq. (6)
     roll_damping_Nms_per_rad: float  # B_B, Eq. (6)
-    rolling_friction_N: float  # f_fri, Eq. (9b)
+    rolling_friction_N: float  # f_fri, Eq. (9b), as planned: the board's x the planning factor
+    rolling_friction_nominal_N: float  # f_fri of the board itself
     tanh_scale_s_per_m: float  # k, Eq. (10)
     rake_front_rad: float
     rake_rear_rad: float
@@ -39,8 +40,9 @@ class BoardModel:
 
     @staticmethod
     def from_config(cfg: BoardConfig, robot_mass_kg: float, gravity_mps2: float,
-                    calibration_foot_y_m: float) -> BoardModel:
-        """Derive K_B, B_B, f_fri and the steering geometry from the config.
+                    calibration_foot_y_m: float, rolling_factor: float = 1.0) -> BoardModel:
+        """Derive K_B, B_B, f_fri and the steering geometry from the config; the dynamics use
+        ``rolling_factor`` x the board's rolling resistance (a planning margin).
 
         K_B is calibrated so that the robot's whole weight resting on the feet of one side, at
         ``calibration_foot_y_m`` from the centre line, holds the deck at ``cfg.calibration_roll_rad``
@@ -55,7 +57,8 @@ class BoardModel:
         return BoardModel(
             mass_kg=cfg.mass_kg, roll_inertia_kgm2=cfg.roll_inertia_kgm2,
             roll_stiffness_Nm_per_rad=k_b, roll_damping_Nms_per_rad=b_b,
-            rolling_friction_N=cfg.rolling_friction_coeff * total_weight,
+            rolling_friction_N=rolling_factor * cfg.rolling_friction_coeff * total_weight,
+            rolling_friction_nominal_N=cfg.rolling_friction_coeff * total_weight,
             tanh_scale_s_per_m=cfg.tanh_scale_s_per_m,
             rake_front_rad=cfg.rake_front_rad, rake_rear_rad=cfg.rake_rear_rad,
             l_front_m=l_f, l_rear_m=cfg.truck_distance_m - l_f, K_board_m=l_f / cot_f,

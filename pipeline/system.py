@@ -82,7 +82,8 @@ class SkateSystem:
         push_targets[push] = [push_xy[0] - st.base_x_offset_m, push_xy[1], -h - cfg.board.deck_height_m + r]
         q_push = solve_leg_ik(robot, push_targets, q0=q_board)
         srb = robot.single_rigid_body(q_board)
-        board = BoardModel.from_config(cfg.board, srb.mass_kg, cfg.robot.gravity_mps2, st.foot_y_m)
+        board = BoardModel.from_config(cfg.board, srb.mass_kg, cfg.robot.gravity_mps2, st.foot_y_m,
+                                       cfg.optimization.rolling_friction_factor)
         stance = Stance(q_board=q_board, q_push=q_push, cr=cr,
                         trunk_height_m=h + cfg.board.deck_height_m, push_foot_board_xy=push_xy)
         return SkateSystem(
