@@ -241,7 +241,8 @@ def bench_humanoid(repeats: int = 21) -> None:
 def bench_mpc(path: Path | None = None) -> None:
     import numpy as np
     from skatelib.control.closed_loop import EntryReference, TrackSettings
-    from skatelib.control.linear_model import Feedback, board_rotation
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
     from skatelib.control.mpc import SOLVERS, Discretizer, MpcConfig, build_problem, make_solver
     from skatelib.control.params import SkateParams
     from skatelib.control.track import track_library
@@ -257,13 +258,15 @@ def bench_mpc(path: Path | None = None) -> None:
     cfg = MpcConfig()
     ref = EntryReference(lib, e, p, TrackSettings())
     disc = Discretizer(p, cfg.dt)
+    kin = LegKinematics.from_library(lib)
     updates = []
     for t in np.arange(ref.t0, ref.t_end, cfg.dt):
         x0 = np.asarray(e.sample(t).state, float)
         k = int(np.clip(np.searchsorted(e.t, t), 0, len(e.t) - 1))
         r_board = board_rotation(x0[26], x0[5]) @ np.vstack([p.deck_points_m, np.zeros(4)])
-        fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board)
-        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0)))
+        fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board,
+                      torque_maps=kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6])))  # with the torque rows
+        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.model_coast_mps2)))
     t0 = time.perf_counter()
     qps = [build_problem(p, cfg, disc, fb, xr, ur, ct, acc) for fb, xr, ur, ct, acc in updates]
     t_build = (time.perf_counter() - t0) / len(qps)
@@ -277,7 +280,7 @@ def bench_mpc(path: Path | None = None) -> None:
             times.append(time.perf_counter() - t1)
         solve[name] = statistics.median(times)
     print(f"MPC update along v0.50_s2 ({len(qps)} updates at 30 Hz, N = {cfg.horizon}; median)")
-    print(f"  build (linearize, discretize, condense, joint part): {t_build * 1e3:6.2f} ms (mean)")
+    print(f"  build (linearize, discretize, condense, joint part, torque rows): {t_build * 1e3:6.2f} ms (mean)")
     for name, t in solve.items():
         print(f"  solve {name:7s} {t * 1e3:6.2f} ms   build + solve {(t_build + t) * 1e3:6.2f} ms   "
               f"{solve['osqp'] / t:5.1f}x the sparse OSQP baseline")

@@ -25,19 +25,33 @@ from dataclasses import asdict, dataclass, field
 from typing import Protocol
 
 import numpy as np
+from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
 from skatelib.control.mpc import (
+    CoastObserver,
     Discretizer,
     DisturbanceObserver,
     MpcConfig,
     QpSolveFailed,
+    board_heading,
     build_problem,
     make_solver,
 )
 from skatelib.control.params import Disturbances, SkateParams
 from skatelib.control.plant import NB, Plant
 from skatelib.library import schema
-from skatelib.library.channels import BOARD, CONTROL_NAMES, GROUND, I_BOARD_ROLL, LEGS, NU, NX, STATE_NAMES, SWING
+from skatelib.library.channels import (
+    BOARD,
+    CONTROL_NAMES,
+    GROUND,
+    I_BOARD_ROLL,
+    LEGS,
+    NU,
+    NX,
+    S_Q,
+    STATE_NAMES,
+    SWING,
+)
 from skatelib.library.margins import forward_speed
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -45,6 +59,7 @@ SPEED_TOLERANCE = 0.05
 HEIGHT_LIMIT_M = 0.05  # body height over the deck may leave its reference by this much
 TILT_LIMIT_RAD = 0.35
 REACH_MARGIN_M = 0.05
+IK_TOLERANCE_M = 0.002  # a stance foot the inverse kinematics cannot put on its contact point
 
 
 @dataclass(frozen=True)
@@ -84,7 +99,11 @@ class TrackResult:
     max_attitude_error_rad: float
     min_normal_N: float
     max_friction_use: float
+    min_friction_margin_N: float
     slips: int
+    max_joint_torque_Nm: float
+    max_ik_residual_m: float
+    joint_limit_excess_rad: float
     mpc_median_ms: float
     mpc_max_ms: float
     fall: str
@@ -128,6 +147,15 @@ class Trace:
         return Entry(key, attrs, arrays, columns)
 
 
+def push_intervals(t: np.ndarray, on_ground: np.ndarray, t_end: float) -> list[tuple[float, float, float]]:
+    """(start, end, end of the coast after it) of each stance of the push foot on the ground."""
+    edges = np.diff(np.r_[0, on_ground.astype(np.int8), 0])
+    starts = t[np.nonzero(edges[:-1] == 1)[0]]
+    ends = t[np.minimum(np.nonzero(edges[1:] == -1)[0] + 1, len(t) - 1)]
+    coast_ends = np.r_[starts[1:], t_end]
+    return [(float(a), float(b), float(c)) for a, b, c in zip(starts, ends, coast_ends, strict=True)]
+
+
 def _interp_rows(t: float, ts: np.ndarray, rows: np.ndarray) -> np.ndarray:
     t = min(max(t, float(ts[0])), float(ts[-1]))
     i = int(np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2))
@@ -157,6 +185,47 @@ class EntryReference:
         com = np.asarray(entry.state, dtype=np.float64)[:, None, 0:3]
         loaded = contact != SWING
         self.max_reach = float(np.max(np.linalg.norm((feet - com)[loaded], axis=-1)))
+        self.pushes = push_intervals(np.asarray(entry.t, dtype=np.float64), contact[:, p.push_leg] == GROUND,
+                                     self.t_end)
+        x = np.asarray(entry.state, dtype=np.float64)
+        heading = np.stack([np.cos(x[:, 5]), np.sin(x[:, 5])], axis=1)
+        v_plan = np.sum(heading * (p.mass_kg * x[:, 6:8] + p.board_mass_kg * x[:, 24:26]), axis=1) / (
+            p.mass_kg + p.board_mass_kg)
+        drag = np.tanh(p.tanh_scale_s_per_m * v_plan)
+        self._t = np.asarray(entry.t, dtype=np.float64)
+        self._friction_integral = np.r_[0.0, np.cumsum(0.5 * (drag[1:] + drag[:-1]) * np.diff(self._t))]
+
+    @property
+    def plan_coast_mps2(self) -> float:
+        """The plan's rolling deceleration of robot and board (friction at the planning factor)."""
+        return self.p.rolling_plan_N / (self.p.board_mass_kg + self.p.mass_kg)
+
+    @property
+    def model_coast_mps2(self) -> float:
+        """The rolling deceleration the model expects of the board as it is: the coast observer's prior."""
+        return self.p.rolling_N / (self.p.board_mass_kg + self.p.mass_kg)
+
+    def coasting(self, t: float) -> bool:
+        """Between the first push's start and the end, with no foot on the ground."""
+        return bool(self.pushes) and self.pushes[0][0] <= t < self.t_end and not np.any(self.contact(t) == GROUND)
+
+    def speed_offset(self, t: float, coast_mps2: float) -> float:
+        """How far the forward speed reference moves at ``t`` so that the entry still ends at its
+        label when rolling friction slows robot and board by ``coast_mps2`` (:class:`CoastObserver`)
+        instead of the plan's. Only a foot on the ground changes their momentum, so each push aims
+        at the speed that the following coast (to the next push, or to the end) turns into the
+        plan's; friction acts as tanh(k v) of the plan's speed over that coast."""
+        easier = self.plan_coast_mps2 - coast_mps2  # > 0: the board rolls easier than planned
+        for start, end, coast_end in self.pushes:
+            if t < start:
+                return 0.0
+            if t < coast_end:
+                return -easier * (self._friction_time(coast_end) - self._friction_time(max(t, end)))
+        return 0.0
+
+    def _friction_time(self, t: float) -> float:
+        """integral of tanh(k v_plan) from the start to ``t`` [s] (v_plan: the plan's momentum speed)."""
+        return float(np.interp(t, self._t, self._friction_integral))
 
     def touchdown_point(self, t: float, leg: int) -> np.ndarray:
         """Where the entry puts ``leg`` on the ground for the stance that starts at about ``t``."""
@@ -205,18 +274,25 @@ class EntryReference:
                 u[3 * i + 2] = self.p.mass_kg * self.p.gravity_mps2 / n
         return x, u
 
-    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float,
+                coast_mps2: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """X_ref(k+1), U_ref(k), contact(k) and the acceleration mode for k = 0..n-1, positions
-        re-anchored to the board."""
+        re-anchored to the board, forward speeds moved by :meth:`speed_offset` (None: the plan's)."""
         w = self.e.window(t, n + 1, dt)
         x_ref = np.array(w.state[1:], dtype=np.float64)
         u_ref = np.array(w.control[:n], dtype=np.float64)
         contact = np.array([self.contact(t + k * dt) for k in range(n)], dtype=np.int8)
         shift = board_xy - self.board_xy(t)
         x_ref[:, 0:2] += shift
+        ahead = np.zeros(2)  # where the moved speeds take robot and board over the horizon
         for k in range(n):
             tk = t + (k + 1) * dt
+            if coast_mps2 is not None and tk <= self.t_end:
+                dv = self.speed_offset(tk, coast_mps2) * board_heading(x_ref[k])
+                ahead += dv * dt
+                x_ref[k, 0:2] += ahead
+                x_ref[k, 6:8] += dv
+                x_ref[k, 24:26] += dv
             if tk > self.t_end:
                 x_ref[k], _ = self._after(tk, board_xy, t, v_ride)
             if t + k * dt >= self.t_end:
@@ -240,6 +316,9 @@ class Run:
     max_position_error_m: float = 0.0
     max_attitude_error_rad: float = 0.0
     max_roll_rad: float = 0.0
+    max_torque_Nm: float = 0.0  # stance legs, -J^T f at the inverse-kinematics joint angles
+    max_ik_residual_m: float = 0.0  # how far a stance foot stayed from where its leg can put it
+    max_joint_limit_excess_rad: float = 0.0
     friction_loss_Ns: float = 0.0  # rolling friction's impulse from the end of the plan to 1 s later
     momentum_at_end_mps: float = float("nan")
     speed_after_1s_mps: float = float("nan")
@@ -257,10 +336,16 @@ class Reference(Protocol):
     deck_z: float  # height of the deck's top [m]
     max_reach: float  # the farthest the plan puts a loaded foot from the COM [m]
 
+    @property
+    def model_coast_mps2(self) -> float: ...  # the coast observer's prior [m/s^2]
+
     def contact(self, t: float) -> np.ndarray: ...
 
+    def coasting(self, t: float) -> bool: ...
+
     def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray,
-                v_ride: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+                v_ride: float, coast_mps2: float | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 
     def board_xy(self, t: float) -> np.ndarray: ...
 
@@ -270,12 +355,16 @@ class Reference(Protocol):
 
 
 def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_params: SkateParams, dist: Disturbances,
-             cfg: MpcConfig, settings: TrackSettings, keep_trace: bool = False) -> Run:
+             cfg: MpcConfig, settings: TrackSettings, keep_trace: bool = False,
+             kinematics: LegKinematics | None = None) -> Run:
     """Run the MPC against the plant from ``ref.t0`` to ``ref.t_stop``.
 
     Args:
         ref: The reference (:class:`EntryReference` or the steering experiment's).
         x_init: (31,) initial plant state of the model's COM (28 channels, board origin).
+        kinematics: The robot's legs: after every update, the stance legs' joint angles by
+            inverse kinematics and the torques of the commanded forces (the whole-body
+            controller's job) are measured on the plant's state.
     """
     rng = np.random.default_rng(settings.seed)
     com_shift = np.array([0.0, dist.com_offset_m, 0.0])
@@ -284,6 +373,8 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
     disc = Discretizer(model, cfg.dt)
     solver = make_solver(cfg)
     observer = DisturbanceObserver(cfg.disturbance_gain)
+    coast_observer = CoastObserver(ref.model_coast_mps2, cfg.coast_gain)
+    total = model.mass_kg + model.board_mass_kg
     h = cfg.dt / settings.plant_substeps
     s = np.array(x_init, dtype=np.float64)
     s[0:3] += rpy_matrix(s[3:6]) @ com_shift  # the true COM
@@ -294,6 +385,7 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
     trace_t, trace_s, trace_r, trace_f, trace_qd, trace_c, trace_p = [], [], [], [], [], [], []
     t = ref.t0
     t_1s = ref.t_end + 1.0
+    q_legs = np.array(x_init[S_Q], dtype=np.float64)
     for _ in range(round((ref.t_stop - ref.t0) / cfg.dt)):
         # Feedback: what the estimator reports (the model's COM, noise).
         x_fb = s[:NX].copy()
@@ -303,12 +395,17 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
             x_fb[6:12] += rng.normal(0.0, 5 * dist.noise_std, 6)
         pts = plant.contact_points(s, ref.contact(t), ground)
         r_board = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5]) @ np.vstack([model.deck_points_m, np.zeros(4)])
-        fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board)
+        maps = None if kinematics is None else kinematics.torque_maps(q_legs, rpy_matrix(x_fb[3:6]))
+        fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board, torque_maps=maps)
         v_ride = float(forward_speed(x_fb))
-        x_ref, u_ref, contact, accelerating = ref.horizon(t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride)
+        bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
+        heading = board_heading(x_fb)
+        coast = coast_observer.update(ref.coasting(t), float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg
+                                                                        * x_fb[24:26])) / total, cfg.dt)
+        x_ref, u_ref, contact, accelerating = ref.horizon(
+            t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride, coast if cfg.coast_compensation else None)
         t_start = time.perf_counter()
-        bias = observer.update(v_ride, cfg.dt)
-        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating, bias)
+        qp = build_problem(model, cfg, disc, fb, x_ref, u_ref, contact, accelerating, bias, observer.vertical_mps2)
         try:
             U = solver.solve(qp)
         except QpSolveFailed as e:
@@ -357,6 +454,10 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         pos_err = float(np.linalg.norm(s[0:3] - rpy_matrix(s[3:6]) @ com_shift - x_ref[0, 0:3]))
         run.max_position_error_m = max(run.max_position_error_m, pos_err)
         run.max_attitude_error_rad = max(run.max_attitude_error_rad, float(np.max(np.abs(s[3:6] - x_ref[0, 3:6]))))
+        if kinematics is not None:
+            q_legs = _whole_body(run, kinematics, model, s, forces, prev_contact, plant.contact_points(s, prev_contact,
+                                                                                                       ground),
+                                 com_shift, q_legs, x_ref[0, S_Q])
         run.fall = _fall(ref, plant, s, x_ref[0], prev_contact, ground, plant_params.roll_limit_rad, t)
         if run.fall:
             break
@@ -364,6 +465,27 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         run.trace = Trace(np.array(trace_t), np.array(trace_s), np.array(trace_r), np.array(trace_f),
                           np.array(trace_qd), np.array(trace_c), np.array(trace_p))
     return run
+
+
+def _whole_body(run: Run, kin: LegKinematics, model: SkateParams, s: np.ndarray, forces: np.ndarray,
+                contact: np.ndarray, points: np.ndarray, com_shift: np.ndarray, q_prev: np.ndarray,
+                q_ref: np.ndarray) -> np.ndarray:
+    """Stance legs by inverse kinematics to where their feet touch the plant's deck or ground,
+    swinging legs at the reference; records torque, reach and joint-limit figures in ``run``."""
+    R = rpy_matrix(s[3:6])
+    origin = s[0:3] - R @ (model.com_offset_m + com_shift)  # the trunk frame's origin
+    loaded = contact != SWING
+    normals = np.where(contact[None, :] == BOARD, board_rotation(s[I_BOARD_ROLL], s[5])[:, 2:3],
+                       np.array([[0.0], [0.0], [1.0]]))
+    centres = R.T @ (points + kin.foot_radius_m * normals - origin[:, None])
+    q0 = np.where(np.repeat(loaded, 3), q_prev, q_ref)
+    q, residual = kin.inverse(centres, q0, loaded)
+    tau = kin.torques(q, R.T @ forces, loaded)
+    run.max_torque_Nm = max(run.max_torque_Nm, float(np.max(np.abs(tau))))
+    run.max_ik_residual_m = max(run.max_ik_residual_m, float(np.max(residual)))
+    excess = np.maximum(kin.lower_rad - q, q - kin.upper_rad)[np.repeat(loaded, 3)]
+    run.max_joint_limit_excess_rad = max(run.max_joint_limit_excess_rad, float(np.max(excess, initial=0.0)))
+    return q
 
 
 def _fall(ref: Reference, plant: Plant, s: np.ndarray, x_ref: np.ndarray, contact: np.ndarray, ground: np.ndarray,
@@ -404,7 +526,8 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     x_init = np.zeros(NB)
     x_init[:NX] = np.asarray(entry.state[0], dtype=np.float64)
     x_init[NX:NX + 3] = ref.board_pos[0, 0:3]
-    run = simulate(ref, x_init, model, plant_params, dist, cfg, settings, keep_trace)
+    kin = LegKinematics.from_library(lib)
+    run = simulate(ref, x_init, model, plant_params, dist, cfg, settings, keep_trace, kin)
     label = float(entry.attrs["target_velocity_mps"])
     delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
     err = (delivered - label) / label if label else float("nan")
@@ -415,6 +538,12 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
         reasons.append(f"fall: {run.fall}")
     if run.plant.log.slips:
         reasons.append(slip_reason(run.plant))
+    if run.max_torque_Nm > kin.torque_limit_Nm:
+        reasons.append(f"joint torque {run.max_torque_Nm:.1f} N m above the limit {kin.torque_limit_Nm:.0f}")
+    if run.max_ik_residual_m > IK_TOLERANCE_M:
+        reasons.append(f"a stance foot {1e3 * run.max_ik_residual_m:.0f} mm beyond where its leg reaches")
+    if run.max_joint_limit_excess_rad > 0.0:
+        reasons.append(f"a stance joint {run.max_joint_limit_excess_rad:.3f} rad beyond its limit")
     ms = np.array(run.times_s) * 1e3
     result = TrackResult(
         key=key, label_mps=label, speed_after_1s_mps=run.speed_after_1s_mps,
@@ -422,7 +551,10 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
         delivered_mps=delivered, speed_error=err, max_deck_roll_rad=run.max_roll_rad,
         max_position_error_m=run.max_position_error_m, max_attitude_error_rad=run.max_attitude_error_rad,
         min_normal_N=float(run.plant.log.min_normal_N), max_friction_use=run.plant.log.max_friction_use,
-        slips=run.plant.log.slips, mpc_median_ms=float(np.median(ms)) if len(ms) else float("nan"),
+        min_friction_margin_N=float(run.plant.log.min_friction_margin_N),
+        slips=run.plant.log.slips, max_joint_torque_Nm=run.max_torque_Nm, max_ik_residual_m=run.max_ik_residual_m,
+        joint_limit_excess_rad=run.max_joint_limit_excess_rad,
+        mpc_median_ms=float(np.median(ms)) if len(ms) else float("nan"),
         mpc_max_ms=float(np.max(ms)) if len(ms) else float("nan"), fall=run.fall, passed=not reasons,
         reasons="; ".join(reasons),
     )

@@ -56,11 +56,15 @@ class Feedback:
         x: (28,) state.
         r_robot: (3, 4) contact point minus COM, world [m] (r_Ri).
         r_board: (3, 4) R_B times the deck point of each foot, world [m] (r_Bi, Eq. 8).
+        torque_maps: (4, 3, 3) per leg the matrix giving its joint torques from its foot force in
+            the world (-J(q)^T R^T at the measured joint angles, the whole-body controller's
+            Jacobians); None: no torque rows in the QP.
     """
 
     x: np.ndarray
     r_robot: np.ndarray
     r_board: np.ndarray
+    torque_maps: np.ndarray | None = None
 
 
 def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,

@@ -41,6 +41,7 @@ SOLVERS = ("daqp", "proxqp", "osqp")
 NF = 12  # force variables per step
 REDUCED = np.r_[0:S_Q.start, S_Q.stop:NX]  # the 16 states the forces drive (all but the joint angles)
 BOARD_V_REDUCED = slice(S_Q.start, S_Q.start + 2)  # board_vx, board_vy among them
+ROBOT_VZ_REDUCED = 8  # the robot's vertical speed (before the joint angles: same index)
 
 
 def board_heading(x: np.ndarray) -> np.ndarray:
@@ -49,23 +50,51 @@ def board_heading(x: np.ndarray) -> np.ndarray:
 
 
 class DisturbanceObserver:
-    """Estimates the board's unmodelled forward acceleration from what the model predicted for
-    the last update and what the feedback then showed, low-pass filtered with ``gain`` per update."""
+    """Estimates the board's unmodelled forward acceleration (``bias_mps2``) and the robot's
+    unmodelled vertical one (``vertical_mps2``: a heavier robot sags) from what the model
+    predicted for the last update and what the feedback then showed, low-pass filtered with
+    ``gain`` per update."""
 
     def __init__(self, gain: float):
         self.gain = gain
         self.bias_mps2 = 0.0
-        self._predicted: float | None = None
+        self.vertical_mps2 = 0.0
+        self._predicted: tuple[float, float] | None = None
 
-    def update(self, v_forward_measured: float, dt: float) -> float:
+    def update(self, v_forward_measured: float, dt: float, v_vertical_measured: float | None = None) -> float:
+        """Returns the board's estimate; the robot's is updated when its vertical speed is given."""
         if self._predicted is not None:
-            self.bias_mps2 += self.gain * (v_forward_measured - self._predicted) / dt
+            self.bias_mps2 += self.gain * (v_forward_measured - self._predicted[0]) / dt
+            if v_vertical_measured is not None:
+                self.vertical_mps2 += self.gain * (v_vertical_measured - self._predicted[1]) / dt
         return self.bias_mps2
 
     def predict(self, qp: MpcProblem, U: np.ndarray) -> None:
-        """Remember the model's forward board speed one step after ``U`` is applied."""
+        """Remember the model's forward board speed and the robot's vertical speed one step after
+        ``U`` is applied."""
         x1 = qp.Ad[0] @ qp.x0 + qp.Bd[0] @ U[:NF] + qp.cd[0]
-        self._predicted = float(board_heading(qp.x0_full) @ x1[BOARD_V_REDUCED])
+        self._predicted = (float(board_heading(qp.x0_full) @ x1[BOARD_V_REDUCED]), float(x1[ROBOT_VZ_REDUCED]))
+
+
+class CoastObserver:
+    """How hard rolling friction slows robot and board together [m/s^2], measured while no foot
+    touches the ground: then only rolling friction changes their momentum (m_R v_R + m_B v_B),
+    whatever the masses, the deck's stiffness or the feet on the deck do. Samples only above
+    ``min_speed_mps``, where friction has its full size (tanh(k v) ~ 1); starts from ``prior_mps2``."""
+
+    def __init__(self, prior_mps2: float, gain: float, min_speed_mps: float = 0.05):
+        self.estimate_mps2 = prior_mps2
+        self.gain = gain
+        self.min_speed_mps = min_speed_mps
+        self._last: float | None = None
+
+    def update(self, coasting: bool, momentum_speed_mps: float, dt: float) -> float:
+        usable = coasting and abs(momentum_speed_mps) > self.min_speed_mps
+        if usable and self._last is not None:
+            sample = -(momentum_speed_mps - self._last) / dt * np.sign(momentum_speed_mps)
+            self.estimate_mps2 += self.gain * (sample - self.estimate_mps2)
+        self._last = momentum_speed_mps if usable else None
+        return self.estimate_mps2
 
 
 @dataclass(frozen=True)
@@ -82,6 +111,11 @@ class MpcConfig:
         q_weights / r_weights: Diagonals of Q (28) and R (24).
         solver: ``daqp``, ``proxqp`` or ``osqp`` (module docstring).
         disturbance_gain: Gain of the board-acceleration disturbance observer per update (0: off).
+        coast_gain: Gain per update of the coast observer (:class:`CoastObserver`).
+        coast_compensation: Move each push's speed reference by what the following coast will
+            gain or lose against the plan (measured while coasting; before the first coast, the
+            plan's rolling-friction margin), so that the entry still ends at its label; False:
+            track the plan's speeds.
     """
 
     rate_hz: float = 30.0
@@ -92,6 +126,8 @@ class MpcConfig:
     f_max_N: float = 120.0
     solver: str = "daqp"
     disturbance_gain: float = 0.3
+    coast_gain: float = 0.2
+    coast_compensation: bool = True
     q_weights: tuple[float, ...] = field(default_factory=lambda: (
         (4e4, 4e4, 4e4) + (4e3, 4e3, 2e3) + (300.0, 300.0, 300.0) + (20.0, 20.0, 20.0) + (1.0,) * 12
         + (2e3, 2e3) + (2e3, 5.0)))
@@ -129,10 +165,13 @@ class MpcProblem:
 
 
 def _legs_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarray,
-               rolls: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               rolls: tuple[float, ...], torque_maps: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rows of the friction pyramid and normal bounds for one step's forces (12 columns). A foot on
     the deck gets the pyramid about the deck normal at each of ``rolls`` (the first step's force
-    is held while the deck rolls on: its pyramid must hold at both ends of the update)."""
+    is held while the deck rolls on: its pyramid must hold at both ends of the update). With
+    ``torque_maps``, each loaded leg's joint torques at the feedback's joint angles stay within
+    the torque limit (the joints are held over the horizon: the linearizable part of the limit)."""
     mu = p.mu_plan if cfg.mu is None else cfg.mu
     angles = np.arange(cfg.facets) * (2.0 * np.pi / cfg.facets)
     inscribed = mu * np.cos(np.pi / cfg.facets)
@@ -154,6 +193,12 @@ def _legs_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarr
             rows.append(block if j == 0 else block[:cfg.facets])
             lo.extend((-np.inf,) * cfg.facets + ((cfg.f_min_N,) if j == 0 else ()))
             hi.extend((0.0,) * cfg.facets + ((cfg.f_max_N,) if j == 0 else ()))
+        if torque_maps is not None and np.isfinite(p.torque_limit_Nm):
+            block = np.zeros((3, 12))
+            block[:, 3 * i:3 * i + 3] = torque_maps[i]
+            rows.append(block)
+            lo.extend((-p.torque_limit_Nm,) * 3)
+            hi.extend((p.torque_limit_Nm,) * 3)
     return (np.vstack(rows) if rows else np.zeros((0, 12))), np.array(lo), np.array(hi)
 
 
@@ -182,7 +227,7 @@ def solve_joints(q0: np.ndarray, q_ref: np.ndarray, qd_ref: np.ndarray, w_q: np.
 
 def build_problem(p: SkateParams, cfg: MpcConfig, disc: Discretizer, fb: Feedback, x_ref: np.ndarray,
                   u_ref: np.ndarray, contact: np.ndarray, accelerating: np.ndarray,
-                  board_bias_mps2: float = 0.0) -> MpcProblem:
+                  board_bias_mps2: float = 0.0, vertical_bias_mps2: float = 0.0) -> MpcProblem:
     """The QP of one update (its joint part solved).
 
     Args:
@@ -193,6 +238,7 @@ def build_problem(p: SkateParams, cfg: MpcConfig, disc: Discretizer, fb: Feedbac
         board_bias_mps2: An estimated constant forward acceleration of the board that the model
             misses (rolling friction, mass errors: :class:`DisturbanceObserver`), added to every
             step (offset-free MPC).
+        vertical_bias_mps2: The same for the robot's vertical acceleration (a mass error).
     """
     N = cfg.horizon
     S = REDUCED
@@ -205,9 +251,10 @@ def build_problem(p: SkateParams, cfg: MpcConfig, disc: Discretizer, fb: Feedbac
             Ad, Bd, cd = disc(*continuous_model(p, fb, contact[k], bool(accelerating[k])))
             cache[key] = (Ad[np.ix_(S, S)], Bd[S, :NF], cd[S])
         Ad, Bd, cd = cache[key]
-        if board_bias_mps2:
+        if board_bias_mps2 or vertical_bias_mps2:
             cd = cd.copy()
             cd[BOARD_V_REDUCED] += board_heading(fb.x) * board_bias_mps2 * disc.dt  # vB rows: Gamma = dt I
+            cd[ROBOT_VZ_REDUCED] += vertical_bias_mps2 * disc.dt
         Ad_l.append(Ad)
         Bd_l.append(Bd)
         cd_l.append(cd)
@@ -245,7 +292,7 @@ def build_problem(p: SkateParams, cfg: MpcConfig, disc: Discretizer, fb: Feedbac
         key = contact[k].tobytes() + bytes([k == 0])
         if key not in rows_cache:
             rolls = (roll, roll + roll_rate * disc.dt) if k == 0 else (roll,)
-            rows_cache[key] = _legs_rows(p, cfg, fb.x, contact[k], rolls)
+            rows_cache[key] = _legs_rows(p, cfg, fb.x, contact[k], rolls, fb.torque_maps)
         per_step.append(rows_cache[key])
     C = np.zeros((sum(len(rows) for rows, _, _ in per_step), N * NF))  # block diagonal over steps
     at = 0
@@ -372,7 +419,7 @@ class OsqpSolver:
         lo = np.concatenate([rhs, qp.l, qp.lb])
         hi = np.concatenate([rhs, qp.u, qp.ub])
         solver = osqp.OSQP()
-        solver.setup(sp.diags(P).tocsc(), q, A, lo, hi, verbose=False, eps_abs=1e-7, eps_rel=1e-7,
+        solver.setup(sp.diags(P).tocsc(), q, A, lo, hi, verbose=False, eps_abs=1e-9, eps_rel=1e-9,
                      max_iter=20000, polishing=True)
         if self.prev is not None and len(self.prev) == nz:
             solver.warm_start(x=self.prev)

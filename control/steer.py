@@ -70,6 +70,10 @@ class SteerReference:
         feet = np.vstack([p.deck_points_m, np.zeros(4)]) - np.array([[self.rel_x], [0.0], [self.height]])
         self.max_reach = float(np.max(np.linalg.norm(feet, axis=0))) + 0.05  # room for the sideways shift
         self.foot_y = float(np.mean(np.abs(p.deck_points_m[1])))
+        self.model_coast_mps2 = 0.0  # four legs on the deck throughout: no push to compensate
+
+    def coasting(self, t: float) -> bool:
+        return False
 
     def roll(self, t: float) -> tuple[float, float]:
         w = 2.0 * np.pi / self.period
@@ -100,7 +104,7 @@ class SteerReference:
     def touchdown_point(self, t: float, leg: int) -> np.ndarray:
         raise AssertionError("no foot touches the ground while steering")
 
-    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float
+    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float, coast_mps2: float | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         x_ref = np.zeros((n, NX))
         u_ref = np.zeros((n, NU))

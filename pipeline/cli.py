@@ -72,7 +72,8 @@ def model(config: ConfigArg = None) -> None:
         ("board mass m_B [kg]", b.mass_kg), ("roll inertia I_Bx [kg m^2]", b.roll_inertia_kgm2),
         ("roll stiffness K_B [N m/rad] (calibrated)", b.roll_stiffness_Nm_per_rad),
         ("roll damping B_B [N m s/rad]", b.roll_damping_Nms_per_rad),
-        ("rolling friction f_fri [N]", b.rolling_friction_N), ("K_board [m]", b.K_board_m),
+        ("rolling friction f_fri [N]", b.rolling_friction_nominal_N),
+        ("f_fri the TO plans with [N]", b.rolling_friction_N), ("K_board [m]", b.K_board_m),
         ("l_f, l_r [m]", f"{b.l_front_m:.3f}, {b.l_rear_m:.3f}"), ("deck height [m]", b.deck_height_m),
     ):
         bt.add_row(escape(name), f"{value:.5g}" if isinstance(value, float) else str(value))
@@ -418,18 +419,21 @@ def _track_table(results: list[Any], perturb: str) -> int:
     """Print the closed-loop verdicts; returns how many failed."""
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
     for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
-                "min f_n", "slips", "MPC ms med/max", "verdict"):
+                "min f_n", "fric margin", "slips", "tau max", "MPC ms med/max", "verdict"):
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
-                  f"{r.delivered_mps:.3f}",
-                  f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
-                  f"{1e3 * r.max_position_error_m:.1f} mm",
-                  f"{r.max_attitude_error_rad:.3f}", f"{r.min_normal_N:.1f}", str(r.slips),
-                  f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+                  f"{r.delivered_mps:.3f}", f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
+                  f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
+                  f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
+                  f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
+                  "[green]pass[/]" if r.passed else "[red]FAIL[/]")
     console.print(t)
     console.print(escape("p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends [m/s]; "
-                         "delivered: the momentum speed 1 s later plus what rolling friction took meanwhile"))
+                         "delivered: the momentum speed 1 s later plus what rolling friction took meanwhile; "
+                         "fric margin: the smallest mu f_n - |f_t| of a commanded foot force in the plant's cone "
+                         "(< 0: clipped, a slip); tau max: the largest stance-joint torque at the "
+                         "inverse-kinematics angles [N m]"))
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))

@@ -44,7 +44,8 @@ def lib(tmp_path_factory):
 def _params() -> SkateParams:
     return SkateParams(
         mass_kg=8.9, inertia_kgm2=np.diag([0.05, 0.2, 0.22]), com_offset_m=np.zeros(3), board_mass_kg=2.2,
-        roll_inertia_kgm2=0.009, kb_Nm_per_rad=80.0, bb_Nms_per_rad=1.7, rolling_N=1.1, tanh_scale_s_per_m=50.0,
+        roll_inertia_kgm2=0.009, kb_Nm_per_rad=80.0, bb_Nms_per_rad=1.7, rolling_N=1.1, rolling_plan_N=1.1,
+        tanh_scale_s_per_m=50.0,
         mu=0.6, gravity_mps2=9.81, deck_points_m=np.array([[0.17, 0.17, -0.17, -0.17], [0.11, -0.11, 0.11, -0.11]]),
         roll_limit_rad=0.2, joint_velocity_limit_radps=31.0, push_leg=2, mu_plan=0.57)
 
@@ -268,3 +269,104 @@ def test_validate_closed_loop_stores_each_verdict(lib, tmp_path):
     for k, v in lib[key].attrs.items():
         assert after[key].attrs[k] == v
     assert after.attrs["git_commit"] == lib.attrs["git_commit"]
+
+
+def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
+    """The closed loop's leg kinematics (pinocchio on the URDF stored in the library) against the
+    pipeline's CasADi chains built from the config's URDF: foot positions and the quasi-static
+    torques -J^T R^T f of the optimization; inverse kinematics recovers perturbed joint angles."""
+    import casadi as ca
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.linear_model import rpy_matrix
+    from skatelib.pipeline.dynamics import joint_torques
+    from skatelib.pipeline.validate import system_from_library
+
+    kin = LegKinematics.from_library(lib)
+    system = system_from_library(lib)
+    e = lib[lib.keys()[0]]
+    x, u = np.asarray(e.state[10], float), np.asarray(e.control[10], float)
+    q = x[12:24]
+    qs = ca.SX.sym("q", 12)
+    feet = np.asarray(ca.Function("feet", [qs], [system.robot.foot_positions_body(qs)])(q))
+    np.testing.assert_allclose(kin.foot_positions(q), feet, atol=1e-9)
+    xs, us = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
+    expected = np.asarray(ca.Function("tau", [xs, us], [joint_torques(system, xs, us)])(x, u)).reshape(-1)
+    R = rpy_matrix(x[3:6])
+    forces = u[:12].reshape(4, 3).T
+    np.testing.assert_allclose(kin.torques(q, R.T @ forces, np.ones(4, bool)), expected, atol=1e-9)
+    maps = kin.torque_maps(q, R)
+    np.testing.assert_allclose(np.concatenate([maps[i] @ forces[:, i] for i in range(4)]), expected, atol=1e-9)
+    rng = np.random.default_rng(0)
+    q_ik, residual = kin.inverse(feet, q + rng.normal(0, 0.1, 12), np.ones(4, bool))
+    np.testing.assert_allclose(q_ik, q, atol=1e-6)
+    assert residual.max() < 1e-6  # the Newton iteration stops below 1e-7 m
+
+
+def test_torque_rows_hold_the_joint_torques(lib):
+    """With the legs' torque maps in the feedback, every loaded leg's joint torques stay within the
+    limit; a limit low enough to bind changes the solution (negative control: without the rows
+    the same QP exceeds it)."""
+    import dataclasses
+
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.linear_model import rpy_matrix
+
+    e = lib[lib.keys()[0]]
+    kin = LegKinematics.from_library(lib)
+    cfg = MpcConfig()
+    t = float(e.t[0]) + 0.3
+    x0 = np.asarray(e.sample(t).state, float)
+    pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
+    R_B = board_rotation(x0[26], x0[5])
+    maps = kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6]))
+    w = e.window(t, cfg.horizon + 1, cfg.dt)
+    contact = np.array(w.contact[:-1])
+    for limit, rows in ((12.0, True), (4.0, True), (4.0, False)):
+        p = dataclasses.replace(SkateParams.from_library(lib), torque_limit_Nm=limit)
+        fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]),
+                      torque_maps=maps if rows else None)
+        qp = build_problem(p, cfg, Discretizer(p, cfg.dt), fb, np.array(w.state[1:]), np.array(w.control[:-1]),
+                           contact, np.ones(cfg.horizon, bool))
+        U = make_solver(cfg).solve(qp)
+        f = U[:12].reshape(4, 3)
+        tau = max(float(np.abs(maps[i] @ f[i]).max()) for i in range(4) if contact[0, i] != SWING)
+        if rows:
+            assert tau <= limit + 1e-6
+        else:
+            assert tau > limit  # the rows above were binding
+
+
+def test_coast_compensation_delivers_the_label_on_an_easier_board(lib):
+    """The library plans against twice the board's rolling resistance; on the board as it is,
+    robot and board coast faster than planned. With the coast compensation the push aims lower
+    and the entry delivers its label within 5 %; tracking the plan's speeds instead overshoots
+    (negative control)."""
+    p = SkateParams.from_library(lib)
+    assert p.rolling_plan_N == pytest.approx(2.0 * p.rolling_N)
+    key = lib.keys()[0]
+    settings = TrackSettings(ride_s=1.2)
+    good, _ = track_entry(lib, key, p, p, settings=settings)
+    assert good.passed, good.reasons
+    plain, _ = track_entry(lib, key, p, p, cfg=MpcConfig(coast_compensation=False), settings=settings)
+    assert plain.speed_error > 0.05, plain
+
+
+def test_coast_observer_measures_a_constant_deceleration():
+    """Momentum speeds falling by a dt each update while coasting: the estimate converges to a;
+    updates outside coasts or below the speed floor leave it alone."""
+    from skatelib.control.mpc import CoastObserver
+
+    obs = CoastObserver(prior_mps2=0.1, gain=0.2)
+    v, dt = 0.8, 1 / 30
+    for _ in range(60):
+        obs.update(True, v, dt)
+        v -= 0.25 * dt
+    assert obs.estimate_mps2 == pytest.approx(0.25, abs=1e-4)
+    for _ in range(10):
+        obs.update(False, v, dt)
+        v -= 5.0 * dt  # a push or anything else: not a coast
+    assert obs.estimate_mps2 == pytest.approx(0.25, abs=1e-4)
+    slow = CoastObserver(prior_mps2=0.1, gain=0.2)
+    for k in range(20):
+        slow.update(True, 0.01 - 0.001 * k, dt)  # below the floor: tanh(k v) is not 1 there
+    assert slow.estimate_mps2 == 0.1
