@@ -124,7 +124,8 @@ class Disturbances:
 def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Disturbances]:
     """Apply ``KEY=VALUE,...`` to the nominal parameters: ``+10%`` or ``-20%`` is relative, a plain
     number absolute (``mu=0.5``; for ``inertia`` a factor; ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
-    ``impulse_t`` [s], ``init=0.01`` [m]).
+    ``impulse_t`` [s], ``init=0.01`` [m]). ``rolling`` changes the rolling-resistance coefficient
+    (the force at the nominal weight); the force follows the plant's weight (``mass``, ``board_mass``).
 
     Raises:
         PerturbationError: Naming the item and the valid keys.
@@ -161,6 +162,11 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
         if np.any(np.asarray(new) <= 0) and key != "rolling":
             raise PerturbationError(f"--perturb {item!r}: {key} would be {new}; it must stay positive")
         changes[field] = new
+    # Rolling resistance is a coefficient times the weight on the wheels (Eq. 9b, the config's
+    # rolling_friction_coeff): a heavier or lighter robot or board changes the force with it.
+    weight_ratio = ((changes.get("mass_kg", nominal.mass_kg) + changes.get("board_mass_kg", nominal.board_mass_kg))
+                    / (nominal.mass_kg + nominal.board_mass_kg))
+    changes["rolling_N"] = changes.get("rolling_N", nominal.rolling_N) * weight_ratio
     dist = Disturbances(
         com_offset_m=extra.get("com", 0.0), noise_std=extra.get("noise", 0.0),
         impulse_Ns=extra.get("impulse", 0.0), impulse_t_s=extra.get("impulse_t", 1.0),

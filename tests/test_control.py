@@ -223,7 +223,10 @@ def test_perturbations_parse_and_refuse():
     p = _params()
     q, d = parse_perturbation("mass=+10%,kb=-20%,rolling=+100%,mu=0.5,com=0.01", p)
     assert q.mass_kg == pytest.approx(9.79) and q.kb_Nm_per_rad == pytest.approx(64.0)
-    assert q.rolling_N == pytest.approx(2.2) and q.mu == 0.5 and d.com_offset_m == 0.01
+    # rolling doubles the coefficient; the force also follows the heavier robot's weight (Eq. 9b)
+    assert q.rolling_N == pytest.approx(2.2 * (9.79 + 2.2) / (8.9 + 2.2)) and q.mu == 0.5 and d.com_offset_m == 0.01
+    light, _ = parse_perturbation("mass=-10%", p)
+    assert light.rolling_N == pytest.approx(1.1 * (8.01 + 2.2) / (8.9 + 2.2))
     for bad in ("weight=+10%", "mass", "mass=abc", "mu=nan", "mass=-100%"):
         with pytest.raises(PerturbationError):
             parse_perturbation(bad, p)
