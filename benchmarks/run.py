@@ -266,7 +266,7 @@ def bench_mpc(path: Path | None = None) -> None:
         r_board = board_rotation(x0[26], x0[5]) @ np.vstack([p.deck_points_m, np.zeros(4)])
         fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board,
                       torque_maps=kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6])))  # with the torque rows
-        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.model_coast_mps2)))
+        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.prior_coast_mps2(t))))
     t0 = time.perf_counter()
     qps = [build_problem(p, cfg, disc, fb, xr, ur, ct, acc) for fb, xr, ur, ct, acc in updates]
     t_build = (time.perf_counter() - t0) / len(qps)

@@ -200,10 +200,14 @@ class EntryReference:
         """The plan's rolling deceleration of robot and board (friction at the planning factor)."""
         return self.p.rolling_plan_N / (self.p.board_mass_kg + self.p.mass_kg)
 
-    @property
-    def model_coast_mps2(self) -> float:
-        """The rolling deceleration the model expects of the board as it is: the coast observer's prior."""
-        return self.p.rolling_N / (self.p.board_mass_kg + self.p.mass_kg)
+    def prior_coast_mps2(self, t: float) -> float:
+        """The rolling deceleration to aim with before a coast has been measured: a push with
+        another one after it aims as planned (the plan's harder rolling), because the next push
+        can always push less but not always more (the plan pushes at its friction limit); the
+        last push aims at the board as the model has it (the likelier case)."""
+        last_start = self.pushes[-1][0] if self.pushes else 0.0
+        rolling = self.p.rolling_N if t >= last_start else self.p.rolling_plan_N
+        return rolling / (self.p.board_mass_kg + self.p.mass_kg)
 
     def coasting(self, t: float) -> bool:
         """Between the first push's start and the end, with no foot on the ground."""
@@ -336,8 +340,7 @@ class Reference(Protocol):
     deck_z: float  # height of the deck's top [m]
     max_reach: float  # the farthest the plan puts a loaded foot from the COM [m]
 
-    @property
-    def model_coast_mps2(self) -> float: ...  # the coast observer's prior [m/s^2]
+    def prior_coast_mps2(self, t: float) -> float: ...  # the coast deceleration before one is measured
 
     def contact(self, t: float) -> np.ndarray: ...
 
@@ -373,7 +376,7 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
     disc = Discretizer(model, cfg.dt)
     solver = make_solver(cfg)
     observer = DisturbanceObserver(cfg.disturbance_gain)
-    coast_observer = CoastObserver(ref.model_coast_mps2, cfg.coast_gain)
+    coast_observer = CoastObserver(cfg.coast_gain)
     total = model.mass_kg + model.board_mass_kg
     h = cfg.dt / settings.plant_substeps
     s = np.array(x_init, dtype=np.float64)
@@ -400,8 +403,9 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         v_ride = float(forward_speed(x_fb))
         bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
         heading = board_heading(x_fb)
-        coast = coast_observer.update(ref.coasting(t), float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg
-                                                                        * x_fb[24:26])) / total, cfg.dt)
+        measured = coast_observer.update(ref.coasting(t), float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg
+                                                                           * x_fb[24:26])) / total, cfg.dt)
+        coast = ref.prior_coast_mps2(t) if measured is None else measured
         x_ref, u_ref, contact, accelerating = ref.horizon(
             t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride, coast if cfg.coast_compensation else None)
         t_start = time.perf_counter()

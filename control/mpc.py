@@ -80,19 +80,20 @@ class CoastObserver:
     """How hard rolling friction slows robot and board together [m/s^2], measured while no foot
     touches the ground: then only rolling friction changes their momentum (m_R v_R + m_B v_B),
     whatever the masses, the deck's stiffness or the feet on the deck do. Samples only above
-    ``min_speed_mps``, where friction has its full size (tanh(k v) ~ 1); starts from ``prior_mps2``."""
+    ``min_speed_mps``, where friction has its full size (tanh(k v) ~ 1); None until the first."""
 
-    def __init__(self, prior_mps2: float, gain: float, min_speed_mps: float = 0.05):
-        self.estimate_mps2 = prior_mps2
+    def __init__(self, gain: float, min_speed_mps: float = 0.05):
+        self.estimate_mps2: float | None = None
         self.gain = gain
         self.min_speed_mps = min_speed_mps
         self._last: float | None = None
 
-    def update(self, coasting: bool, momentum_speed_mps: float, dt: float) -> float:
+    def update(self, coasting: bool, momentum_speed_mps: float, dt: float) -> float | None:
         usable = coasting and abs(momentum_speed_mps) > self.min_speed_mps
         if usable and self._last is not None:
             sample = -(momentum_speed_mps - self._last) / dt * np.sign(momentum_speed_mps)
-            self.estimate_mps2 += self.gain * (sample - self.estimate_mps2)
+            last = sample if self.estimate_mps2 is None else self.estimate_mps2
+            self.estimate_mps2 = last + self.gain * (sample - last)
         self._last = momentum_speed_mps if usable else None
         return self.estimate_mps2
 
@@ -113,9 +114,9 @@ class MpcConfig:
         disturbance_gain: Gain of the board-acceleration disturbance observer per update (0: off).
         coast_gain: Gain per update of the coast observer (:class:`CoastObserver`).
         coast_compensation: Move each push's speed reference by what the following coast will
-            gain or lose against the plan (measured while coasting; before the first coast, the
-            plan's rolling-friction margin), so that the entry still ends at its label; False:
-            track the plan's speeds.
+            gain or lose against the plan (measured while coasting; before the first coast, see
+            :meth:`EntryReference.prior_coast_mps2`), so that the entry still ends at its label;
+            False: track the plan's speeds.
     """
 
     rate_hz: float = 30.0

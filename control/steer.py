@@ -70,10 +70,12 @@ class SteerReference:
         feet = np.vstack([p.deck_points_m, np.zeros(4)]) - np.array([[self.rel_x], [0.0], [self.height]])
         self.max_reach = float(np.max(np.linalg.norm(feet, axis=0))) + 0.05  # room for the sideways shift
         self.foot_y = float(np.mean(np.abs(p.deck_points_m[1])))
-        self.model_coast_mps2 = 0.0  # four legs on the deck throughout: no push to compensate
 
     def coasting(self, t: float) -> bool:
-        return False
+        return False  # four legs on the deck throughout: no push to compensate
+
+    def prior_coast_mps2(self, t: float) -> float:
+        return 0.0
 
     def roll(self, t: float) -> tuple[float, float]:
         w = 2.0 * np.pi / self.period
