@@ -403,8 +403,8 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         v_ride = float(forward_speed(x_fb))
         bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
         heading = board_heading(x_fb)
-        measured = coast_observer.update(ref.coasting(t), float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg
-                                                                           * x_fb[24:26])) / total, cfg.dt)
+        momentum_speed = float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg * x_fb[24:26])) / total
+        measured = coast_observer.update(ref.coasting(t), momentum_speed, cfg.dt)
         coast = ref.prior_coast_mps2(t) if measured is None else measured
         x_ref, u_ref, contact, accelerating = ref.horizon(
             t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride, coast if cfg.coast_compensation else None)
