@@ -209,6 +209,9 @@ class EntryReference:
         rolling = self.p.rolling_N if t >= last_start else self.p.rolling_plan_N
         return rolling / (self.p.board_mass_kg + self.p.mass_kg)
 
+    def observe(self, t: float, x: np.ndarray, board_xy: np.ndarray) -> None:
+        """Nothing to learn from the feedback beyond the observers of :func:`simulate`."""
+
     def coasting(self, t: float) -> bool:
         """Between the first push's start and the end, with no foot on the ground."""
         return bool(self.pushes) and self.pushes[0][0] <= t < self.t_end and not np.any(self.contact(t) == GROUND)
@@ -346,6 +349,8 @@ class Reference(Protocol):
 
     def coasting(self, t: float) -> bool: ...
 
+    def observe(self, t: float, x: np.ndarray, board_xy: np.ndarray) -> None: ...  # feedback, each update
+
     def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray,
                 v_ride: float, coast_mps2: float | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
@@ -402,6 +407,7 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board, torque_maps=maps)
         v_ride = float(forward_speed(x_fb))
         bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
+        ref.observe(t, x_fb, s[NX:NX + 2])
         heading = board_heading(x_fb)
         momentum_speed = float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg * x_fb[24:26])) / total
         measured = coast_observer.update(ref.coasting(t), momentum_speed, cfg.dt)

@@ -22,6 +22,7 @@ from skatelib.library.channels import BOARD, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NU
 from skatelib.runtime import MotionLibrary
 
 ROLL_RMS_LIMIT_RAD = 0.03  # issue 10: deck-roll tracking error below this, RMS
+SHIFT_LIMIT = 0.85  # the torso's sideways shift at most this fraction of the feet's half-width
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ class SteerReference:
     """Four legs on the deck, deck roll following ``amplitude sin(2 pi t / period)``."""
 
     def __init__(self, lib: MotionLibrary, p: SkateParams, speed_mps: float, duration_s: float,
-                 amplitude_rad: float = 0.1, period_s: float = 3.0):
+                 amplitude_rad: float = 0.1, period_s: float = 3.0, adapt_stiffness: bool = True):
         last = np.asarray(lib.select(speed_mps, clamp=True).state[-1], dtype=np.float64)
         self.p = p
         self.t0, self.t_end, self.t_stop = 0.0, 0.0, duration_s
@@ -70,6 +71,22 @@ class SteerReference:
         feet = np.vstack([p.deck_points_m, np.zeros(4)]) - np.array([[self.rel_x], [0.0], [self.height]])
         self.max_reach = float(np.max(np.linalg.norm(feet, axis=0))) + 0.05  # room for the sideways shift
         self.foot_y = float(np.mean(np.abs(p.deck_points_m[1])))
+        self.kb_estimate = p.kb_Nm_per_rad  # the trucks' stiffness as measured (:meth:`observe`)
+        self.adapt_stiffness = adapt_stiffness
+
+    def observe(self, t: float, x: np.ndarray, board_xy: np.ndarray) -> None:
+        """Measure the trucks' stiffness from the feedback: with the deck rolled by phi and the
+        COM y off the centre line, the feet's weight holds the deck, K_B phi = -m g y (the roll
+        is slow: its inertia and damping terms are a few per cent). Samples only beyond 0.03 rad,
+        filtered with 0.05 per update."""
+        phi = float(x[I_BOARD_ROLL])
+        if not self.adapt_stiffness or abs(phi) < 0.03:
+            return
+        yaw = float(x[5])
+        y = -np.sin(yaw) * (x[0] - board_xy[0]) + np.cos(yaw) * (x[1] - board_xy[1])
+        sample = -self.p.mass_kg * self.p.gravity_mps2 * y / phi
+        if sample > 0:
+            self.kb_estimate += 0.05 * (sample - self.kb_estimate)
 
     def coasting(self, t: float) -> bool:
         return False  # four legs on the deck throughout: no push to compensate
@@ -83,7 +100,9 @@ class SteerReference:
 
     def lateral_shift(self, roll: float) -> float:
         """COM offset from the centre line that holds the deck at ``roll`` (see the module docstring)."""
-        return -self.p.kb_Nm_per_rad * roll / (self.p.mass_kg * self.p.gravity_mps2)
+        y = -self.kb_estimate * roll / (self.p.mass_kg * self.p.gravity_mps2)
+        limit = SHIFT_LIMIT * self.foot_y  # beyond it the far feet would lift: roll less instead
+        return float(np.clip(y, -limit, limit))
 
     def initial_state(self) -> np.ndarray:
         s = np.zeros(NB)
@@ -131,10 +150,11 @@ class SteerReference:
 
 def steer(lib: MotionLibrary, model: SkateParams, plant_params: SkateParams, speed_mps: float,
           duration_s: float = 9.0, dist: Disturbances | None = None, cfg: MpcConfig | None = None,
-          settings: TrackSettings | None = None) -> SteerResult:
+          settings: TrackSettings | None = None, adapt_stiffness: bool = True) -> SteerResult:
     """Run the steering experiment and judge it: deck-roll error below 0.03 rad RMS, no foot
-    unloading from the deck, no fall, no slip."""
-    ref = SteerReference(lib, model, speed_mps, duration_s)
+    unloading from the deck, no fall, no slip. ``adapt_stiffness``: the torso shift follows the
+    trucks' stiffness as measured while rolling (False: the model's K_B throughout)."""
+    ref = SteerReference(lib, model, speed_mps, duration_s, adapt_stiffness=adapt_stiffness)
     run = simulate(ref, ref.initial_state(), model, plant_params, dist or Disturbances(), cfg or MpcConfig(),
                    settings or TrackSettings())
     t = np.array([u[0] for u in run.updates])
