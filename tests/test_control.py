@@ -114,21 +114,25 @@ def test_discretization_is_the_exact_zero_order_hold():
     np.testing.assert_allclose(cd, E[:NX, -1], atol=1e-12)
 
 
+def _one_update(e, p: SkateParams, cfg: MpcConfig, t: float, torque_maps: np.ndarray | None = None):
+    """The QP of one update fed with the entry's own state at ``t`` (its window and contacts)."""
+    x0 = np.asarray(e.sample(t).state, float)
+    pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
+    R_B = board_rotation(x0[26], x0[5])
+    fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]),
+                  torque_maps=torque_maps)
+    w = e.window(t, cfg.horizon + 1, cfg.dt)
+    return build_problem(p, cfg, Discretizer(p, cfg.dt), fb, np.array(w.state[1:]), np.array(w.control[:-1]),
+                         np.array(w.contact[:-1]), np.ones(cfg.horizon, bool)), w
+
+
 def test_the_two_qp_solvers_agree(lib):
     """The condensed dense QP (DAQP, ProxQP) and the sparse multiple-shooting QP (OSQP) of one real
     update give the same forces and objective."""
     key = lib.keys()[0]
     e = lib[key]
     p = SkateParams.from_library(lib)
-    cfg = MpcConfig()
-    t = float(e.t[0]) + 0.3
-    x0 = np.asarray(e.sample(t).state, float)
-    pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
-    R_B = board_rotation(x0[26], x0[5])
-    fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]))
-    w = e.window(t, cfg.horizon + 1, cfg.dt)
-    qp = build_problem(p, cfg, Discretizer(p, cfg.dt), fb, np.array(w.state[1:]), np.array(w.control[:-1]),
-                       np.array(w.contact[:-1]), np.ones(cfg.horizon, bool))
+    qp, w = _one_update(e, p, MpcConfig(), float(e.t[0]) + 0.3)
     Ub = make_solver(MpcConfig(solver="osqp")).solve(qp)
     jb = qp_objective(qp, Ub)
     for name in ("daqp", "proxqp"):
@@ -323,17 +327,11 @@ def test_torque_rows_hold_the_joint_torques(lib):
     cfg = MpcConfig()
     t = float(e.t[0]) + 0.3
     x0 = np.asarray(e.sample(t).state, float)
-    pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
-    R_B = board_rotation(x0[26], x0[5])
     maps = kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6]))
-    w = e.window(t, cfg.horizon + 1, cfg.dt)
-    contact = np.array(w.contact[:-1])
     for limit, rows in ((12.0, True), (4.0, True), (4.0, False)):
         p = dataclasses.replace(SkateParams.from_library(lib), torque_limit_Nm=limit)
-        fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]),
-                      torque_maps=maps if rows else None)
-        qp = build_problem(p, cfg, Discretizer(p, cfg.dt), fb, np.array(w.state[1:]), np.array(w.control[:-1]),
-                           contact, np.ones(cfg.horizon, bool))
+        qp, w = _one_update(e, p, cfg, t, maps if rows else None)
+        contact = np.array(w.contact[:-1])
         U = make_solver(cfg).solve(qp)
         f = U[:12].reshape(4, 3)
         tau = max(float(np.abs(maps[i] @ f[i]).max()) for i in range(4) if contact[0, i] != SWING)
