@@ -7,6 +7,15 @@ single-rigid-body plant); then four-leg riding at the speed reached, ``ride_s`` 
 
 The reference positions are re-anchored to the board at every update: the robot controls where
 its body is over the deck (what its feet measure), not where the optimization's world frame was.
+Its forward speeds are moved by the coast compensation (:meth:`EntryReference.speed_offset`):
+only a foot on the ground changes the momentum of robot and board, so each push aims at the
+speed that the following coast turns into the plan's, with the coast's rolling deceleration
+measured (:class:`CoastObserver`).
+
+After every update the stance legs' joint angles follow by inverse kinematics from where their
+feet touch the plant's deck or ground (:mod:`skatelib.control.kinematics`, the whole-body
+controller's share); their torques and joint limits are checked, and the next update's QP holds
+the torques within the limit at those angles.
 
 Verdict (fails on any of):
 * speed: the speed delivered, one second after the entry ends, more than 5 % from the label.
@@ -15,7 +24,9 @@ Verdict (fails on any of):
   entry cannot be blamed for it). Both are reported;
 * a fall: body height over the deck or roll/pitch beyond limits, a foot farther from the body
   than the entry ever put it (it would leave the deck), deck roll beyond the wheel limit;
-* a slip: a commanded force outside the plant's Coulomb cone.
+* a slip: a commanded force outside the plant's Coulomb cone;
+* a stance joint torque above the limit, a stance foot its leg cannot reach, a stance joint
+  beyond its limit.
 """
 
 from __future__ import annotations

@@ -11,7 +11,9 @@ Constraints per step and leg, from the schedule of the reference window:
   or world z on the ground) and the pyramid of the polygon with ``facets`` sides inscribed in
   Coulomb's cone of mu_mpc (8 by default, as the optimization plans; 4 is |f_t1|, |f_t2| <=
   mu_mpc / sqrt(2) f_n);
-* |qd| <= the joint-velocity limit.
+* |qd| <= the joint-velocity limit;
+* with the feedback's torque maps, each loaded leg's joint torques -J(q)^T R^T f within the
+  torque limit at the measured joint angles (held over the horizon).
 
 Structure: the 12 joint angles are pure integrators of the 12 joint velocities (Eq. 17), and
 neither enters any other row or constraint, while Q and R are diagonal. So the QP splits exactly
@@ -24,8 +26,9 @@ and (b) one box-constrained least-squares problem of N variables per joint, solv
 * ``proxqp``: the same condensed QP with ProxSuite's ProxQP, warm-started;
 * ``osqp``: sparse multiple-shooting form (states kept, dynamics as equalities), OSQP, warm-started.
 
-Offset-free: :class:`DisturbanceObserver` estimates the board's forward acceleration that the
-model misses (rolling friction and masses differ on the robot) and the prediction carries it.
+Offset-free: :class:`DisturbanceObserver` estimates the board's forward acceleration and the
+robot's vertical one that the model misses (rolling friction and masses differ on the robot) and
+the prediction carries them.
 """
 
 from __future__ import annotations
