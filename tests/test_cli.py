@@ -32,3 +32,12 @@ def test_bad_config_exits_nonzero_with_file_and_key(tmp_path: Path, bad: str):
     assert bad in r.stderr and r.stdout == ""
     if bad == "bad_key.toml":
         assert "board.mass_kilo" in r.stderr
+
+
+@pytest.mark.parametrize("command, unit", [("frontier", "[m/s]"), ("track", "0.5"), ("solve", "m/s")])
+def test_help_keeps_units_and_brackets(command: str, unit: str):
+    """Help texts are printed as written: a unit in brackets such as [m/s] is not taken for markup
+    and dropped (rich markup ate it before), and no stray type placeholders like <bool> appear."""
+    env = {**os.environ, "COLUMNS": "200"}
+    out = subprocess.run([*SKATELIB, command, "--help"], capture_output=True, text=True, check=True, env=env).stdout
+    assert unit in out and "<bool>" not in out
