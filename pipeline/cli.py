@@ -26,8 +26,19 @@ VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib import metadata
+
+        console.print(f"skatelib {metadata.version('skatelib')}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[bool, typer.Option("--version", callback=_print_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
     """Offline motion-library pipeline for legged robots on skateboards.
 
     Exit codes: 0 ok, 1 entries failed, 2 usage/config/output error, 3 bad library file,

@@ -41,3 +41,10 @@ def test_help_keeps_units_and_brackets(command: str, unit: str):
     env = {**os.environ, "COLUMNS": "200"}
     out = subprocess.run([*SKATELIB, command, "--help"], capture_output=True, text=True, check=True, env=env).stdout
     assert unit in out and "<bool>" not in out
+
+
+def test_version_prints_the_installed_version():
+    from importlib import metadata
+
+    out = subprocess.run([*SKATELIB, "--version"], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == f"skatelib {metadata.version('skatelib')}"
