@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import json
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,6 +25,12 @@ err_console = Console(stderr=True)
 VENDOR_MASS_KG = 8.3644
 VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 
+
+
+def _count(n: int, noun: str) -> str:
+    """'1 entry', '18 entries'."""
+    plural = noun[:-1] + "ies" if noun.endswith("y") else noun + "s"
+    return f"{n} {noun if n == 1 else plural}"
 
 
 def _print_version(value: bool) -> None:
@@ -133,7 +140,7 @@ def build(
     if cache or cfg.optimization.compile:
         check_cache_dir()
     total = sum(len(c.velocities) for c in chains_for(cfg))
-    console.print(f"building {total} entries of {escape(str(cfg.path))} -> {escape(str(target))}")
+    console.print(f"building {_count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(target))}")
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
@@ -159,7 +166,8 @@ def build(
         _frontier_table(report.frontier)
     console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
     if report.failed and not allow_failures:
-        console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept in the file with success=false); "
+        failed = _count(len(report.failed), "entry")
+        console.print(f"[bold red]{failed} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
         raise typer.Exit(1)
 
@@ -180,7 +188,7 @@ def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
     console.print(t)
     console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.2f} s")
     if report.failed and not allow_failures:
-        console.print(f"[bold red]{len(report.failed)} entries failed[/] (kept with success=false)")
+        console.print(f"[bold red]{_count(len(report.failed), 'entry')} failed[/] (kept with success=false)")
         raise typer.Exit(1)
 
 
@@ -205,7 +213,7 @@ def _summary(outcomes: list[Any]) -> None:
             console.print(f"[yellow]note:[/] {escape(o.note)}")
 
 
-def _fmt(physics: dict[str, float], key: str, fmt: str) -> str:
+def _fmt(physics: Any, key: str, fmt: str) -> str:
     return fmt.format(physics[key]) if key in physics else "-"
 
 
@@ -297,12 +305,20 @@ def info(library: LibArg) -> None:
         if not str(k).endswith("_source"):
             m.add_row(escape(str(k)), escape(f"{v:.6g}" if isinstance(v, float) else str(v)))
     console.print(m)
-    t = Table(title=f"{len(lib)} entries")
-    for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]"):
-        t.add_column(escape(col))
+    t = Table(title=_count(len(lib), "entry"))
+    for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]", "solve [s]",
+                "momentum [m/s]", "off label", "Coulomb margin [N]", "defect"):
+        t.add_column(escape(col), justify="left" if col in ("entry", "status") else "right")
     for e in lib:
-        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success), str(e.attrs["status"]),
-                  str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}")
+        ph = json.loads(str(e.attrs.get("physics_json", "{}")))
+        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
+               if "momentum_speed_mps" in ph and e.target_velocity_mps else "-")
+        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
+                  escape(str(e.attrs["status"])),
+                  str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}",
+                  _fmt(e.attrs, "solve_time_s", "{:.2f}"), _fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                  off, _fmt(ph, "min_friction_margin_N", "{:.3f}"),
+                  _fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
 
 
@@ -326,7 +342,7 @@ def validate(
 
     problems = validate_library(library, lambda key, msg: console.print(escape(f"{key}: {msg}")))
     if problems:
-        console.print(f"[bold red]{problems} entries failed validation[/]")
+        console.print(f"[bold red]{_count(problems, 'entry')} failed validation[/]")
     else:
         console.print("[green]all entries valid[/]")
     failed = 0
@@ -372,7 +388,8 @@ def inspect(
     if save is not None:
         check_output(save, [library], force, what="recording")
     roots = inspect_library(library, entry, save, spawn, overlay)
-    console.print(f"logged {len(roots)} entries" + (escape(f" to {save}; open it with: rerun {save}") if save else ""))
+    where = escape(f" to {save}; open it with: rerun {save}") if save else ""
+    console.print(f"logged {_count(len(roots), 'entry')}{where}")
 
 
 @app.command()
@@ -422,7 +439,7 @@ def track(
         console.print(escape(f"wrote {save}; open it with: rerun {save}"))
     failed = _track_table(results, perturb)
     if failed:
-        console.print(f"[bold red]{failed} of {len(results)} entries failed in closed loop[/]")
+        console.print(f"[bold red]{failed} of {_count(len(results), 'entry')} failed in closed loop[/]")
         raise typer.Exit(1)
 
 

@@ -3,6 +3,7 @@ from its cache, records failures, and gives the same library through a dask clus
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -64,6 +65,12 @@ def test_info_and_validate_commands(built):
     env = {**os.environ, "COLUMNS": "200"}
     info = subprocess.run([*CLI, "info", str(out)], capture_output=True, text=True, env=env, check=True).stdout
     assert "v0.30_s1" in info and "board_roll_stiffness_Nm_per_rad" in info
+    # the figures a user checks, from the stored physics: momentum speed and how far off the label
+    from skatelib.runtime import MotionLibrary
+
+    e = MotionLibrary.open(out)["v0.30_s1"]
+    momentum = json.loads(e.attrs["physics_json"])["momentum_speed_mps"]
+    assert "2 entries" in info and f"{momentum:.3f}" in info and f"{(momentum - 0.3) / 0.3:+.2%}" in info
     val = subprocess.run([*CLI, "validate", str(out)], capture_output=True, text=True, env=env)
     assert val.returncode == 0, val.stdout
     assert "all entries valid" in val.stdout
