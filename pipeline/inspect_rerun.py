@@ -11,6 +11,8 @@ the soles, with plots of COM height and speed and the ZMP.
 from __future__ import annotations
 
 import contextlib
+import os
+import sys
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -240,6 +242,15 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
     return roots
 
 
+def put_viewer_on_path() -> None:
+    """The SDK spawns the viewer found on PATH; the one installed with it sits beside this Python
+    (``.venv/bin/rerun``), which is not on PATH when the venv is not activated."""
+    here = str(Path(sys.executable).parent)
+    parts = os.environ.get("PATH", "").split(os.pathsep)
+    if here not in parts:
+        os.environ["PATH"] = os.pathsep.join([here, *parts])
+
+
 def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn: bool, overlay: bool) -> list[str]:
     """Open a library and log it to a file (written atomically) and/or a spawned viewer."""
     lib = MotionLibrary.open(path)
@@ -252,6 +263,7 @@ def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn
         if save is not None:
             rec.save(str(stack.enter_context(atomic_path(save))))  # moved into place only on success
         if spawn:
+            put_viewer_on_path()
             rec.spawn()
         roots = log_library(lib, rec, keys, overlay)
         rec.flush()

@@ -125,3 +125,19 @@ def test_track_save_puts_the_run_beside_its_reference(quad_lib, tmp_path):
     v = subprocess.run([str(Path(sys.executable).parent / "rerun"), "rrd", "verify", str(out)],
                        capture_output=True, text=True)
     assert v.returncode == 0, v.stdout + v.stderr
+
+
+def test_spawn_finds_the_viewer_installed_beside_python(monkeypatch):
+    """`inspect --spawn` with the venv not activated: the SDK looks for `rerun` on PATH, and the
+    viewer installed with it (beside this Python) is put there first."""
+    import shutil
+
+    from skatelib.pipeline.inspect_rerun import put_viewer_on_path
+
+    monkeypatch.setenv("PATH", "/usr/bin:/bin")
+    beside = Path(sys.executable).parent / "rerun"
+    if not beside.exists():
+        pytest.skip("no rerun viewer installed beside this Python")
+    assert shutil.which("rerun") != str(beside)  # negative control: not found that way before
+    put_viewer_on_path()
+    assert shutil.which("rerun") == str(beside)
