@@ -141,6 +141,16 @@ def build(
         check_cache_dir()
     total = sum(len(c.velocities) for c in chains_for(cfg))
     console.print(f"building {_count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(target))}")
+    if cfg.optimization.compile:
+        from skatelib.pipeline.stagewise import c_compiler, cache_dir
+
+        cc = c_compiler()
+        if cc is None:
+            err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
+                              "3-4x slower; install gcc to compile them")
+        else:
+            console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
+                                 f"once; cached in {cache_dir()})"))
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

@@ -62,6 +62,11 @@ _DERIVATIVES_VERSION = "1"
 _NAMES = ("stage_value", "stage_grad", "stage_jac", "stage_hess")
 
 
+def c_compiler() -> str | None:
+    """The C compiler the stage functions are built with ($CC, gcc or cc), or None."""
+    return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+
+
 def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: str = "-O1") -> StageFunctions:
     """The four stage functions compiled to C in one shared library, cached by content hash.
 
@@ -69,7 +74,7 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags
     costs neither differentiation nor code generation. Without a C compiler, returns the
     symbolic functions.
     """
-    cc = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+    cc = c_compiler()
     if cc is None:
         return stage_functions(z, p, cost, cons)
     value = ca.Function("stage_value", [z, p], [cost, cons])

@@ -166,3 +166,16 @@ def test_solve_command_writes_a_one_entry_library(cache, tmp_path):
     lib = MotionLibrary.open(out)
     assert lib.keys() == ["v0.35_s1"] and lib["v0.35_s1"].success
     assert lib["v0.35_s1"].channel("board_vx")[-1] == pytest.approx(0.35, rel=0.02)
+
+
+def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
+    """No C compiler on PATH ($CC pointing nowhere): the build says so on stderr, solves with the
+    interpreted stage functions and writes the library."""
+    cfg = tmp_path / "compiled.toml"
+    cfg.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = true\n[sweep]\nvelocities_mps = [0.3]\n')
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache"),
+           "CC": str(tmp_path / "no-cc"), "PATH": str(tmp_path)}
+    r = subprocess.run([*CLI, "build", str(cfg), "-o", str(tmp_path / "a.h5"), "--no-progress"],
+                       capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "no C compiler found" in r.stderr and MotionLibrary.open(tmp_path / "a.h5")["v0.30_s1"].success
