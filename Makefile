@@ -23,9 +23,20 @@ $(STAMP): pyproject.toml
 	@ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules
 	touch $@
 
-# The strict editable install links each module; relink when a module is added or removed.
+# PYTHON=... given on the command line or in the environment: a .venv of another Python version
+# is rebuilt with it. The strict editable install links each module; relink when a module is added
+# or removed, or when the links are gone (rm -rf build).
 venv: $(STAMP)
-	@ls pipeline/*.py library/*.py runtime/*.py control/*.py | cmp -s - $(VENV)/.skatelib-modules || { \
+ifneq ($(origin PYTHON),file)
+	@want=$$($(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])'); \
+	 have=$$($(BIN)/python -c 'import sys; print("%d.%d" % sys.version_info[:2])'); \
+	 if [ "$$want" != "$$have" ]; then \
+	   echo "rebuilding $(VENV) with $(PYTHON) ($$want; it had $$have)"; rm -rf $(VENV); \
+	   $(MAKE) --no-print-directory $(STAMP); fi
+endif
+	@{ ls pipeline/*.py library/*.py runtime/*.py control/*.py | cmp -s - $(VENV)/.skatelib-modules && \
+	   $(BIN)/python -c 'import skatelib.pipeline.cli, skatelib.control.closed_loop' 2>/dev/null; } || { \
+	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
 	  ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules; }
 
