@@ -27,6 +27,11 @@ VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 
 
 
+def _jsonable(v: Any) -> Any:
+    """numpy scalars and arrays as JSON numbers and lists."""
+    return v.tolist() if hasattr(v, "tolist") else str(v)
+
+
 def _count(n: int, noun: str) -> str:
     """'1 entry', '18 entries'."""
     plural = noun[:-1] + "ies" if noun.endswith("y") else noun + "s"
@@ -298,16 +303,37 @@ class Maneuver(enum.StrEnum):
 
 
 @app.command()
-def info(library: LibArg) -> None:
+def info(
+    library: LibArg,
+    as_json: Annotated[bool, typer.Option("--json", help="Print it as one JSON document instead.")] = False,
+) -> None:
     """Summarize a motion library: provenance, model and entries."""
+    import h5py
+    from skatelib.library import schema
     from skatelib.runtime import MotionLibrary
 
-    lib = MotionLibrary.open(library)
+    lib = MotionLibrary.open(library)  # verifies the checksum first
     a = lib.attrs
+    with h5py.File(library, "r") as f:
+        raw = f.attrs[schema.A_CHECKSUM]
+    sha = raw.decode() if isinstance(raw, bytes) else str(raw)
+    if as_json:
+        entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
+                    "success": e.success, "status": str(e.attrs["status"]), "iterations": int(e.attrs["iterations"]),
+                    "knots": len(e.t), "duration_s": e.duration_s, "solve_time_s": e.attrs.get("solve_time_s"),
+                    "physics": json.loads(str(e.attrs.get("physics_json", "{}")))} for e in lib]
+        provenance = {k: a[k] for k in ("name", "format_version", "skatelib_version", "created_utc", "git_commit",
+                                        "git_dirty", "casadi_version", "ipopt_version", "pinocchio_version")
+                      if k in a}
+        print(json.dumps({"library": str(library), "kind": lib.kind, **provenance, "content_sha256": sha,
+                          "model": dict(lib.model),
+                          "entries": entries}, indent=1, default=_jsonable))
+        return
     console.print(escape(f"{library}: {a.get('name', '?')} ({lib.kind}), format {a['format_version']}, "
                          f"skatelib {a['skatelib_version']}, created {a['created_utc']}"))
     console.print(escape(f"git {a['git_commit'][:12]}{' (dirty)' if a['git_dirty'] else ''}; casadi "
                          f"{a['casadi_version']}, ipopt {a['ipopt_version']}, pinocchio {a['pinocchio_version']}"))
+    console.print(escape(f"content sha256 {sha}"))
     m = Table(title="model")
     m.add_column("parameter")
     m.add_column("value", justify="right")
@@ -346,19 +372,29 @@ def validate(
                               "verdict in the library (entry attribute closed_loop_json).")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries tracked in parallel.")] = 2,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
     from skatelib.pipeline.validate import validate_library
 
-    problems = validate_library(library, lambda key, msg: console.print(escape(f"{key}: {msg}")))
-    if problems:
+    verdicts: list[dict[str, Any]] = []
+
+    def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
+        verdicts.append({"key": key, "status": status, "message": message, **figures})
+        if not as_json:
+            console.print(escape(f"{key}: {message}"))
+
+    problems = validate_library(library, report)
+    if as_json:
+        pass
+    elif problems:
         console.print(f"[bold red]{_count(problems, 'entry')} failed validation[/]")
     else:
         console.print("[green]all entries valid[/]")
     failed = 0
+    results: list[Any] = []
     if closed_loop:
         import datetime
-        import json
 
         from skatelib.library.amend import amend_library
 
@@ -367,11 +403,17 @@ def validate(
         except ImportError as e:
             raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
         results = [r for r, _ in track_library(library, None, "" if perturb == "none" else perturb, jobs=jobs)]
-        failed = _track_table(results, perturb)
+        failed = sum(not r.passed for r in results) if as_json else _track_table(results, perturb)
         amend_library(library, {"closed_loop_plant": perturb,
                                 "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
                       {r.key: {"closed_loop_json": json.dumps(r.as_dict(), sort_keys=True)} for r in results})
-        console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+        if not as_json:
+            console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    if as_json:
+        doc = {"library": str(library), "valid": not problems, "entries": verdicts}
+        if closed_loop:
+            doc["closed_loop"] = {"plant": perturb, "failed": failed, "entries": [r.as_dict() for r in results]}
+        print(json.dumps(doc, indent=1, default=_jsonable))
     if problems or failed:
         raise typer.Exit(1)
 

@@ -26,8 +26,12 @@ def system_from_library(lib: MotionLibrary) -> SkateSystem:
             raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {e}") from e
 
 
-def validate_library(path: Path | str, report: Callable[[str, str], None]) -> int:
-    """Check the file (raises on a corrupt one) and each entry's physics; returns the failures."""
+Report = Callable[[str, str, str, dict[str, float]], None]  # key, "ok" | "failed" | "skipped", message, figures
+
+
+def validate_library(path: Path | str, report: Report) -> int:
+    """Check the file (raises on a corrupt one) and each entry's physics; returns the failures.
+    ``report`` gets each entry's key, verdict, message and the figures measured."""
     read_library(path, full=True)  # integrity: checksum, and every attribute and view against the index
     lib = MotionLibrary.open(path)
     if lib.kind == "humanoid":
@@ -36,7 +40,7 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
     bad = 0
     for e in lib:
         if not e.success:
-            report(e.key, f"stored as failed ({e.attrs['status']}): skipped")
+            report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
         assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
         rep = check_trajectory(system, e.t, e.state, e.control, e.contact, e.foot_pos, e.board_pos,
@@ -45,11 +49,14 @@ def validate_library(path: Path | str, report: Callable[[str, str], None]) -> in
         bad += bool(failures)
         ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({100 * rep.momentum_speed_error:.2f} % off), "
               f"Coulomb margin {rep.min_friction_margin_N:.2f} N, defect {rep.max_defect:.1e}")
-        report(e.key, ok if not failures else "; ".join(failures))
+        figures = {"momentum_speed_mps": rep.momentum_speed_mps, "momentum_speed_error": rep.momentum_speed_error,
+                   "min_friction_margin_N": rep.min_friction_margin_N, "max_defect": rep.max_defect,
+                   "max_torque_rigid_legs_Nm": rep.max_torque_rigid_legs_Nm}
+        report(e.key, "failed" if failures else "ok", ok if not failures else "; ".join(failures), figures)
     return bad
 
 
-def _validate_humanoid(lib: MotionLibrary, report: Callable[[str, str], None]) -> int:
+def _validate_humanoid(lib: MotionLibrary, report: Report) -> int:
     from skatelib.pipeline.config import humanoid_config_from_json
     from skatelib.pipeline.humanoid_motions import skating_steps, walking_steps
     from skatelib.pipeline.humanoid_verify import check_steps, failures
@@ -62,12 +69,12 @@ def _validate_humanoid(lib: MotionLibrary, report: Callable[[str, str], None]) -
     bad = 0
     for e in lib:
         if not e.success:
-            report(e.key, f"stored as failed ({e.attrs['status']}): skipped")
+            report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
         plan = (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
         rep = check_steps(plan, e.arrays["nodes_t"], e.arrays["nodes_state"], e.arrays["nodes_control"],
                           h.gravity_mps2, h.leg_min_m, h.leg_max_m)
         fails = failures(rep)
         bad += bool(fails)
-        report(e.key, "ok" if not fails else "; ".join(fails))
+        report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})
     return bad

@@ -76,6 +76,28 @@ def test_info_and_validate_commands(built):
     assert "all entries valid" in val.stdout
 
 
+def test_info_and_validate_print_json(built):
+    """`info --json` and `validate --json` print one JSON document each, with the figures of the
+    stored physics and of the re-check, so a CI script can read them; the digest is the file's."""
+    from skatelib.library.digest import file_digest
+
+    out, _ = built
+    env = {**os.environ, "COLUMNS": "80"}  # narrow: JSON must not be wrapped
+    info = json.loads(subprocess.run([*CLI, "info", str(out), "--json"], capture_output=True, text=True, env=env,
+                                     check=True).stdout)
+    assert info["kind"] == "quadruped" and [e["key"] for e in info["entries"]] == ["v0.30_s1", "v0.40_s1"]
+    model = info["model"]
+    assert model["board_rolling_friction_plan_N"] == pytest.approx(2 * model["board_rolling_friction_N"])
+    digest = info["content_sha256"]
+    assert file_digest(out.read_bytes(), digest.encode()) == digest  # what the reader verifies
+    val = subprocess.run([*CLI, "validate", str(out), "--json"], capture_output=True, text=True, env=env)
+    doc = json.loads(val.stdout)
+    assert val.returncode == 0 and doc["valid"] and {e["status"] for e in doc["entries"]} == {"ok"}
+    stored = {e["key"]: e["physics"]["momentum_speed_mps"] for e in info["entries"]}
+    for e in doc["entries"]:  # the re-check measures what the build stored
+        assert e["momentum_speed_mps"] == pytest.approx(stored[e["key"]], rel=1e-9)
+
+
 def test_validate_rejects_a_corrupt_file(built, tmp_path):
     """A library with a damaged byte fails `skatelib validate` with exit 3 (a bad library file) and
     a message on stderr naming the file."""
