@@ -156,9 +156,17 @@ def build(
         else:
             console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
                                  f"once; cached in {cache_dir()})"))
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  TextColumn("eta"), TimeRemainingColumn(),
                   console=console, disable=not progress) as bar:
         task = bar.add_task("solving", total=total)
 
