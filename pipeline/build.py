@@ -37,7 +37,7 @@ def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
 def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
                   scheduler: Any = None, use_cache: bool = True,
                   on_entry: Callable[[str, EntryOutcome], None] | None = None,
-                  frontier: FrontierSearch | None = None) -> BuildReport:
+                  frontier: FrontierSearch | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
     marked ``success = false`` with their IPOPT status); with ``frontier``, also search the
     reachable-speed frontier of every stride count and store it in the file."""
@@ -46,7 +46,7 @@ def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 
     if config.optimization.compile and backend == "loky":
         # Compile the stage functions once here, so parallel workers load them instead of all compiling.
         problem_for(config, min(config.sweep.strides))
-    outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry))
+    outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry, ipopt))
     system = SkateSystem.from_config(config)
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
     options = outcomes[0].result.ipopt_options if outcomes else {}

@@ -283,9 +283,10 @@ def frontier(
 def solve(
     velocity: Annotated[float, typer.Option(min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
                                             help="Target board speed, m/s (the range of sweep.velocities_mps).")],
-    strides: Annotated[int, typer.Option(min=1, max=20, help="Number of push strides.")],
+    strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="One-entry library to write (.h5).")],
     config: Annotated[Path | None, typer.Option(help="Build config (TOML); default when omitted.")] = None,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build import build_library
@@ -295,7 +296,7 @@ def solve(
     cfg = load_config(config)
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
-    report = build_library(cfg, out, jobs=1, use_cache=False)
+    report = build_library(cfg, out, jobs=1, use_cache=False, ipopt=(("print_level", 5),) if verbose else ())
     _summary(report.outcomes)
     console.print(f"wrote {escape(str(report.path))}")
     if report.failed:

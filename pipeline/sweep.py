@@ -50,12 +50,13 @@ class Chain:
     config: QuadrupedConfig
     n_strides: int
     velocities: tuple[float, ...]
+    ipopt: tuple[tuple[str, Any], ...] = ()  # extra IPOPT options of every solve (e.g. its log level)
 
 
-def chains_for(config: QuadrupedConfig) -> list[Chain]:
+def chains_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
     """One chain per stride count, longest-running (most strides) first for load balance."""
     v = tuple(sorted(config.sweep.velocities_mps))
-    return [Chain(config, s, v) for s in sorted(config.sweep.strides, reverse=True)]
+    return [Chain(config, s, v, ipopt) for s in sorted(config.sweep.strides, reverse=True)]
 
 
 # Bump when the retry ladder, the solve's post-processing or the cached payload changes: the key
@@ -180,7 +181,7 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
     warm_key: str | None = None
     for v in chain.velocities:
         use_warm = warm if chain.config.sweep.warm_start else None
-        spec = PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm)
+        spec = PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm, ipopt=chain.ipopt)
         key = entry_key(spec, warm_key if use_warm is not None else None)
         path = _cache_file(key)
         hit = _load_cached(path) if use_cache else None
@@ -204,8 +205,8 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
 
 
 def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", scheduler: str | None = None,
-              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome], None] | None = None
-              ) -> list[EntryOutcome]:
+              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome], None] | None = None,
+              ipopt: tuple[tuple[str, Any], ...] = ()) -> list[EntryOutcome]:
     """Solve every (velocity, strides) of ``config.sweep`` and return the outcomes.
 
     Args:
@@ -213,10 +214,11 @@ def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", sch
         backend: ``"loky"`` (this machine) or ``"dask"`` (an existing cluster at ``scheduler``).
         scheduler: Dask scheduler address (``tcp://host:port``), or a ``distributed.Client``.
         on_entry: Called in the main process as each entry finishes.
+        ipopt: Extra IPOPT options of every solve (``(("print_level", 5),)`` shows its log).
     """
     for var in THREAD_VARS:
         os.environ.setdefault(var, "1")
-    chains = chains_for(config)
+    chains = chains_for(config, ipopt)
     if backend == "dask":
         return _run_dask(chains, scheduler, use_cache, on_entry)
     if backend != "loky":

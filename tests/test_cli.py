@@ -48,3 +48,18 @@ def test_version_prints_the_installed_version():
 
     out = subprocess.run([*SKATELIB, "--version"], capture_output=True, text=True, check=True).stdout
     assert out.strip() == f"skatelib {metadata.version('skatelib')}"
+
+
+def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
+    """`solve -v` shows IPOPT's iteration log (one line per iteration); without it there is none."""
+    tiny = Path(__file__).parent / "configs" / "tiny.toml"
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
+    logs = []
+    for flags in (["-v"], []):
+        r = subprocess.run([*SKATELIB, "solve", "--config", str(tiny), "--velocity", "0.3", "-s", "1",
+                            "-o", str(tmp_path / f"v{len(flags)}.h5"), *flags],
+                           capture_output=True, text=True, env=env, timeout=600)
+        assert r.returncode == 0, r.stdout + r.stderr
+        logs.append(r.stdout)
+    assert "inf_pr" in logs[0] and "EXIT: Optimal Solution Found" in logs[0]
+    assert "inf_pr" not in logs[1]
