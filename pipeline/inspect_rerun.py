@@ -36,6 +36,14 @@ def _time(t: np.ndarray) -> list[rr.TimeColumn]:
     return [rr.TimeColumn("time", duration=np.asarray(t, dtype=float))]
 
 
+def _series(rec: rr.RecordingStream, root: str, path: str, t: np.ndarray, values: np.ndarray, name: str) -> None:
+    """One plotted series with its legend name (units included); a run beside its reference
+    (``/<key>/closed_loop``) says which it is."""
+    role = [r.replace("_", " ") for r in root.strip("/").split("/")[1:]]
+    rec.log(f"{root}/plots/{path}", rr.SeriesLines(names=" ".join([*role, name])), static=True)
+    rec.send_columns(f"{root}/plots/{path}", indexes=_time(t), columns=rr.Scalars.columns(scalars=values))
+
+
 class _Robot:
     """Pinocchio model and visual shapes from the URDF stored in the library."""
 
@@ -126,24 +134,21 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
                                                      vectors=forces[:, i] * FORCE_SCALE_M_PER_N, colors=colors))
     # Plots.
     v_fwd = np.cos(x[:, 5]) * x[:, 24] + np.sin(x[:, 5]) * x[:, 25]
-    plot = f"{root}/plots"
-    rec.send_columns(f"{plot}/board_speed/actual", indexes=_time(t), columns=rr.Scalars.columns(scalars=v_fwd))
-    rec.send_columns(f"{plot}/board_speed/target", indexes=_time(t),
-                     columns=rr.Scalars.columns(scalars=np.full(K, e.target_velocity_mps)))
-    rec.send_columns(f"{plot}/board_roll", indexes=_time(t), columns=rr.Scalars.columns(scalars=x[:, 26]))
+    _series(rec, root, "board_speed/actual", t, v_fwd, "board speed [m/s]")
+    _series(rec, root, "board_speed/target", t, np.full(K, e.target_velocity_mps), "label [m/s]")
+    _series(rec, root, "board_roll", t, x[:, 26], "deck roll [rad]")
     for i, leg in enumerate(LEGS):
-        rec.send_columns(f"{plot}/normal_force/{leg}", indexes=_time(t[:-1]),
-                         columns=rr.Scalars.columns(scalars=forces[:, i, 2]))
+        _series(rec, root, f"normal_force/{leg}", t[:-1], forces[:, i, 2], f"{leg} normal force [N]")
     names = e.columns["state"][12:24]
     for j, name in enumerate(names):
-        rec.send_columns(f"{plot}/joints/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=x[:, 12 + j]))
+        _series(rec, root, f"joints/{name}", t, x[:, 12 + j], f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
     tau_max = float(m.get("torque_limit_Nm", np.inf))
     fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
     touching = np.isin(e.contact[:-1], (BOARD, GROUND))
     tau = np.abs(np.einsum("klji,klj->kli", jac[:-1], forces)).max(axis=2)  # |J^T f| per leg
     torque = np.where(touching, tau_max - tau, np.inf).min(axis=1)
-    rec.send_columns(f"{plot}/margins/friction_N", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=fric))
-    rec.send_columns(f"{plot}/margins/torque_Nm", indexes=_time(t[:-1]), columns=rr.Scalars.columns(scalars=torque))
+    _series(rec, root, "margins/friction_N", t[:-1], fric, "Coulomb margin mu f_n - |f_t| [N]")
+    _series(rec, root, "margins/torque_Nm", t[:-1], torque, "torque margin [N m]")
 
 
 def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
@@ -166,9 +171,9 @@ def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, ro
     rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
                                         half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
     _log_support_polygons(rec, lib, e, root, offset)
-    plot = f"{root}/plots"
-    for name, col in (("com_z", x[:, 2]), ("com_vx", x[:, 3]), ("zmp_x", zmp[:, 0]), ("zmp_y", zmp[:, 1])):
-        rec.send_columns(f"{plot}/{name}", indexes=_time(t), columns=rr.Scalars.columns(scalars=col))
+    for name, col, label in (("com_z", x[:, 2], "COM height [m]"), ("com_vx", x[:, 3], "COM speed [m/s]"),
+                             ("zmp_x", zmp[:, 0], "ZMP x [m]"), ("zmp_y", zmp[:, 1], "ZMP y [m]")):
+        _series(rec, root, name, t, col, label)
 
 
 def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str,
@@ -189,15 +194,23 @@ def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry,
 
 
 def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
-    """A 3D view of every entry beside time-series panels."""
+    """A 3D view of every entry beside time-series panels, one tab per entry (a closed-loop run
+    shares its entry's tab with the reference), so that a plot never mixes entries."""
     if lib.kind == "quadruped":
         panels = [("board speed vs target", "board_speed"), ("deck roll", "board_roll"),
                   ("normal forces", "normal_force"), ("joint angles", "joints"), ("margins", "margins")]
     else:
         panels = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), ("ZMP y", "zmp_y")]
-    series = [rrb.TimeSeriesView(name=title, contents=[f"{r}/plots/{p}/**" for r in roots] + [
-        f"{r}/plots/{p}" for r in roots]) for title, p in panels]
-    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="scene", origin="/"), rrb.Vertical(*series),
+    groups: dict[str, list[str]] = {}
+    for r in roots:
+        groups.setdefault(r.strip("/").split("/")[0], []).append(r)
+
+    def plots(members: list[str]) -> list[rrb.TimeSeriesView]:
+        return [rrb.TimeSeriesView(name=title, contents=[f"{r}/plots/{p}/**" for r in members] + [
+            f"{r}/plots/{p}" for r in members]) for title, p in panels]
+
+    tabs = [rrb.Vertical(*plots(members), name=key) for key, members in groups.items()]
+    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="scene", origin="/"), rrb.Tabs(*tabs),
                                         column_shares=[3, 2]), collapse_panels=True)
 
 

@@ -66,6 +66,11 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
     assert np.allclose(vec[3], e.control[3, 6:9] * 0.004, atol=1e-6)
     margins = np.array([v[0] for v in cols[f"{root}/plots/margins/friction_N"]["Scalars:scalars"]])
     assert margins.min() >= -1e-4  # the friction cones hold on the logged data
+    # every series names itself, with its unit, in the legend
+    names = {sub: cols[f"{root}/plots/{sub}"]["SeriesLines:names"][0][0]
+             for sub in ("board_roll", "joints/q_FL_knee", "normal_force/RL")}
+    assert names == {"board_roll": "deck roll [rad]", "joints/q_FL_knee": "FL knee [rad]",
+                     "normal_force/RL": "RL normal force [N]"}
 
 
 def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
@@ -122,6 +127,9 @@ def test_track_save_puts_the_run_beside_its_reference(quad_lib, tmp_path):
     assert len(ref) == len(e.t)
     assert abs(len(run) - round((e.duration_s + 0.4 + 1.5) * 30)) <= 1
     assert abs(run[0] - ref[0]) < 0.01 and "/v0.30_s1/closed_loop/robot/trunk_0" in cols
+    # the legend says which is which: they share the entry's tab
+    assert cols["/v0.30_s1/closed_loop/plots/board_roll"]["SeriesLines:names"][0][0] == "closed loop deck roll [rad]"
+    assert cols["/v0.30_s1/reference/plots/board_roll"]["SeriesLines:names"][0][0] == "reference deck roll [rad]"
     v = subprocess.run([str(Path(sys.executable).parent / "rerun"), "rrd", "verify", str(out)],
                        capture_output=True, text=True)
     assert v.returncode == 0, v.stdout + v.stderr
