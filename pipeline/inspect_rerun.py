@@ -115,6 +115,13 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
             rec.log(path, shape, static=True)
         rec.send_columns(path, indexes=_time(t),
                          columns=rr.Transform3D.columns(translation=trans[:, i], quaternion=quats[:, i]))
+    # Paths on the ground: the board's, and where the push foot stood on the ground.
+    rec.log(f"{root}/board_path", rr.LineStrips3D([e.board_pos[:, 0:3] * [1, 1, 0] + offset], colors=[(160, 110, 60)]),
+            static=True)
+    stood = e.contact == GROUND
+    if np.any(stood):
+        steps = np.unique(np.round(e.foot_pos[stood], 3), axis=0)
+        rec.log(f"{root}/footholds", rr.Points3D(steps + offset, radii=0.012, colors=[(230, 120, 30)]), static=True)
     # The board: a deck-sized box rolling about its x axis and yawing with the robot.
     m = lib.model
     half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, 0.01]
