@@ -11,6 +11,7 @@ the soles, with plots of COM height and speed and the ZMP.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import sys
 import tempfile
@@ -216,9 +217,29 @@ def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
         return [rrb.TimeSeriesView(name=title, contents=[f"{r}/plots/{p}/**" for r in members] + [
             f"{r}/plots/{p}" for r in members]) for title, p in panels]
 
-    tabs = [rrb.Vertical(*plots(members), name=key) for key, members in groups.items()]
+    tabs = [rrb.Vertical(rrb.TextDocumentView(origin=f"{members[0]}/summary", name="entry"), *plots(members),
+                         name=key, row_shares=[2] + [5] * len(panels)) for key, members in groups.items()]
     return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="scene", origin="/"), rrb.Tabs(*tabs),
                                         column_shares=[3, 2]), collapse_panels=True)
+
+
+def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
+    """A short text at ``<root>/summary`` saying which entry this is and how it did."""
+    a = e.attrs
+    parts = [f"{e.target_velocity_mps:.2f} m/s x {e.n_strides}", f"{a['status']}" + ("" if e.success else " (failed)")]
+    if "iterations" in a:
+        parts[-1] += f", {a['iterations']} iterations"
+    ph = json.loads(str(a.get("physics_json", "{}")))
+    for key, fmt in (("momentum_speed_mps", "rides at {:.3f} m/s"),
+                     ("min_friction_margin_N", "Coulomb margin {:.2f} N"),
+                     ("max_torque_rigid_legs_Nm", "torque {:.1f} N m"), ("max_defect", "defect {:.0e}")):
+        if key in ph:
+            parts.append(fmt.format(ph[key]))
+    if "closed_loop_json" in a:
+        cl = json.loads(str(a["closed_loop_json"]))
+        parts.append(f"closed loop {'pass' if cl['passed'] else 'FAIL'} ({cl['delivered_mps']:.3f} m/s)")
+    text = f"**{e.key}**: " + "; ".join(parts)
+    rec.log(f"{root}/summary", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
 
 
 def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | None = None,
@@ -235,6 +256,7 @@ def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | N
             log_quadruped_entry(rec, lib, e, robot, root, offset)
         else:
             log_humanoid_entry(rec, lib, e, root, offset)
+        _log_summary(rec, root, e)
         roots.append(root)
     rec.send_blueprint(blueprint(lib, roots))
     return roots
@@ -253,6 +275,7 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
         for n, (key, run) in enumerate(runs):
             offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
             log_quadruped_entry(rec, lib, lib[key], robot, f"/{key}/reference", offset)
+            _log_summary(rec, f"/{key}/reference", lib[key])
             beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
             log_quadruped_entry(rec, lib, run, robot, f"/{key}/closed_loop", beside)
             roots += [f"/{key}/reference", f"/{key}/closed_loop"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -67,6 +68,10 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
     assert np.allclose(vec[3], e.control[3, 6:9] * 0.004, atol=1e-6)
     margins = np.array([v[0] for v in cols[f"{root}/plots/margins/friction_N"]["Scalars:scalars"]])
     assert margins.min() >= -1e-4  # the friction cones hold on the logged data
+    # the entry's tab says which entry it is and how it did
+    summary = cols[f"{root}/summary"]["TextDocument:text"][0][0]
+    momentum = json.loads(e.attrs["physics_json"])["momentum_speed_mps"]
+    assert summary.startswith("**v0.30_s1**: 0.30 m/s x 1") and f"rides at {momentum:.3f} m/s" in summary
     # every series names itself, with its unit, in the legend
     names = {sub: cols[f"{root}/plots/{sub}"]["SeriesLines:names"][0][0]
              for sub in ("board_roll", "joints/q_FL_knee", "normal_force/RL")}
