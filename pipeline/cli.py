@@ -285,7 +285,8 @@ def solve(
                                             help="Target board speed, m/s (the range of sweep.velocities_mps).")],
     strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="One-entry library to write (.h5).")],
-    config: Annotated[Path | None, typer.Option(help="Build config (TOML); default when omitted.")] = None,
+    config: ConfigArg = None,
+    config_option: Annotated[Path | None, typer.Option("--config", help="The same, as an option.")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
@@ -293,7 +294,9 @@ def solve(
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.preflight import check_output
 
-    cfg = load_config(config)
+    if config is not None and config_option is not None and config != config_option:
+        raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
+    cfg = load_config(config or config_option)
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, jobs=1, use_cache=False, ipopt=(("print_level", 5),) if verbose else ())

@@ -51,12 +51,13 @@ def test_version_prints_the_installed_version():
 
 
 def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
-    """`solve -v` shows IPOPT's iteration log (one line per iteration); without it there is none."""
+    """`solve -v` shows IPOPT's iteration log (one line per iteration); without it there is none.
+    The config is given as an option or, as for `build`, as the argument."""
     tiny = Path(__file__).parent / "configs" / "tiny.toml"
     env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
     logs = []
-    for flags in (["-v"], []):
-        r = subprocess.run([*SKATELIB, "solve", "--config", str(tiny), "--velocity", "0.3", "-s", "1",
+    for config, flags in ((["--config", str(tiny)], ["-v"]), ([str(tiny)], [])):
+        r = subprocess.run([*SKATELIB, "solve", *config, "--velocity", "0.3", "-s", "1",
                             "-o", str(tmp_path / f"v{len(flags)}.h5"), *flags],
                            capture_output=True, text=True, env=env, timeout=600)
         assert r.returncode == 0, r.stdout + r.stderr
