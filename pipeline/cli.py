@@ -70,13 +70,36 @@ VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, define
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 
 
+def _humanoid_model(cfg: Any) -> None:
+    import dataclasses
+    import math
+
+    h = cfg.humanoid
+    t = Table(title=f"{cfg.meta.name}: humanoid point-mass model (Takasugi et al.)")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    for f in dataclasses.fields(h):
+        if f.name != "source":
+            t.add_row(escape(f.name), f"{getattr(h, f.name):.4g}")
+    omega = math.sqrt(h.gravity_mps2 / h.com_height_m)
+    t.add_row(escape("LIP natural frequency omega = sqrt(g / z) [1/s]"), f"{omega:.4g}")
+    t.add_row(escape("DCM time constant 1 / omega [s]"), f"{1 / omega:.4g}")
+    console.print(t)
+    if h.source:
+        console.print(escape(f"source: {h.source}"))
+
+
 @app.command()
 def model(config: ConfigArg = None) -> None:
-    """Print the robot and board model of a config: SRB mass and inertia from the URDF, board figures."""
-    from skatelib.pipeline.config import load_config
+    """Print the robot and board model of a config: SRB mass and inertia from the URDF, board
+    figures; for a humanoid config, its point-mass model and the LIP/DCM time constant."""
+    from skatelib.pipeline.config import HumanoidConfig, load_any_config
     from skatelib.pipeline.system import SkateSystem
 
-    cfg = load_config(config)
+    cfg = load_any_config(config)
+    if isinstance(cfg, HumanoidConfig):
+        _humanoid_model(cfg)
+        return
     s = SkateSystem.from_config(cfg)
     t = Table(title=f"{cfg.meta.name}: single rigid body at the nominal stance (pinocchio ccrba)")
     t.add_column("quantity")

@@ -64,3 +64,12 @@ def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
         logs.append(r.stdout)
     assert "inf_pr" in logs[0] and "EXIT: Optimal Solution Found" in logs[0]
     assert "inf_pr" not in logs[1]
+
+
+def test_model_of_a_humanoid_config_prints_the_lip_time_constant():
+    """`skatelib model` on a humanoid config: its point-mass figures and omega = sqrt(g / z_com),
+    the analytic LIP frequency (3.502 1/s for g 9.81 and z 0.80)."""
+    env = {**os.environ, "COLUMNS": "200"}
+    out = subprocess.run([*SKATELIB, "model", str(CONFIG_DIR / "hrp2_walk.toml")], capture_output=True, text=True,
+                         check=True, env=env).stdout
+    assert "com_height_m" in out and f"{(9.81 / 0.8) ** 0.5:.4g}" in out and "[1/s]" in out
