@@ -16,7 +16,7 @@ from rich.table import Table
 from skatelib.library.errors import Interrupted, SkatelibError
 from skatelib.pipeline.config import SweepConfig, field_range
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,
+app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
 console = Console()
 err_console = Console(stderr=True)

@@ -73,3 +73,10 @@ def test_model_of_a_humanoid_config_prints_the_lip_time_constant():
     out = subprocess.run([*SKATELIB, "model", str(CONFIG_DIR / "hrp2_walk.toml")], capture_output=True, text=True,
                          check=True, env=env).stdout
     assert "com_height_m" in out and f"{(9.81 / 0.8) ** 0.5:.4g}" in out and "[1/s]" in out
+
+
+def test_shell_completion_is_offered():
+    """`skatelib --show-completion bash` prints a completion function for the command."""
+    out = subprocess.run([*SKATELIB, "--show-completion", "bash"], capture_output=True, text=True,
+                         env={**os.environ, "_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION": "1"})
+    assert out.returncode == 0 and "complete" in out.stdout, out.stdout + out.stderr
