@@ -3,10 +3,13 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
+BUILD_STAMP := $(VENV)/.skatelib-build-installed
+# make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
+ALL_EXTRAS := build,viz,control,dask,dev
 CONFIG ?=
 OUT    ?=
 
-.PHONY: all venv library test lint bench clean help cpp
+.PHONY: all venv venv-build relink library test lint bench clean help cpp
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5)"
@@ -15,18 +18,29 @@ help:
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
-$(STAMP): pyproject.toml
+define install
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "skatelib needs Python >= 3.11; found " + sys.version.split()[0] + ": set PYTHON=python3.11 (or newer)")'
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
-	$(BIN)/python -m pip install -q -e '.[pipeline,control,dask,dev]' --config-settings editable_mode=strict
+	$(BIN)/python -m pip install -q -e '.[$(1)]' --config-settings editable_mode=strict
 	@ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules
+endef
+
+$(STAMP): pyproject.toml
+	$(call install,$(ALL_EXTRAS))
+	touch $@ $(BUILD_STAMP)
+
+$(BUILD_STAMP): pyproject.toml
+	$(call install,build)
 	touch $@
 
 # PYTHON=... given on the command line or in the environment: a .venv of another Python version
 # is rebuilt with it. The strict editable install links each module; relink when a module is added
 # or removed, or when the links are gone (rm -rf build).
-venv: $(STAMP)
+venv: $(STAMP) relink
+venv-build: $(BUILD_STAMP) relink
+
+relink:
 ifneq ($(origin PYTHON),file)
 	@want=$$($(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])'); \
 	 have=$$($(BIN)/python -c 'import sys; print("%d.%d" % sys.version_info[:2])'); \
@@ -35,12 +49,12 @@ ifneq ($(origin PYTHON),file)
 	   $(MAKE) --no-print-directory $(STAMP); fi
 endif
 	@{ ls pipeline/*.py library/*.py runtime/*.py control/*.py | cmp -s - $(VENV)/.skatelib-modules && \
-	   $(BIN)/python -c 'import skatelib.pipeline.cli, skatelib.control.closed_loop' 2>/dev/null; } || { \
+	   $(BIN)/python -c 'import skatelib.pipeline.cli, skatelib.library.reader' 2>/dev/null; } || { \
 	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
 	  ls pipeline/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules; }
 
-library: venv
+library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
 
 test: venv
