@@ -469,7 +469,7 @@ def inspect(
     try:
         from skatelib.pipeline.inspect_rerun import inspect_library
     except ImportError as e:
-        raise ImportError(f"Rerun is not installed ({e}); pip install rerun-sdk") from e
+        raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
     if save is None and not spawn:
         save = library.with_suffix(".rrd")
     if save is not None:
@@ -515,11 +515,14 @@ def track(
     if save is not None:
         from skatelib.pipeline.preflight import check_output
 
+        try:  # before the runs, not after them
+            from skatelib.pipeline.inspect_rerun import save_closed_loop
+        except ImportError as e:
+            raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
         check_output(save, [library], what="recording")
     runs = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs, keep_runs=save is not None)
     results = [r for r, _ in runs]
     if save is not None:
-        from skatelib.pipeline.inspect_rerun import save_closed_loop
         from skatelib.runtime import MotionLibrary
 
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
