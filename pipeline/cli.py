@@ -420,12 +420,9 @@ def validate(
             console.print(escape(f"{key}: {message}"))
 
     problems = validate_library(library, report)
-    if as_json:
-        pass
-    elif problems:
-        console.print(f"[bold red]{_count(problems, 'entry')} failed validation[/]")
-    else:
-        console.print("[green]all entries valid[/]")
+    if not as_json:
+        console.print(f"[bold red]{_count(problems, 'entry')} failed validation[/]" if problems
+                      else "[green]all entries valid[/]")
     failed = 0
     results: list[Any] = []
     if closed_loop:
