@@ -63,7 +63,7 @@ from skatelib.library.channels import (
     STATE_NAMES,
     SWING,
 )
-from skatelib.library.margins import forward_speed
+from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.runtime import Entry, MotionLibrary
 
 SPEED_TOLERANCE = 0.05
@@ -180,6 +180,7 @@ class EntryReference:
     def __init__(self, lib: MotionLibrary, entry: Entry, p: SkateParams, settings: TrackSettings):
         self.e = entry
         self.p = p
+        self._t = np.asarray(entry.t, dtype=np.float64)
         self.t0 = float(entry.t[0])
         self.t_end = float(entry.t[-1])
         self.transfer_end = self.t_end + settings.transfer_s
@@ -196,14 +197,8 @@ class EntryReference:
         com = np.asarray(entry.state, dtype=np.float64)[:, None, 0:3]
         loaded = contact != SWING
         self.max_reach = float(np.max(np.linalg.norm((feet - com)[loaded], axis=-1)))
-        self.pushes = push_intervals(np.asarray(entry.t, dtype=np.float64), contact[:, p.push_leg] == GROUND,
-                                     self.t_end)
-        x = np.asarray(entry.state, dtype=np.float64)
-        heading = np.stack([np.cos(x[:, 5]), np.sin(x[:, 5])], axis=1)
-        v_plan = np.sum(heading * (p.mass_kg * x[:, 6:8] + p.board_mass_kg * x[:, 24:26]), axis=1) / (
-            p.mass_kg + p.board_mass_kg)
-        drag = np.tanh(p.tanh_scale_s_per_m * v_plan)
-        self._t = np.asarray(entry.t, dtype=np.float64)
+        self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end)
+        drag = np.tanh(p.tanh_scale_s_per_m * momentum_speed(np.asarray(entry.state), p.mass_kg, p.board_mass_kg))
         self._friction_integral = np.r_[0.0, np.cumsum(0.5 * (drag[1:] + drag[:-1]) * np.diff(self._t))]
 
     @property
@@ -247,11 +242,10 @@ class EntryReference:
 
     def touchdown_point(self, t: float, leg: int) -> np.ndarray:
         """Where the entry puts ``leg`` on the ground for the stance that starts at about ``t``."""
-        ts = np.asarray(self.e.t)
         contact = np.asarray(self.e.contact)
-        k = int(np.searchsorted(ts, t - 1e-6))
+        k = int(np.searchsorted(self._t, t - 1e-6))
         on = np.nonzero(contact[k:, leg] == GROUND)[0]
-        k = min(k + int(on[0]) if len(on) else k, len(ts) - 1)
+        k = min(k + int(on[0]) if len(on) else k, len(self._t) - 1)
         return self.feet[k, leg].copy()
 
     def initial_ground(self) -> np.ndarray:
@@ -260,7 +254,7 @@ class EntryReference:
         return np.where(c[None, :] == GROUND, self.feet[0].T, 0.0)
 
     def board_xy(self, t: float) -> np.ndarray:
-        return _interp_rows(t, np.asarray(self.e.t), self.board_pos)[0:2]
+        return _interp_rows(t, self._t, self.board_pos)[0:2]
 
     def contact(self, t: float) -> np.ndarray:
         if t < self.t_end:
@@ -393,7 +387,6 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
     solver = make_solver(cfg)
     observer = DisturbanceObserver(cfg.disturbance_gain)
     coast_observer = CoastObserver(cfg.coast_gain)
-    total = model.mass_kg + model.board_mass_kg
     h = cfg.dt / settings.plant_substeps
     s = np.array(x_init, dtype=np.float64)
     s[0:3] += rpy_matrix(s[3:6]) @ com_shift  # the true COM
@@ -419,9 +412,8 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         v_ride = float(forward_speed(x_fb))
         bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
         ref.observe(t, x_fb, s[NX:NX + 2])
-        heading = board_heading(x_fb)
-        momentum_speed = float(heading @ (model.mass_kg * x_fb[6:8] + model.board_mass_kg * x_fb[24:26])) / total
-        measured = coast_observer.update(ref.coasting(t), momentum_speed, cfg.dt)
+        v_momentum = float(momentum_speed(x_fb, model.mass_kg, model.board_mass_kg))
+        measured = coast_observer.update(ref.coasting(t), v_momentum, cfg.dt)
         coast = ref.prior_coast_mps2(t) if measured is None else measured
         x_ref, u_ref, contact, accelerating = ref.horizon(
             t, cfg.horizon, cfg.dt, s[NX:NX + 2], v_ride, coast if cfg.coast_compensation else None)

@@ -39,13 +39,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from skatelib.control.linear_model import Discretizer, Feedback, board_rotation, continuous_model
 from skatelib.control.params import SkateParams
-from skatelib.library.channels import BOARD, I_BOARD_ROLL, NU, NX, S_Q, SWING
+from skatelib.library.channels import BOARD, I_BOARD_ROLL, NU, NX, S_Q, S_VEL, SWING
 
 SOLVERS = ("daqp", "proxqp", "osqp")
 NF = 12  # force variables per step
 REDUCED = np.r_[0:S_Q.start, S_Q.stop:NX]  # the 16 states the forces drive (all but the joint angles)
 BOARD_V_REDUCED = slice(S_Q.start, S_Q.start + 2)  # board_vx, board_vy among them
-ROBOT_VZ_REDUCED = 8  # the robot's vertical speed (before the joint angles: same index)
+ROBOT_VZ_REDUCED = S_VEL.start + 2  # the robot's vertical speed (before the joint angles: same index)
 
 
 def board_heading(x: np.ndarray) -> np.ndarray:

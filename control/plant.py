@@ -25,6 +25,7 @@ import numpy as np
 from skatelib.control.linear_model import board_rotation, euler_rate_map, rpy_matrix
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NX, SWING
+from skatelib.library.margins import momentum_speed
 
 NB = NX + 3  # plant state: the 28 channels, then the board origin x, y and the deck height z
 
@@ -163,10 +164,8 @@ class Plant:
         return s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
     def momentum_speed(self, s: np.ndarray) -> float:
-        """(m_R v_R + m_B v_B) / (m_R + m_B) along the heading [m/s]."""
-        heading = np.array([np.cos(s[5]), np.sin(s[5])])
-        m, mb = self.p.mass_kg, self.p.board_mass_kg
-        return float((m * heading @ s[6:8] + mb * heading @ s[24:26]) / (m + mb))
+        """(m_R v_R + m_B v_B) / (m_R + m_B) along the heading [m/s], with the plant's masses."""
+        return float(momentum_speed(s[:NX], self.p.mass_kg, self.p.board_mass_kg))
 
 
 __all__ = ["GROUND", "NB", "ContactLog", "Plant"]

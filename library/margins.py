@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, S_BOARD_V, S_RPY
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, S_BOARD_V, S_RPY, S_VEL
 
 UNLOADED_N = 1e-3  # [N]
 
@@ -71,4 +71,13 @@ def forward_speed(state: np.ndarray) -> np.ndarray:
     """The board's speed along its heading (its yaw is the robot's) [m/s], per knot."""
     yaw = state[..., S_RPY][..., 2]
     v = state[..., S_BOARD_V]
+    return np.cos(yaw) * v[..., 0] + np.sin(yaw) * v[..., 1]
+
+
+def momentum_speed(state: np.ndarray, robot_mass_kg: float, board_mass_kg: float) -> np.ndarray:
+    """(m_R v_R + m_B v_B) / (m_R + m_B) along the heading [m/s], per knot: the speed robot and
+    board ride at together once the feet hold on the deck."""
+    yaw = state[..., S_RPY][..., 2]
+    v = (robot_mass_kg * state[..., S_VEL][..., :2] + board_mass_kg * state[..., S_BOARD_V]) / (
+        robot_mass_kg + board_mass_kg)
     return np.cos(yaw) * v[..., 0] + np.sin(yaw) * v[..., 1]

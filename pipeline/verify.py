@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
-from skatelib.library.margins import board_rotations, friction_margins
+from skatelib.library.margins import board_rotations, friction_margins, momentum_speed
 from skatelib.pipeline.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
 from skatelib.pipeline.leg_dynamics import rigid_leg_torques
 from skatelib.pipeline.system import SkateSystem
@@ -165,8 +165,7 @@ def _riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, f
     """How the entry ends: the speeds robot and board ride on at, by momentum (no model code)."""
     heading = np.array([np.cos(x[5]), np.sin(x[5])])
     v_robot, v_board = x[S_VEL][:2], x[S_BOARD_V]
-    m_r, m_b = system.srb.mass_kg, system.board.mass_kg
-    v_mom = float(heading @ (m_r * v_robot + m_b * v_board) / (m_r + m_b))
+    v_mom = float(momentum_speed(x, system.srb.mass_kg, system.board.mass_kg))
     return {
         "final_board_speed_mps": float(heading @ v_board), "final_robot_speed_mps": float(heading @ v_robot),
         "momentum_speed_mps": v_mom, "momentum_speed_error": abs(v_mom - label) / label,
