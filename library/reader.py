@@ -48,6 +48,7 @@ class LibraryData:
     model_arrays: dict[str, np.ndarray]
     model_text: dict[str, str]
     entries: dict[str, EntryRecord]
+    content_sha256: str | None = None  # the verified whole-file digest (None: read unverified)
 
     @property
     def kind(self) -> str:
@@ -172,6 +173,7 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         model_arrays=model_arrays,
         model_text=model_text,
         entries=_entries(path, kind, index, arrays),
+        content_sha256=digest,
     )
 
 

@@ -343,15 +343,11 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print it as one JSON document instead.")] = False,
 ) -> None:
     """Summarize a motion library: provenance, model and entries."""
-    import h5py
-    from skatelib.library import schema
     from skatelib.runtime import MotionLibrary
 
     lib = MotionLibrary.open(library)  # verifies the checksum first
     a = lib.attrs
-    with h5py.File(library, "r") as f:
-        raw = f.attrs[schema.A_CHECKSUM]
-    sha = raw.decode() if isinstance(raw, bytes) else str(raw)
+    sha = lib.content_sha256
     if as_json:
         entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
                     "success": e.success, "status": str(e.attrs["status"]), "iterations": int(e.attrs["iterations"]),

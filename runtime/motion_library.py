@@ -332,6 +332,7 @@ class MotionLibrary:
         self.model = data.model_attrs
         self.model_arrays = data.model_arrays
         self.urdf = data.model_text.get(schema.D_ROBOT_URDF, "")
+        self.content_sha256 = data.content_sha256  # the file's verified SHA-256 (format doc, Integrity)
         self._entries = {k: _entry(r) for k, r in data.entries.items()}
 
     @classmethod
