@@ -378,7 +378,19 @@ def simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_param
         kinematics: The robot's legs: after every update, the stance legs' joint angles by
             inverse kinematics and the torques of the commanded forces (the whole-body
             controller's job) are measured on the plant's state.
+
+    BLAS runs on one thread meanwhile, as in a controller's real-time loop: the MPC's matrices are
+    small (about 100 x 400), and a multi-threaded BLAS made an update 2-4x slower on 2 cores
+    (median 5.9 against 1.7 ms on ``v0.50_s2`` with ``skatelib track -j 1``).
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _simulate(ref, x_init, model, plant_params, dist, cfg, settings, keep_trace, kinematics)
+
+
+def _simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_params: SkateParams, dist: Disturbances,
+              cfg: MpcConfig, settings: TrackSettings, keep_trace: bool, kinematics: LegKinematics | None) -> Run:
     rng = np.random.default_rng(settings.seed)
     com_shift = np.array([0.0, dist.com_offset_m, 0.0])
     plant = Plant(plant_params, com_shift)
