@@ -104,5 +104,12 @@ def entry_path(key: str, name: str | None = None) -> str:
 
 
 def entry_key(target_velocity_mps: float, n_strides: int) -> str:
-    """Canonical entry name, e.g. ``v0.50_s2``."""
+    """Canonical quadruped entry name, e.g. ``v0.50_s2``."""
     return f"v{target_velocity_mps:.2f}_s{n_strides}"
+
+
+def humanoid_key(motion: str, velocity_mps: float, n_steps: int) -> str:
+    """Humanoid entry name: ``walk_v0.375_n6`` (six walking steps between start and stop; the speed
+    with two decimals, three when it needs them) or ``skate_v1.00`` (one push, slide and stop)."""
+    speed = f"{velocity_mps:.2f}" if abs(round(velocity_mps, 2) - velocity_mps) < 1e-9 else f"{velocity_mps:.3f}"
+    return f"walk_v{speed}_n{n_steps}" if motion == "walk" else f"{motion}_v{speed}"

@@ -225,11 +225,11 @@ def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
     t = Table(title=f"{cfg.meta.name}: {cfg.sweep.motion} ({cfg.gpm.nodes} LG nodes, {cfg.gpm.solver})")
     for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
         t.add_column(escape(col))
-    from skatelib.library.schema import entry_key
+    from skatelib.pipeline.humanoid_build import motion_key
 
     for m in report.motions:
         for r in m.steps:
-            t.add_row(entry_key(m.velocity_mps, len(m.steps)), r.spec.name, r.status, str(r.iterations),
+            t.add_row(motion_key(cfg, m)[0], r.spec.name, r.status, str(r.iterations),
                       f"{1e3 * r.solve_time_s:.1f}", f"{r.objective:.4f}")
     console.print(t)
     console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.2f} s")

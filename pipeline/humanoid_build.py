@@ -36,8 +36,17 @@ class HumanoidBuildReport:
         return [m for m in self.motions if not m.success]
 
 
-def entry_from_motion(m: Motion, n_nodes: int) -> EntryData:
+def motion_key(config: HumanoidConfig, m: Motion) -> tuple[str, int]:
+    """The entry key of a motion and its strides: walking steps between start and stop, or one
+    skating push (``n_phases`` keeps the number of GPM phases)."""
+    strides = config.walk.steps if config.sweep.motion == "walk" else 1
+    return schema.humanoid_key(config.sweep.motion, m.velocity_mps, strides), strides
+
+
+def entry_from_motion(m: Motion, config: HumanoidConfig) -> EntryData:
     """A library entry with the sampled trajectory and every step's GPM node values."""
+    n_nodes = config.gpm.nodes
+    key, strides = motion_key(config, m)
     steps = m.steps
     nodes_state = np.stack([np.vstack([r.X, r.Xf]) for r in steps])  # (S, N+2, 6): tau_0..tau_N, end
     support = GaussPseudospectral(n_nodes).support
@@ -45,7 +54,8 @@ def entry_from_motion(m: Motion, n_nodes: int) -> EntryData:
                         for r in steps])
     status = "; ".join(f"{r.spec.name}: {r.status}" for r in steps)
     attrs = {
-        "target_velocity_mps": m.velocity_mps, "n_strides": len(steps), "success": m.success,
+        "target_velocity_mps": m.velocity_mps, "n_strides": strides, "n_phases": len(steps),
+        "motion": config.sweep.motion, "success": m.success,
         "status": "Solve_Succeeded" if m.success else status, "iterations": sum(r.iterations for r in steps),
         "solve_time_s": sum(r.solve_time_s for r in steps), "objective": sum(r.objective for r in steps),
         "max_constraint_violation": max(r.max_violation for r in steps),
@@ -62,7 +72,7 @@ def entry_from_motion(m: Motion, n_nodes: int) -> EntryData:
                "contact_point": ("x", "y", "z")}
     units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS, "zmp": ("m", "m"),
              "contact_point": ("m", "m", "m")}
-    return EntryData(key=schema.entry_key(m.velocity_mps, len(steps)), attrs=attrs, arrays=arrays, columns=columns,
+    return EntryData(key=key, attrs=attrs, arrays=arrays, columns=columns,
                      units=units)
 
 
@@ -76,7 +86,7 @@ def build_humanoid_library(config: HumanoidConfig, out: Path | None = None,
         m = solve_motion(config, v)
         motions.append(m)
         if on_entry:
-            on_entry(schema.entry_key(v, len(m.steps)), m)
+            on_entry(motion_key(config, m)[0], m)
     h = config.humanoid
     model = {"robot_mass_kg": h.mass_kg, "gravity_mps2": h.gravity_mps2, "com_height_m": h.com_height_m,
              "foot_length_m": h.foot_length_m, "foot_width_m": h.foot_width_m, "step_width_m": h.step_width_m,
@@ -85,6 +95,6 @@ def build_humanoid_library(config: HumanoidConfig, out: Path | None = None,
              "source": h.source}
     root = root_attributes("humanoid", config.meta.name, config.text, config.resolved_json(),
                            {"solver": config.gpm.solver, "nodes": config.gpm.nodes})
-    entries = [entry_from_motion(m, config.gpm.nodes) for m in motions]
+    entries = [entry_from_motion(m, config) for m in motions]
     path = write_library(out, root, model, {}, {}, entries)
     return HumanoidBuildReport(path=path, motions=motions, wall_time_s=time.perf_counter() - t0)

@@ -102,7 +102,7 @@ def test_library_round_trip_and_cli(tmp_path):
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out)], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stdout + r.stderr
     lib = MotionLibrary.open(out)
-    assert lib.kind == "humanoid" and len(lib) == 3
+    assert lib.kind == "humanoid" and lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"]
     e = lib.select(1.0)
     assert e.columns["state"] == ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
     assert e.columns["zmp"] == ("zmp_x", "zmp_y")
@@ -114,9 +114,11 @@ def test_library_round_trip_and_cli(tmp_path):
 
 
 def test_build_report_marks_all_entries(tmp_path):
-    """The walking build writes one successful entry with 8 steps."""
+    """The walking build writes one successful entry: six walking steps between start and stop
+    (eight GPM phases), named for what it is."""
     rep = build_humanoid_library(load_humanoid_config(WALK), tmp_path / "w.h5")
-    assert not rep.failed and MotionLibrary.open(rep.path).select(0.375).n_strides == 8
+    e = MotionLibrary.open(rep.path).select(0.375)
+    assert not rep.failed and e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
 
 
 def test_unknown_motion_is_a_config_error(tmp_path):

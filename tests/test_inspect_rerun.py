@@ -83,14 +83,14 @@ def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
     """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
     lib_path = build_humanoid_library(load_humanoid_config(CONFIG_DIR / "hrp2_skate.toml"), tmp_path / "s.h5").path
     out = tmp_path / "h.rrd"
-    inspect_library(lib_path, ["v1.00_s3"], out, spawn=False, overlay=False)
+    inspect_library(lib_path, ["skate_v1.00"], out, spawn=False, overlay=False)
     cols = _columns(out)
-    e = MotionLibrary.open(lib_path)["v1.00_s3"]
-    com = cols["/v1.00_s3/com"]
+    e = MotionLibrary.open(lib_path)["skate_v1.00"]
+    com = cols["/skate_v1.00/com"]
     assert len(com["time"]) == len(e.t)
     assert np.allclose(np.array([p[0] for p in com["Points3D:positions"]])[:, 2], e.state[:, 2], atol=1e-6)
-    assert "/v1.00_s3/zmp" in cols and "/v1.00_s3/soles" in cols and "/v1.00_s3/plots/com_vx" in cols
-    (strips,) = cols["/v1.00_s3/support_polygons"]["LineStrips3D:strips"]  # one static row
+    assert "/skate_v1.00/zmp" in cols and "/skate_v1.00/soles" in cols and "/skate_v1.00/plots/com_vx" in cols
+    (strips,) = cols["/skate_v1.00/support_polygons"]["LineStrips3D:strips"]  # one static row
     assert len(strips) == 12  # 10 push segments, the slide, the stop
     assert "/v1.00_s0" not in cols
 
