@@ -36,7 +36,7 @@ def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
 
 def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
                   scheduler: Any = None, use_cache: bool = True,
-                  on_entry: Callable[[str, EntryOutcome], None] | None = None,
+                  on_entry: Callable[[str, EntryOutcome | None], None] | None = None,
                   frontier: FrontierSearch | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
     marked ``success = false`` with their IPOPT status); with ``frontier``, also search the

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import json
+import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
@@ -18,8 +19,20 @@ from skatelib.pipeline.config import SweepConfig, field_range
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
-console = Console()
-err_console = Console(stderr=True)
+PIPE_WIDTH = 260
+
+
+def _console(stderr: bool = False) -> Console:
+    """Rich's console; into a pipe or file (no terminal, no COLUMNS) 260 columns instead of rich's
+    80, so that tables are not wrapped or their cells cut ("Solve_S...") in a log."""
+    c = Console(stderr=stderr)
+    if not c.is_terminal and "COLUMNS" not in os.environ:
+        c = Console(stderr=stderr, width=PIPE_WIDTH)
+    return c
+
+
+console = _console()
+err_console = _console(stderr=True)
 
 # Vendor single-rigid-body figures (ROBOT_DATA.md), printed beside ours for comparison.
 VENDOR_MASS_KG = 8.3644
@@ -128,7 +141,8 @@ def model(config: ConfigArg = None) -> None:
     console.print(escape(f"nominal stance q [rad] (FL FR RL RR x abad hip knee): {q.tolist()}"))
 
 
-OutOpt = Annotated[Path | None, typer.Option("-o", "--out", help="Library file to write (.h5).")]
+OutOpt = Annotated[Path | None, typer.Option(
+    "-o", "--out", help="Library file to write (.h5).", show_default="out/<config's meta.name>.h5")]
 
 
 @app.command()
@@ -193,11 +207,20 @@ def build(
                   console=console, disable=not progress) as bar:
         task = bar.add_task("solving", total=total)
 
-        done = []
+        done: list[str] = []
+        flying: list[str] = []  # entries being solved, oldest first
 
         def on_entry(key: str, outcome: Any) -> None:
-            done.append(key)
-            bar.update(task, advance=1, description=f"{key}: {outcome.result.status}")
+            if outcome is None:
+                flying.append(key)
+            else:
+                done.append(key)
+                if key in flying:
+                    flying.remove(key)
+            text = f"solving {', '.join(flying)}" if flying else "solving"
+            if outcome is not None:
+                text += f" (last: {key} {'cached, ' if outcome.cached else ''}{_short_status(outcome)})"
+            bar.update(task, advance=0 if outcome is None else 1, description=escape(text))
 
         from skatelib.pipeline.frontier import FrontierSearch
 
@@ -238,11 +261,20 @@ def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
         raise typer.Exit(1)
 
 
+def _short_status(outcome: Any) -> str:
+    """``ok`` for a solved entry that passed its checks, else its status."""
+    status = str(outcome.result.status)
+    return "ok" if outcome.result.success else status.split(":")[0]
+
+
 def _summary(outcomes: list[Any]) -> None:
     t = Table(title="entries (time: c = from the cache; momentum: the speed robot and board ride at together)")
     for col in ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
                 "Coulomb margin [N]", "torque [N m]", "defect"):
-        t.add_column(escape(col), justify="left" if col in ("entry", "status") else "right")
+        if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
+            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
+        else:
+            t.add_column(escape(col), justify="right")
     from skatelib.library.schema import entry_key
 
     for o in outcomes:
@@ -304,10 +336,12 @@ def frontier(
 
 @app.command()
 def solve(
-    velocity: Annotated[float, typer.Option(min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
+    velocity: Annotated[float, typer.Option("--velocity", "-V", min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
                                             help="Target board speed, m/s (the range of sweep.velocities_mps).")],
     strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="One-entry library to write (.h5).")],
+    out: Annotated[Path | None, typer.Option(
+        "-o", "--out", help="One-entry library to write (.h5).",
+        show_default="out/<config's meta.name>-v<velocity>_s<strides>.h5")] = None,
     config: ConfigArg = None,
     config_option: Annotated[Path | None, typer.Option("--config", help="The same, as an option.")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
@@ -320,6 +354,9 @@ def solve(
     if config is not None and config_option is not None and config != config_option:
         raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
     cfg = load_config(config or config_option)
+    from skatelib.library.schema import entry_key
+
+    out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, jobs=1, use_cache=False, ipopt=(("print_level", 5),) if verbose else ())
@@ -335,6 +372,14 @@ LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
 class Maneuver(enum.StrEnum):
     entries = "entries"
     steer = "steer"
+
+
+class QpSolver(enum.StrEnum):
+    """The MPC's QP solvers (``skatelib.control.mpc.SOLVERS``)."""
+
+    daqp = "daqp"
+    proxqp = "proxqp"
+    osqp = "osqp"
 
 
 @app.command()
@@ -375,7 +420,10 @@ def info(
     t = Table(title=_count(len(lib), "entry"))
     for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]", "solve [s]",
                 "momentum [m/s]", "off label", "Coulomb margin [N]", "defect"):
-        t.add_column(escape(col), justify="left" if col in ("entry", "status") else "right")
+        if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
+            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
+        else:
+            t.add_column(escape(col), justify="right")
     for e in lib:
         ph = json.loads(str(e.attrs.get("physics_json", "{}")))
         off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
@@ -479,8 +527,8 @@ def track(
                      typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
                      ] = None,
     perturb: PerturbOpt = DEFAULT_PERTURB,
-    solver: Annotated[str, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
-                      ] = "daqp",
+    solver: Annotated[QpSolver, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
+                      ] = QpSolver.daqp,
     mpc_mu: Annotated[float | None, typer.Option(
         help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
              "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
@@ -501,7 +549,7 @@ def track(
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
-    mpc = MpcConfig(solver=solver, mu=mpc_mu)
+    mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
     if maneuver is Maneuver.steer:
         _steer_table(steer_library(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed), jobs), perturb)
         return

@@ -170,7 +170,8 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
               parent_pid: int | None = None) -> list[EntryOutcome]:
     """Solve one warm-start chain (a module-level function, so worker processes can import it).
 
-    ``events`` is an optional queue that receives one ``(key, outcome)`` per finished entry;
+    ``events`` is an optional queue that receives ``(key, None)`` as an entry starts and
+    ``(key, outcome)`` when it is finished;
     ``parent_pid``: the build process, whose death ends this worker (:func:`exit_with_parent`).
     """
     exit_with_parent(parent_pid)
@@ -183,6 +184,8 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
         use_warm = warm if chain.config.sweep.warm_start else None
         spec = PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm, ipopt=chain.ipopt)
         key = entry_key(spec, warm_key if use_warm is not None else None)
+        if events is not None:
+            events.put((schema.entry_key(v, chain.n_strides), None))
         path = _cache_file(key)
         hit = _load_cached(path) if use_cache else None
         note = hit if isinstance(hit, str) else ""
@@ -205,7 +208,7 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
 
 
 def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", scheduler: str | None = None,
-              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome], None] | None = None,
+              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome | None], None] | None = None,
               ipopt: tuple[tuple[str, Any], ...] = ()) -> list[EntryOutcome]:
     """Solve every (velocity, strides) of ``config.sweep`` and return the outcomes.
 
@@ -213,7 +216,8 @@ def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", sch
         jobs: Worker processes (loky backend).
         backend: ``"loky"`` (this machine) or ``"dask"`` (an existing cluster at ``scheduler``).
         scheduler: Dask scheduler address (``tcp://host:port``), or a ``distributed.Client``.
-        on_entry: Called in the main process as each entry finishes.
+        on_entry: Called in the main process with ``(key, None)`` as an entry starts (not with
+            the dask backend) and ``(key, outcome)`` as it finishes.
         ipopt: Extra IPOPT options of every solve (``(("print_level", 5),)`` shows its log).
     """
     for var in THREAD_VARS:
@@ -224,17 +228,23 @@ def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", sch
     if backend != "loky":
         raise ValueError(f"unknown backend {backend!r}; use 'loky' or 'dask'")
     if jobs <= 1:
-        outcomes = []
-        for c in chains:
-            for o in run_chain(c, use_cache):
-                outcomes.append(o)
-                if on_entry:
-                    on_entry(schema.entry_key(o.result.target_velocity_mps, o.result.n_strides), o)
-        return outcomes
+        direct = _Direct(on_entry)
+        return [o for c in chains for o in run_chain(c, use_cache, direct)]
     return _run_loky(chains, jobs, use_cache, on_entry)
 
 
-def _drain(events: Any, on_entry: Callable[[str, EntryOutcome], None] | None, stop: threading.Event) -> None:
+class _Direct:
+    """A queue that hands each event straight to the callback (a serial build)."""
+
+    def __init__(self, on_entry: Callable[[str, EntryOutcome | None], None] | None):
+        self.on_entry = on_entry
+
+    def put(self, event: tuple[str, EntryOutcome | None]) -> None:
+        if self.on_entry:
+            self.on_entry(*event)
+
+
+def _drain(events: Any, on_entry: Callable[[str, EntryOutcome | None], None] | None, stop: threading.Event) -> None:
     import queue
 
     while not stop.is_set() or not events.empty():
@@ -247,7 +257,7 @@ def _drain(events: Any, on_entry: Callable[[str, EntryOutcome], None] | None, st
 
 
 def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
-              on_entry: Callable[[str, EntryOutcome], None] | None) -> list[EntryOutcome]:
+              on_entry: Callable[[str, EntryOutcome | None], None] | None) -> list[EntryOutcome]:
     from multiprocessing.managers import SyncManager
 
     from joblib import Parallel, delayed
@@ -270,7 +280,7 @@ def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
 
 
 def _run_dask(chains: list[Chain], scheduler: Any, use_cache: bool,
-              on_entry: Callable[[str, EntryOutcome], None] | None) -> list[EntryOutcome]:
+              on_entry: Callable[[str, EntryOutcome | None], None] | None) -> list[EntryOutcome]:
     try:
         from distributed import Client, as_completed
     except ImportError as e:

@@ -116,8 +116,11 @@ def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path
     """A second build finds every entry in the cache and writes identical trajectories."""
     out, _ = built
     cfg = load_config(TINY)
-    report = build_library(cfg, tmp_path / "again.h5", jobs=1)
+    events: list[tuple[str, bool]] = []
+    report = build_library(cfg, tmp_path / "again.h5", jobs=1, on_entry=lambda k, o: events.append((k, o is None)))
     assert all(o.cached for o in report.outcomes)
+    # The progress hears of each entry as it starts (in flight) and as it ends, in that order.
+    assert events == [("v0.30_s1", True), ("v0.30_s1", False), ("v0.40_s1", True), ("v0.40_s1", False)]
     a, b = MotionLibrary.open(out), MotionLibrary.open(report.path)
     for e in a:
         assert np.array_equal(e.state, b[e.key].state)

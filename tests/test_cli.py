@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 from skatelib.pipeline.config import CONFIG_DIR
@@ -80,3 +81,44 @@ def test_shell_completion_is_offered():
     out = subprocess.run([*SKATELIB, "--show-completion", "bash"], capture_output=True, text=True,
                          env={**os.environ, "_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION": "1"})
     assert out.returncode == 0 and "complete" in out.stdout, out.stdout + out.stderr
+
+
+def _options() -> list[tuple[str, Any, Any]]:
+    """(command, its click command, option) of every option of every command."""
+    import typer
+    from skatelib.pipeline.cli import app
+
+    group = typer.main.get_command(app)
+    return [(name, cmd, p) for name, cmd in group.commands.items() for p in cmd.params  # type: ignore[attr-defined]
+            if p.param_type_name == "option"]
+
+
+def test_every_help_shows_defaults_choices_and_units():
+    """Every command's --help, as printed: each option with a default shows it (``-o`` included,
+    whose default is a rule), each choice option its choices, each speed or other physical number
+    its unit; and every command is reachable with --help (exit 0)."""
+    from skatelib.control.mpc import SOLVERS
+    from skatelib.pipeline.cli import QpSolver, app
+    from typer._click.core import Context  # typer's own click
+    from typer.testing import CliRunner
+
+    runner = CliRunner()
+    seen = set()
+    for name, cmd, p in _options():
+        if name not in seen:
+            seen.add(name)
+            r = runner.invoke(app, [name, "--help"], env={"COLUMNS": "200"})
+            assert r.exit_code == 0 and "<bool>" not in r.output, (name, r.output)
+        record = p.get_help_record(Context(cmd))
+        assert record is not None, (name, p.opts)
+        names, text = record
+        if (p.default not in (None, False) and not p.is_flag) or (p.opts[0] == "-o" and name in ("build", "solve")):
+            assert "[default: " in text, (name, p.opts, text)
+        if "|" in names:  # a choice: all of them listed
+            assert all(c in names for c in ("daqp", "osqp")) or "loky" in names or "steer" in names, names
+        if "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
+            assert "m/s" in text, (name, p.opts, text)
+    assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()
+                                             if p.name == "solver")
+    assert set(QpSolver) == set(SOLVERS)
+    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "track"}  # model: no options
