@@ -5,17 +5,18 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
 BUILD_STAMP := $(VENV)/.skatelib-build-installed
 # make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
-ALL_EXTRAS := build,viz,control,dask,dev
+ALL_EXTRAS := build,viz,plot,control,dask,dev
 CONFIG ?=
 OUT    ?=
 
-.PHONY: all venv venv-build relink library test lint bench clean help cpp
+.PHONY: all venv venv-build relink library test lint bench clean help cpp figures
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5)"
 	@echo "make test      run the test suite"
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
+	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 define install
@@ -66,6 +67,17 @@ lint: venv
 
 bench: venv
 	$(BIN)/python -m benchmarks.run
+
+# The README's figures from the current code: the default library (built when missing), its
+# frontier for 1-4 strides, `skatelib plot`, and a screenshot of `skatelib inspect` in the viewer.
+LIB := out/cyberdog2-default.h5
+figures: venv
+	test -f $(LIB) || $(BIN)/skatelib build -o $(LIB)
+	$(BIN)/skatelib frontier -s 1 -s 2 -s 3 -s 4 -o docs/figures/frontier.json
+	$(BIN)/skatelib plot $(LIB) -o docs/figures -f png --frontier docs/figures/frontier.json
+	mkdir -p build/figures
+	$(BIN)/skatelib inspect $(LIB) --entry v0.50_s2 --entry v1.00_s4 --save build/figures/inspect.rrd --force
+	tools/rrd-screenshot build/figures/inspect.rrd docs/inspect.png 1400x850
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache

@@ -521,6 +521,33 @@ def inspect(
 
 
 @app.command()
+def plot(
+    library: LibArg,
+    out: Annotated[Path, typer.Option("-o", "--out", help="Folder for the figures.")] = Path("out/figures"),
+    frontier_file: Annotated[Path | None, typer.Option(
+        "--frontier", help="A `skatelib frontier -o` file to draw (default: the library's stored frontier, if any).")
+                             ] = None,
+    fmt: Annotated[list[str] | None, typer.Option(
+        "--format", "-f", help="png and/or svg (repeatable); both by default.")] = None,
+) -> None:
+    """Figures of a quadruped library (matplotlib): board and momentum speed over time (the paper's
+    Fig. 6), deck roll, the push foot's forces against the friction cone, the reachable-speed
+    frontier."""
+    from skatelib.pipeline.plots import FORMATS, write_figures
+
+    formats = tuple(fmt or FORMATS)
+    for f in formats:
+        if f not in FORMATS:
+            raise typer.BadParameter(f"--format {f}: choose png or svg")
+    written = write_figures(library, out, frontier_file, formats)
+    for p in written:
+        console.print(escape(str(p)))
+    if frontier_file is None and not any(p.stem == "frontier" for p in written):
+        console.print("no frontier in the library (build --frontier, or pass --frontier F.json "
+                      "from skatelib frontier -o)")
+
+
+@app.command()
 def track(
     library: LibArg,
     entry: Annotated[list[str] | None,

@@ -31,6 +31,10 @@ from skatelib.runtime import Entry, MotionLibrary
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)
 FORCE_SCALE_M_PER_N = 0.004
 SPACING_M = 1.2  # side-by-side entries are this far apart along y
+DECK_THICKNESS_M = 0.02
+WHEEL_RADIUS_M = 0.03  # drawn only: the paper gives the deck height with wheels (0.11 m), not the wheels
+WHEEL_WIDTH_M = 0.035
+GROUND_HALF_WIDTH_M = 0.45
 
 
 def _time(t: np.ndarray) -> list[rr.TimeColumn]:
@@ -123,14 +127,8 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     if np.any(stood):
         steps = np.unique(np.round(e.foot_pos[stood], 3), axis=0)
         rec.log(f"{root}/footholds", rr.Points3D(steps + offset, radii=0.012, colors=[(230, 120, 30)]), static=True)
-    # The board: a deck-sized box rolling about its x axis and yawing with the robot.
-    m = lib.model
-    half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, 0.01]
-    rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -0.01]], colors=[(160, 110, 60)]),
-            static=True)
-    Rb = board_rotations(e.board_pos[:, 3], x[:, 26])
-    rec.send_columns(f"{root}/board", indexes=_time(t),
-                     columns=rr.Transform3D.columns(translation=e.board_pos[:, :3] + offset, quaternion=_quat_rows(Rb)))
+    _log_board(rec, lib.model, e, root, offset)
+    _log_ground(rec, root, e.board_pos[:, :2] + offset[:2], float(lib.model["board_deck_length_m"]))
     # Contact forces at the knots where a control acts.
     forces = u[:, :12].reshape(-1, 4, 3)
     for i, leg in enumerate(LEGS):
@@ -150,6 +148,7 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     names = e.columns["state"][12:24]
     for j, name in enumerate(names):
         _series(rec, root, f"joints/{name}", t, x[:, 12 + j], f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
+    m = lib.model
     tau_max = float(m.get("torque_limit_Nm", np.inf))
     fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
     touching = np.isin(e.contact[:-1], (BOARD, GROUND))
@@ -157,6 +156,48 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
     torque = np.where(touching, tau_max - tau, np.inf).min(axis=1)
     _series(rec, root, "margins/friction_N", t[:-1], fric, "Coulomb margin mu f_n - |f_t| [N]")
     _series(rec, root, "margins/torque_Nm", t[:-1], torque, "torque margin [N m]")
+
+
+def _log_board(rec: rr.RecordingStream, m: dict[str, Any], e: Entry, root: str, offset: np.ndarray) -> None:
+    """The board: the deck rolls about its x axis on two trucks that stay on the ground, four
+    wheels on the trucks' axles; all of it moves and yaws with the board (``board_pos``: the deck
+    top's centre, the deck roll)."""
+    assert e.board_pos is not None
+    t, yaw = e.t, e.state[:, 26]
+    height = float(m["board_deck_height_m"])  # deck top above the ground, wheels included
+    base = e.board_pos[:, :3] * [1.0, 1.0, 0.0] + offset
+    heading = _quat_rows(board_rotations(0 * yaw, yaw))
+    rec.send_columns(f"{root}/board", indexes=_time(t),
+                     columns=rr.Transform3D.columns(translation=base, quaternion=heading))
+    half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, DECK_THICKNESS_M / 2]
+    rec.log(f"{root}/board/deck", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -DECK_THICKNESS_M / 2]],
+                                             colors=[(160, 110, 60)], fill_mode="solid"), static=True)
+    roll = board_rotations(e.board_pos[:, 3], 0 * yaw)
+    rec.send_columns(f"{root}/board/deck", indexes=_time(t),
+                     columns=rr.Transform3D.columns(translation=np.tile([0.0, 0.0, height], (len(t), 1)),
+                                                    quaternion=_quat_rows(roll)))
+    axles = [float(m["board_l_front_m"]), -float(m["board_l_rear_m"])]
+    half_track = float(m.get("board_truck_width_m", m["board_deck_width_m"])) / 2
+    hanger = height - DECK_THICKNESS_M - WHEEL_RADIUS_M
+    rec.log(f"{root}/board/trucks", rr.Boxes3D(
+        centers=[[x, 0.0, WHEEL_RADIUS_M + hanger / 2] for x in axles],
+        half_sizes=[[0.02, half_track - WHEEL_WIDTH_M / 2, hanger / 2]] * 2, colors=[(150, 150, 160)],
+        fill_mode="solid"), static=True)
+    rec.log(f"{root}/board/wheels", rr.Cylinders3D(
+        centers=[[x, side * half_track, WHEEL_RADIUS_M] for x in axles for side in (-1.0, 1.0)],
+        lengths=[WHEEL_WIDTH_M] * 4, radii=[WHEEL_RADIUS_M] * 4, colors=[(235, 235, 225)],
+        rotation_axis_angles=[rr.RotationAxisAngle(axis=[1.0, 0.0, 0.0], degrees=90.0)] * 4), static=True)
+
+
+def _log_ground(rec: rr.RecordingStream, root: str, path_xy: np.ndarray, margin_m: float) -> None:
+    """A ground strip under the entry's path (its own, so that a view of one entry shows it), with
+    this view's axes (z up)."""
+    rec.log(root, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    border = np.array([margin_m, GROUND_HALF_WIDTH_M])
+    lo = path_xy.min(axis=0) - border
+    hi = path_xy.max(axis=0) + border
+    rec.log(f"{root}/ground", rr.Boxes3D(mins=[[lo[0], lo[1], -0.002]], sizes=[[*(hi - lo), 0.002]],
+                                         colors=[(215, 215, 210)], fill_mode="solid"), static=True)
 
 
 def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
@@ -167,6 +208,7 @@ def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, ro
     rec.send_columns(f"{root}/com", indexes=_time(t),
                      columns=rr.Points3D.columns(positions=x[:, 0:3] + offset, radii=np.full(len(t), 0.03)))
     rec.log(f"{root}/com_path", rr.LineStrips3D([x[:, 0:3] + offset], colors=[(200, 40, 40)]), static=True)
+    _log_ground(rec, root, x[:, 0:2] + offset[:2], 0.5)
     zmp3 = np.column_stack([zmp, np.zeros(len(zmp))]) + offset
     green = np.tile(np.array([[20, 160, 60]], dtype=np.uint8), (len(t), 1))
     rec.send_columns(f"{root}/zmp", indexes=_time(t),
@@ -202,8 +244,9 @@ def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry,
 
 
 def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
-    """A 3D view of every entry beside time-series panels, one tab per entry (a closed-loop run
-    shares its entry's tab with the reference), so that a plot never mixes entries."""
+    """One tab per entry: its own 3D view (the others out of it) beside its summary and plots (a
+    closed-loop run shares its entry's tab with the reference), so that nothing mixes entries; a
+    last tab shows all entries side by side."""
     if lib.kind == "quadruped":
         panels = [("board speed vs target", "board_speed"), ("deck roll", "board_roll"),
                   ("normal forces", "normal_force"), ("joint angles", "joints"), ("margins", "margins")]
@@ -217,10 +260,13 @@ def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
         return [rrb.TimeSeriesView(name=title, contents=[f"{r}/plots/{p}/**" for r in members] + [
             f"{r}/plots/{p}" for r in members]) for title, p in panels]
 
-    tabs = [rrb.Vertical(rrb.TextDocumentView(origin=f"{members[0]}/summary", name="entry"), *plots(members),
-                         name=key, row_shares=[2] + [5] * len(panels)) for key, members in groups.items()]
-    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(name="scene", origin="/"), rrb.Tabs(*tabs),
-                                        column_shares=[3, 2]), collapse_panels=True)
+    tabs = [rrb.Horizontal(
+        rrb.Spatial3DView(name=f"{key} 3D", origin=f"/{key}"),
+        rrb.Vertical(rrb.TextDocumentView(origin=f"{members[0]}/summary", name="entry"), *plots(members),
+                     row_shares=[2] + [5] * len(panels)),
+        name=key, column_shares=[3, 2]) for key, members in groups.items()]
+    overview = rrb.Spatial3DView(name=f"all {len(groups)} entries", origin="/")
+    return rrb.Blueprint(rrb.Tabs(*tabs, overview), collapse_panels=True)
 
 
 def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
@@ -274,6 +320,7 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
         rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         for n, (key, run) in enumerate(runs):
             offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
+            rec.log(f"/{key}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # its tab's 3D view
             log_quadruped_entry(rec, lib, lib[key], robot, f"/{key}/reference", offset)
             _log_summary(rec, f"/{key}/reference", lib[key])
             beside = offset + np.array([0.0, SPACING_M / 2, 0.0])

@@ -1,0 +1,77 @@
+"""`skatelib plot`: the figures are written from the file, the plotted forces are the library's,
+and bad input is refused with the file named."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.build import build_library
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.plots import push_foot_forces, write_figures
+from skatelib.runtime import MotionLibrary
+
+TINY = Path(__file__).parent / "configs" / "tiny.toml"
+CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+
+
+@pytest.fixture(scope="module")
+def lib_path(tmp_path_factory):
+    return build_library(load_config(TINY), tmp_path_factory.mktemp("p") / "tiny.h5", jobs=1, use_cache=False).path
+
+
+def test_plot_writes_every_figure(lib_path, tmp_path):
+    """PNG and SVG of the speeds, deck roll and push forces; the frontier from a frontier file."""
+    frontier = tmp_path / "f.json"
+    frontier.write_text(json.dumps({"search": {}, "points": [
+        {"n_strides": 1, "fastest_mps": 0.4, "first_failure_mps": 0.45, "limit": "",
+         "probes": [{"velocity_mps": 0.4, "ok": True}, {"velocity_mps": 0.45, "ok": False}]}]}))
+    r = subprocess.run([*CLI, "plot", str(lib_path), "-o", str(tmp_path / "figs"), "--frontier", str(frontier)],
+                       capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    for stem in ("speeds", "deck_roll", "push_forces", "frontier"):
+        png = (tmp_path / "figs" / f"{stem}.png").read_bytes()
+        assert png.startswith(b"\x89PNG") and len(png) > 10_000
+        assert (tmp_path / "figs" / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
+    assert not list((tmp_path / "figs").glob("*.tmp*"))  # written atomically
+
+
+def test_push_forces_are_the_ground_foot_forces(lib_path):
+    """The plotted |f_t| and mu f_n are those of the foot on the ground, from the stored controls,
+    NaN while no foot is on the ground; a push foot whose force is doctored outside the cone shows."""
+    lib = MotionLibrary.open(lib_path)
+    e = lib["v0.30_s1"]
+    mu = float(lib.model["friction_mu"])
+    t, ft, limit = push_foot_forces(e, mu)
+    assert e.contact is not None
+    on = (e.contact[:-1] == 2).any(axis=1)
+    assert np.all(np.isnan(ft[~on])) and np.all(np.isfinite(ft[on])) and len(t) == len(e.t) - 1
+    k = int(np.nonzero(on)[0][0])
+    leg = int(np.nonzero(e.contact[k] == 2)[0][0])
+    f = e.control[k, 3 * leg:3 * leg + 3]
+    assert ft[k] == pytest.approx(np.hypot(f[0], f[1])) and limit[k] == pytest.approx(mu * f[2])
+    assert np.all(ft[on] <= limit[on] + 1e-6)  # the library's pushes are inside Coulomb's cone
+
+    class Doctored:  # the same entry with the first push's tangential force doubled
+        contact = e.contact
+        t = e.t
+        control = e.control.copy()
+
+    Doctored.control[k, 3 * leg:3 * leg + 2] *= 3.0
+    _, ft2, limit2 = push_foot_forces(Doctored, mu)  # type: ignore[arg-type]
+    assert ft2[k] > limit2[k]
+
+
+def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path):
+    bad = tmp_path / "nope.json"
+    bad.write_text("{}")
+    with pytest.raises(SkatelibError, match=r"nope\.json"):
+        write_figures(lib_path, tmp_path / "figs", bad)
