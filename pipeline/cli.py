@@ -374,6 +374,11 @@ class Maneuver(enum.StrEnum):
     steer = "steer"
 
 
+class FigureFormat(enum.StrEnum):
+    png = "png"
+    svg = "svg"
+
+
 class QpSolver(enum.StrEnum):
     """The MPC's QP solvers (``skatelib.control.mpc.SOLVERS``)."""
 
@@ -527,7 +532,7 @@ def plot(
     frontier_file: Annotated[Path | None, typer.Option(
         "--frontier", help="A `skatelib frontier -o` file to draw (default: the library's stored frontier, if any).")
                              ] = None,
-    fmt: Annotated[list[str] | None, typer.Option(
+    fmt: Annotated[list[FigureFormat] | None, typer.Option(
         "--format", "-f", help="png and/or svg (repeatable); both by default.")] = None,
 ) -> None:
     """Figures of a quadruped library (matplotlib): board and momentum speed over time (the paper's
@@ -535,10 +540,7 @@ def plot(
     frontier."""
     from skatelib.pipeline.plots import FORMATS, write_figures
 
-    formats = tuple(fmt or FORMATS)
-    for f in formats:
-        if f not in FORMATS:
-            raise typer.BadParameter(f"--format {f}: choose png or svg")
+    formats = tuple(f.value for f in fmt) if fmt else FORMATS
     written = write_figures(library, out, frontier_file, formats)
     for p in written:
         console.print(escape(str(p)))

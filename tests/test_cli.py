@@ -115,10 +115,10 @@ def test_every_help_shows_defaults_choices_and_units():
         if (p.default not in (None, False) and not p.is_flag) or (p.opts[0] == "-o" and name in ("build", "solve")):
             assert "[default: " in text, (name, p.opts, text)
         if "|" in names:  # a choice: all of them listed
-            assert all(c in names for c in ("daqp", "osqp")) or "loky" in names or "steer" in names, names
+            assert any(c in names for c in ("daqp|proxqp|osqp", "loky|dask", "entries|steer", "png|svg")), names
         if "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
             assert "m/s" in text, (name, p.opts, text)
     assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()
                                              if p.name == "solver")
     assert set(QpSolver) == set(SOLVERS)
-    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "track"}  # model: no options
+    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track"}  # model: none
