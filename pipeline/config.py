@@ -23,6 +23,8 @@ from skatelib.library.channels import LEGS
 from skatelib.library.errors import ConfigError
 from skatelib.library.schema import HDF5_SIGNATURE
 
+# The checkout's configs/ (editable install) or the installed package skatelib.configs (package
+# data of a wheel): the same place relative to this file.
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT_CONFIG = "cyberdog2.toml"
 FRICTION_MODELS = ("cone", "polygon8")

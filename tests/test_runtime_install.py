@@ -58,3 +58,29 @@ def test_wheel_without_extras_serves_the_runtime(tmp_path):
     cli = subprocess.run([str(env_dir / "bin" / "skatelib"), "--help"], capture_output=True, text=True)
     assert cli.returncode == 4 and "pip install 'skatelib[pipeline]'" in cli.stderr
     assert "Traceback" not in cli.stderr
+
+
+@pytest.mark.slow
+def test_wheel_ships_the_default_config_and_robot(tmp_path):
+    """The wheel holds configs/ and the URDF as package data: installed (without its dependencies,
+    which this venv has) and first on the path, `skatelib model` without a config reads the
+    installed default config and robot, not the checkout's."""
+    import zipfile
+
+    dist = tmp_path / "dist"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(dist),
+                    str(ROOT)], check=True, capture_output=True)
+    (wheel,) = dist.glob("skatelib-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert {"skatelib/configs/cyberdog2.toml", "skatelib/configs/robots/cyberdog2.urdf",
+            "skatelib/configs/hrp2_walk.toml"} <= names
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(wheel)],
+                   check=True, capture_output=True)
+    code = ("from skatelib.pipeline.config import load_config; import skatelib.pipeline as p; "
+            "c = load_config(None); print(p.__file__); print(c.path); print(c.urdf_path)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"}, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    module, config, urdf = r.stdout.split()
+    assert all(Path(x).resolve().is_relative_to(target.resolve()) for x in (module, config, urdf)), r.stdout
