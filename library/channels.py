@@ -63,18 +63,6 @@ NX: Final = len(STATE_NAMES)
 NU: Final = len(CONTROL_NAMES)
 
 
-def index(names: tuple[str, ...], name: str) -> int:
-    """Return the column of ``name`` in ``names``.
-
-    Raises:
-        KeyError: With the list of valid names when ``name`` is unknown.
-    """
-    try:
-        return names.index(name)
-    except ValueError:
-        raise KeyError(f"unknown channel {name!r}; valid channels: {', '.join(names)}") from None
-
-
 # Slices into the state and control vectors, derived from the names above.
 S_POS: Final = slice(0, 3)
 S_RPY: Final = slice(3, 6)

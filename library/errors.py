@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 
 class SkatelibError(Exception):
@@ -28,22 +27,6 @@ class ConfigError(SkatelibError):
 
 class ModelError(SkatelibError):
     """A robot description cannot be used (missing joint or frame, wrong joint type)."""
-
-
-class SolveFailed(SkatelibError):
-    """A trajectory optimization did not converge.
-
-    Attributes:
-        spec: The problem specification that was solved.
-        status: The solver's return status (e.g. ``"Infeasible_Problem_Detected"``).
-        stats: Solver statistics (iterations, times).
-    """
-
-    def __init__(self, spec: Any, status: str, stats: dict[str, Any] | None = None) -> None:
-        self.spec = spec
-        self.status = status
-        self.stats = stats or {}
-        super().__init__(f"solve failed with status {status!r} for {spec!r}")
 
 
 class LibraryFormatError(SkatelibError):

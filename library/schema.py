@@ -95,14 +95,6 @@ ENTRY_DATASETS: Final = {
 }
 
 
-def model_path(name: str) -> str:
-    return f"/{G_MODEL}/{name}"
-
-
-def entry_path(key: str, name: str | None = None) -> str:
-    return f"/{G_ENTRIES}/{key}" + (f"/{name}" if name else "")
-
-
 def entry_key(target_velocity_mps: float, n_strides: int) -> str:
     """Canonical quadruped entry name, e.g. ``v0.50_s2``."""
     return f"v{target_velocity_mps:.2f}_s{n_strides}"

@@ -76,7 +76,9 @@ class _Robot:
         return None
 
     def poses(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Per knot and shape: translations (K, G, 3) and xyzw quaternions (K, G, 4); feet (K, 4, 3)."""
+        """Per knot and shape: translations (K, G, 3) and xyzw quaternions (K, G, 4); per knot and
+        leg the feet's translational Jacobians over the leg's joints (K, 4, 3, 3) (zeros without
+        foot frames)."""
         K, G = len(q), len(self.geoms.geometryObjects)
         trans, quats = np.zeros((K, G, 3)), np.zeros((K, G, 4))
         tau = np.zeros((K, 4, 3, 3))

@@ -36,7 +36,3 @@ def euler_rate_map(rpy: Any) -> Any:
         ca.horzcat(0, cr, -sr),
         ca.horzcat(0, sr / cp, cr / cp),
     )
-
-
-def skew(v: Any) -> Any:
-    return ca.vertcat(ca.horzcat(0, -v[2], v[1]), ca.horzcat(v[2], 0, -v[0]), ca.horzcat(-v[1], v[0], 0))

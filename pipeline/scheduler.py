@@ -1,9 +1,10 @@
-"""Contact scheduler (Sec. IV-A): periodic push cycles of one leg, framed by balancing phases.
+"""Contact scheduler (Sec. IV-A): periodic push cycles of one leg.
 
-The full timeline is: four-leg balancing -> three-leg transfer (push leg board -> ground) ->
-n strides of [push on the ground (duty x period), swing (rest of the period)] -> three-leg
-transfer (push leg back onto the board) -> four-leg balancing. The trajectory optimization
-covers the strides (the accelerating mode); the transfer swings follow a Bezier curve online.
+On the robot: four-leg balancing -> three-leg transfer (push leg board -> ground) -> n strides of
+[push on the ground (duty x period), swing (rest of the period)] -> three-leg transfer (push leg
+back onto the board) -> four-leg balancing. The trajectory optimization covers the strides (the
+accelerating mode, :func:`knot_schedule`); the transfers and balancing are the controller's
+(``skatelib.control.closed_loop``).
 """
 
 from __future__ import annotations
@@ -16,16 +17,6 @@ from skatelib.pipeline.config import ScheduleConfig
 
 
 @dataclass(frozen=True)
-class Phase:
-    """A stretch of time with constant contacts: mode name, start and end [s], contact per leg."""
-
-    mode: str
-    t0: float
-    t1: float
-    contact: tuple[int, int, int, int]
-
-
-@dataclass(frozen=True)
 class KnotSchedule:
     """Contacts on a uniform grid of knots.
 
@@ -33,12 +24,10 @@ class KnotSchedule:
         t: (K,) knot times [s], K = N + 1.
         contact: (K, 4) int8 per knot and leg: the contact on [t_k, t_k+1) (the last knot repeats
             the phase that ends there).
-        stride_index: (K,) which stride each knot belongs to.
     """
 
     t: np.ndarray
     contact: np.ndarray
-    stride_index: np.ndarray
 
     @property
     def n_intervals(self) -> int:
@@ -57,39 +46,6 @@ class KnotSchedule:
             else:
                 k += 1
         return runs
-
-
-def push_phases(cfg: ScheduleConfig, n_strides: int, t0: float = 0.0) -> list[Phase]:
-    """The accelerating phases: per stride, push on the ground then swing."""
-    if n_strides < 1:
-        raise ValueError(f"n_strides must be >= 1, got {n_strides}")
-    p = LEGS.index(cfg.push_leg)
-    push = [BOARD] * 4
-    push[p] = GROUND
-    swing = [BOARD] * 4
-    swing[p] = SWING
-    phases = []
-    for s in range(n_strides):
-        ts = t0 + s * cfg.period_s
-        phases.append(Phase("accelerating", ts, ts + cfg.push_duty * cfg.period_s, tuple(push)))  # type: ignore[arg-type]
-        phases.append(Phase("accelerating", ts + cfg.push_duty * cfg.period_s, ts + cfg.period_s, tuple(swing)))  # type: ignore[arg-type]
-    return phases
-
-
-def full_timeline(cfg: ScheduleConfig, n_strides: int) -> list[Phase]:
-    """Balancing, transfer, strides, transfer, balancing; the strides start at t = 0."""
-    p = LEGS.index(cfg.push_leg)
-    lifted = [BOARD] * 4
-    lifted[p] = SWING
-    t_pre = -(cfg.balance_s + cfg.transfer_s)
-    end = n_strides * cfg.period_s
-    return [
-        Phase("four_leg", t_pre, t_pre + cfg.balance_s, (BOARD,) * 4),
-        Phase("three_leg", -cfg.transfer_s, 0.0, tuple(lifted)),  # type: ignore[arg-type]
-        *push_phases(cfg, n_strides),
-        Phase("three_leg", end, end + cfg.transfer_s, tuple(lifted)),  # type: ignore[arg-type]
-        Phase("four_leg", end + cfg.transfer_s, end + cfg.transfer_s + cfg.balance_s, (BOARD,) * 4),
-    ]
 
 
 def knot_schedule(cfg: ScheduleConfig, n_strides: int, dt: float) -> KnotSchedule:
@@ -112,5 +68,4 @@ def knot_schedule(cfg: ScheduleConfig, n_strides: int, dt: float) -> KnotSchedul
     local = np.arange(n + 1) % per_i
     contact[:, p] = np.where(local < push_i, GROUND, SWING)
     contact[-1, p] = SWING  # the window ends at the end of the last swing
-    stride = np.minimum(np.arange(n + 1) // per_i, n_strides - 1)
-    return KnotSchedule(t=t, contact=contact, stride_index=stride)
+    return KnotSchedule(t=t, contact=contact)

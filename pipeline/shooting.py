@@ -1,4 +1,5 @@
-"""Direct multiple shooting (Bock and Plitt 1984): one stage per interval, RK4 inside.
+"""Direct multiple shooting (Bock and Plitt 1984): one stage per interval; the continuity term
+integrates inside it (the push-off's ``DynamicsDefect``: RK4 in ``substeps`` steps).
 
 The decision vector is ``w = [x_0, u_0, x_1, u_1, ..., x_N, u_N]``; ``u_N`` exists only so every
 stage sees the same window ``[x_k, u_k, x_{k+1}, u_{k+1}]`` and is fixed to zero by its bounds.
@@ -37,9 +38,6 @@ class Transcribed:
     lbg: np.ndarray
     ubg: np.ndarray
     row_slices: dict[str, slice]
-    nx: int
-    nu: int
-    n_params: int
     rows_per_stage: int
     fingerprint: str  # SHA-256 of the serialized stage function: changes with any cost or constraint term
 
@@ -80,6 +78,6 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
     oracle = ca.Function("stage_value", [z, p], [cost, cons])
     nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=oracle, keep=keep)
     fingerprint = hashlib.sha256(oracle.serialize().encode()).hexdigest()
-    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices, nx=nx, nu=nu,
-                       n_params=n_params, rows_per_stage=cons.shape[0], fingerprint=fingerprint)
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices,
+                       rows_per_stage=cons.shape[0], fingerprint=fingerprint)
 

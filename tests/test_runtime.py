@@ -99,6 +99,16 @@ def test_blend_is_the_linear_mix_and_checked(lib):
         lib.blend(0.9, 1)
 
 
+def test_blend_strict_rejects_a_blend_that_misses_its_margins(lib):
+    """The joints of the test entries come within 0.2 rad of their limits: a margin of 0.3 rad
+    rejects the blend (strict, the default), and strict=False returns it with the failed check."""
+    tight = BlendMargin(joint_rad=0.3)
+    with pytest.raises(SkatelibError, match="misses its margins"):
+        lib.blend(0.35, 1, margin=tight)
+    b = lib.blend(0.35, 1, strict=False, margin=tight)
+    assert b.check is not None and not b.check.ok and b.check.min_joint_limit_slack_rad < 0.3
+
+
 def test_runtime_imports_only_numpy_and_h5py():
     """Importing skatelib.runtime and opening nothing pulls in none of the pipeline's packages."""
     code = ("import sys, skatelib.runtime; bad = [m for m in ('casadi', 'pinocchio', 'rerun', 'joblib', 'typer', "

@@ -1,16 +1,15 @@
-"""Contact scheduler: periodic pushes, phase durations and the full timeline."""
+"""Contact scheduler: periodic pushes and phase durations on the knots."""
 
 from __future__ import annotations
 
 import dataclasses
-import itertools
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from skatelib.library.channels import BOARD, GROUND, LEGS, SWING
-from skatelib.pipeline.scheduler import full_timeline, knot_schedule
+from skatelib.pipeline.scheduler import knot_schedule
 
 
 @settings(max_examples=60, deadline=None)
@@ -34,16 +33,6 @@ def test_default_schedule_matches_paper(cfg):
     ks = knot_schedule(cfg.schedule, 2, 0.03)
     assert ks.t[-1] == pytest.approx(2.4)
     assert ks.stance_intervals(LEGS.index("RL"), GROUND) == [(0, 18), (40, 58)]
-
-
-def test_full_timeline_is_contiguous_and_ordered(cfg):
-    """Phases tile time without gaps: balance, transfer, strides, transfer, balance."""
-    tl = full_timeline(cfg.schedule, 3)
-    assert [p.mode for p in tl][:2] == ["four_leg", "three_leg"]
-    assert [p.mode for p in tl][-2:] == ["three_leg", "four_leg"]
-    for a, b in itertools.pairwise(tl):
-        assert a.t1 == pytest.approx(b.t0)
-    assert sum(p.mode == "accelerating" for p in tl) == 6
 
 
 def test_dt_that_does_not_divide_the_period_is_refused(cfg):
