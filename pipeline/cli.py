@@ -172,6 +172,17 @@ def build(
     target = out or default_output(any_cfg)
     check_output(target, [any_cfg.path], force)
     if isinstance(any_cfg, HumanoidConfig):
+        # A humanoid motion solves in milliseconds in this process: no workers, cluster, cache or
+        # frontier. Say so instead of ignoring the flags.
+        if backend is not Backend.loky or scheduler is not None or frontier:
+            raise typer.BadParameter(f"{any_cfg.path} is a humanoid config: its steps solve in milliseconds in "
+                                     "this process; --backend dask, --scheduler and --frontier are for quadruped "
+                                     "configs")
+        moot = [flag for flag, given in (("--jobs", jobs != 2), ("--no-cache", not cache),
+                                         ("--no-progress", not progress)) if given]
+        if moot:
+            err_console.print(f"note: {', '.join(moot)} do{'es' if len(moot) == 1 else ''} not apply to a humanoid "
+                              "build (solved in this process, milliseconds per step, no cache)")
         _build_humanoid(any_cfg, target, allow_failures)
         return
     cfg = any_cfg

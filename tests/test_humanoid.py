@@ -128,3 +128,18 @@ def test_unknown_motion_is_a_config_error(tmp_path):
     with pytest.raises(ConfigError, match=r"sweep\.motion"):
         load_humanoid_config(p)
     assert Path(WALK).exists()
+
+
+def test_humanoid_build_says_which_flags_do_not_apply(tmp_path):
+    """A humanoid build refuses the quadruped-only flags (exit 2, naming them) and notes the moot
+    ones instead of ignoring them silently."""
+    env = {**os.environ, "COLUMNS": "200"}
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    r = subprocess.run([*cli, "build", str(WALK), "-o", str(tmp_path / "w.h5"), "--frontier"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 2 and "--frontier" in r.stderr and "humanoid" in r.stderr
+    assert not (tmp_path / "w.h5").exists()
+    r = subprocess.run([*cli, "build", str(WALK), "-o", str(tmp_path / "w.h5"), "--no-cache", "-j", "1"],
+                       capture_output=True, text=True, env=env)
+    assert r.returncode == 0 and "--jobs, --no-cache do not apply" in r.stderr
+    assert MotionLibrary.open(tmp_path / "w.h5").keys() == ["walk_v0.375_n6"]
