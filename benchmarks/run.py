@@ -28,8 +28,8 @@ from typing import Any
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from skatelib.pipeline import pushoff
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped import pushoff
 
 
 def _build_and_solve(cfg, v: float, strides: int, warm=None) -> tuple[float, pushoff.SolveResult]:
@@ -192,8 +192,8 @@ def bench_humanoid(repeats: int = 21) -> None:
     import numpy as np
     from scipy.optimize import minimize
     from skatelib.pipeline.config import CONFIG_DIR, load_humanoid_config
-    from skatelib.pipeline.humanoid import solve_step, step_problem
-    from skatelib.pipeline.humanoid_motions import skating_steps
+    from skatelib.pipeline.humanoid.motion import skating_steps
+    from skatelib.pipeline.humanoid.step import solve_step, step_problem
 
     c = load_humanoid_config(CONFIG_DIR / "hrp2_skate.toml")
     h = c.humanoid

@@ -9,11 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig
-from skatelib.pipeline.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
-from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
-from skatelib.pipeline.pushoff import problem_for
+from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
+from skatelib.pipeline.quadruped.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
+from skatelib.pipeline.quadruped.pushoff import problem_for
+from skatelib.pipeline.quadruped.system import SkateSystem
 from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
-from skatelib.pipeline.system import SkateSystem
 
 
 @dataclass(frozen=True)

@@ -107,7 +107,7 @@ def model(config: ConfigArg = None) -> None:
     """Print the robot and board model of a config: SRB mass and inertia from the URDF, board
     figures; for a humanoid config, its point-mass model and the LIP/DCM time constant."""
     from skatelib.pipeline.config import HumanoidConfig, load_any_config
-    from skatelib.pipeline.system import SkateSystem
+    from skatelib.pipeline.quadruped.system import SkateSystem
 
     cfg = load_any_config(config)
     if isinstance(cfg, HumanoidConfig):
@@ -195,7 +195,7 @@ def build(
     total = sum(len(c.velocities) for c in chains_for(cfg))
     console.print(f"building {_count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(target))}")
     if cfg.optimization.compile:
-        from skatelib.pipeline.stagewise import c_compiler, cache_dir
+        from skatelib.pipeline.ocp.stagewise import c_compiler, cache_dir
 
         cc = c_compiler()
         if cc is None:
@@ -233,7 +233,7 @@ def build(
                 text += f" (last: {key} {'cached, ' if outcome.cached else ''}{_short_status(outcome)})"
             bar.update(task, advance=0 if outcome is None else 1, description=escape(text))
 
-        from skatelib.pipeline.frontier import FrontierSearch
+        from skatelib.pipeline.quadruped.frontier import FrontierSearch
 
         try:
             report = build_library(cfg, target, jobs=jobs, backend=backend.value, scheduler=scheduler,
@@ -253,13 +253,13 @@ def build(
 
 
 def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
-    from skatelib.pipeline.humanoid_build import build_humanoid_library
+    from skatelib.pipeline.humanoid.entries import build_humanoid_library
 
     report = build_humanoid_library(cfg, out)
     t = Table(title=f"{cfg.meta.name}: {cfg.sweep.motion} ({cfg.gpm.nodes} LG nodes, {cfg.gpm.solver})")
     for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
         t.add_column(escape(col))
-    from skatelib.pipeline.humanoid_build import motion_key
+    from skatelib.pipeline.humanoid.entries import motion_key
 
     for m in report.motions:
         for r in m.steps:
@@ -331,7 +331,7 @@ def frontier(
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (warm-started climb, then bisection)."""
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.frontier import FrontierSearch, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
 
     cfg = load_config(config)
     search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)

@@ -23,9 +23,9 @@ from typing import Any
 from skatelib.library import schema
 from skatelib.library.writer import atomic_path
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
-from skatelib.pipeline.stagewise import cache_dir
-from skatelib.pipeline.verify import check_trajectory
+from skatelib.pipeline.ocp.stagewise import cache_dir
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
+from skatelib.pipeline.quadruped.verify import check_trajectory
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 

@@ -9,8 +9,8 @@ from pathlib import Path
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.library.reader import read_library
 from skatelib.pipeline.config import config_from_json
-from skatelib.pipeline.system import SkateSystem
-from skatelib.pipeline.verify import check_trajectory
+from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.verify import check_trajectory
 from skatelib.runtime import MotionLibrary
 
 
@@ -58,8 +58,8 @@ def validate_library(path: Path | str, report: Report) -> int:
 
 def _validate_humanoid(lib: MotionLibrary, report: Report) -> int:
     from skatelib.pipeline.config import humanoid_config_from_json
-    from skatelib.pipeline.humanoid_motions import skating_steps, walking_steps
-    from skatelib.pipeline.humanoid_verify import check_steps, failures
+    from skatelib.pipeline.humanoid.motion import skating_steps, walking_steps
+    from skatelib.pipeline.humanoid.verify import check_steps, failures
 
     try:
         cfg = humanoid_config_from_json(str(lib.attrs["config_resolved_json"]), lib.path)

@@ -15,7 +15,7 @@ from skatelib.library.reader import read_library
 from skatelib.pipeline import sweep
 from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.pushoff import PushoffSpec, WarmStart
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
 from skatelib.runtime import MotionLibrary
 
 TINY = Path(__file__).parent / "configs" / "tiny.toml"

@@ -289,7 +289,7 @@ def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
     import casadi as ca
     from skatelib.control.kinematics import LegKinematics
     from skatelib.control.linear_model import rpy_matrix
-    from skatelib.pipeline.dynamics import joint_torques
+    from skatelib.pipeline.quadruped.dynamics import joint_torques
     from skatelib.pipeline.validate import system_from_library
 
     kin = LegKinematics.from_library(lib)

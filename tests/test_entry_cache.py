@@ -6,8 +6,10 @@ import dataclasses
 from pathlib import Path
 
 import pytest
-from skatelib.pipeline import pushoff, pushoff_terms, sweep
+from skatelib.pipeline import sweep
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped import terms as pushoff_terms
 
 TINY = Path(__file__).parent / "configs" / "tiny.toml"
 

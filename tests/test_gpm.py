@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from skatelib.pipeline.gpm import GaussPseudospectral, collocation_defects, terminal_state
+from skatelib.pipeline.ocp.gpm import GaussPseudospectral, collocation_defects, terminal_state
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 10, 20])

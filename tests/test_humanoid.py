@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from skatelib.library.errors import ConfigError
 from skatelib.pipeline.config import CONFIG_DIR, load_humanoid_config
-from skatelib.pipeline.humanoid_build import build_humanoid_library
-from skatelib.pipeline.humanoid_motions import skating_steps, solve_motion, walking_steps
-from skatelib.pipeline.humanoid_verify import check_steps, failures
+from skatelib.pipeline.humanoid.entries import build_humanoid_library
+from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, walking_steps
+from skatelib.pipeline.humanoid.verify import check_steps, failures
 from skatelib.runtime import MotionLibrary
 
 WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"

@@ -15,7 +15,7 @@ rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
 from skatelib.pipeline.build import build_library  # noqa: E402
 from skatelib.pipeline.config import CONFIG_DIR, load_config, load_humanoid_config  # noqa: E402
-from skatelib.pipeline.humanoid_build import build_humanoid_library  # noqa: E402
+from skatelib.pipeline.humanoid.entries import build_humanoid_library  # noqa: E402
 from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
 

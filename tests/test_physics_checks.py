@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import board_rotations, friction_margins
-from skatelib.pipeline import pushoff
-from skatelib.pipeline.pushoff import PushoffProblem, PushoffSpec, solve
-from skatelib.pipeline.pushoff_terms import FinalSpeed
+from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped.pushoff import PushoffProblem, PushoffSpec, solve
+from skatelib.pipeline.quadruped.terms import FinalSpeed
+from skatelib.pipeline.quadruped.verify import check_trajectory
 from skatelib.pipeline.sweep import judge
-from skatelib.pipeline.verify import check_trajectory
 
 
 @pytest.fixture(scope="module")
@@ -132,8 +132,8 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
     import copy
 
     import pinocchio as pin
-    from skatelib.pipeline.leg_dynamics import rigid_leg_torques
-    from skatelib.pipeline.verify import _max_torque
+    from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
+    from skatelib.pipeline.quadruped.verify import _max_torque
 
     r = honest
     full = rigid_leg_torques(system, r.t, r.state, r.control, r.contact, r.foot_pos)
@@ -143,7 +143,7 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
         robot.model.inertias[j] = pin.Inertia.Zero()
     # The quasi-static torques act at the sphere centres; put the contact points there to compare.
     import casadi as ca
-    from skatelib.pipeline.dynamics import foot_centres_world
+    from skatelib.pipeline.quadruped.dynamics import foot_centres_world
 
     x = ca.SX.sym("x", 28)
     centres_fn = ca.Function("c", [x], [foot_centres_world(system, x)])
@@ -162,7 +162,7 @@ def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shov
     import subprocess
     import sys
 
-    from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
+    from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 
     path = write_quadruped_library(tmp_path / "shove.h5", small_cfg, system, [entry_from_result(shove)], {})
     r = subprocess.run([sys.executable, "-c", "from skatelib.pipeline.cli import main; main()", "validate",
@@ -179,7 +179,7 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_
     pytest.importorskip("daqp")
     from skatelib.control.closed_loop import TrackSettings, track_entry
     from skatelib.control.params import SkateParams
-    from skatelib.pipeline.library_io import entry_from_result, write_quadruped_library
+    from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
     from skatelib.runtime import MotionLibrary
 
     verdicts = {}

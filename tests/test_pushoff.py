@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 from skatelib.library.channels import GROUND, LEGS
-from skatelib.pipeline.pushoff import PushoffSpec, solve
-from skatelib.pipeline.verify import check_trajectory
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
+from skatelib.pipeline.quadruped.verify import check_trajectory
 
 from tests import reference_model as ref
 
@@ -36,7 +36,7 @@ def test_solve_converges_to_target_speed(solved):
 def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
     """Re-integrating each shooting interval with a 20-step RK4 of the numpy reference model
     (pinocchio kinematics) lands within 1e-3 of the next knot."""
-    from skatelib.pipeline.dynamics import modes_for
+    from skatelib.pipeline.quadruped.dynamics import modes_for
 
     mode = modes_for(system.push_leg)["accelerating"]
     worst = 0.0

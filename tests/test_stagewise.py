@@ -6,7 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from skatelib.pipeline.stagewise import build_stagewise_nlp, stage_functions
+from skatelib.pipeline.ocp.stagewise import build_stagewise_nlp, stage_functions
 
 N_V, N_STAGES = 3, 12  # window v = [position, velocity, acceleration]
 
@@ -67,7 +67,7 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     call loads the cached library instead of compiling."""
     import shutil
 
-    from skatelib.pipeline import stagewise
+    from skatelib.pipeline.ocp import stagewise
 
     if shutil.which("gcc") is None and shutil.which("cc") is None:
         pytest.skip("no C compiler")

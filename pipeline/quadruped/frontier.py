@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.pushoff import PushoffSpec, SolveResult, WarmStart, solve
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
 from skatelib.pipeline.sweep import THREAD_VARS, judge
 
 

@@ -13,9 +13,9 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
 from skatelib.library.margins import board_rotations, friction_margins, momentum_speed
-from skatelib.pipeline.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
-from skatelib.pipeline.leg_dynamics import rigid_leg_torques
-from skatelib.pipeline.system import SkateSystem
+from skatelib.pipeline.quadruped.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
+from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
+from skatelib.pipeline.quadruped.system import SkateSystem
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class PhysicsReport:
         max_joint_limit_violation_rad: Largest joint-angle excursion past a limit [rad].
         max_torque_Nm: Largest quasi-static joint torque [N m] (limit: ``torque_limit_Nm``).
         max_torque_rigid_legs_Nm: Largest joint torque with the legs' own mass, by pinocchio inverse
-            dynamics of the whole URDF (:mod:`skatelib.pipeline.leg_dynamics`) [N m].
+            dynamics of the whole URDF (:mod:`skatelib.pipeline.quadruped.leg_dynamics`) [N m].
         max_joint_velocity_radps: Largest joint speed [rad/s].
         max_board_roll_rad: Largest |deck roll| [rad].
         final_board_speed_mps: Board speed along its heading at the end [m/s].

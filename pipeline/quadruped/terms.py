@@ -27,10 +27,10 @@ from skatelib.library.channels import (
     U_QD,
 )
 from skatelib.pipeline.config import StanceConfig, WeightsConfig
-from skatelib.pipeline.dynamics import board_rotation, foot_centres_world, joint_torques
-from skatelib.pipeline.ocp import Stage, fixed
-from skatelib.pipeline.scheduler import KnotSchedule
-from skatelib.pipeline.system import SkateSystem
+from skatelib.pipeline.ocp.terms import Stage, fixed
+from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
+from skatelib.pipeline.quadruped.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.system import SkateSystem
 
 NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
 I_BOARD_XY = slice(NX, NX + 2)

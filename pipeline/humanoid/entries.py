@@ -12,8 +12,7 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.writer import EntryData, write_library
 from skatelib.pipeline.config import HumanoidConfig
-from skatelib.pipeline.gpm import GaussPseudospectral
-from skatelib.pipeline.humanoid_motions import (
+from skatelib.pipeline.humanoid.motion import (
     CONTROL_NAMES,
     CONTROL_UNITS,
     STATE_NAMES,
@@ -22,7 +21,8 @@ from skatelib.pipeline.humanoid_motions import (
     Motion,
     solve_motion,
 )
-from skatelib.pipeline.library_io import root_attributes
+from skatelib.pipeline.ocp.gpm import GaussPseudospectral
+from skatelib.pipeline.quadruped.entries import root_attributes
 
 
 @dataclass(frozen=True)

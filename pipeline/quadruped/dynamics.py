@@ -12,7 +12,6 @@ Eq. 8, used only for feet on the board) and output ``xdot`` (28).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,8 +32,9 @@ from skatelib.library.channels import (
     U_F,
     U_QD,
 )
-from skatelib.pipeline.rotations import euler_rate_map, rot_x, rot_z, rpy_to_matrix
-from skatelib.pipeline.system import SkateSystem
+from skatelib.pipeline.ocp.integrators import rk4
+from skatelib.pipeline.ocp.rotations import euler_rate_map, rot_x, rot_z, rpy_to_matrix
+from skatelib.pipeline.quadruped.system import SkateSystem
 
 
 @dataclass(frozen=True)
@@ -136,18 +136,6 @@ def dynamics_function(system: SkateSystem, mode: Mode) -> ca.Function:
     x, u, cr = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("cr", 2, 4)
     return ca.Function(f"dynamics_{mode.name}", [x, u, cr], [state_derivative(system, mode, x, u, cr)],
                        ["x", "u", "cr"], ["xdot"])
-
-
-def rk4(f: Callable[[Any], Any], x: Any, h: float, substeps: int = 1) -> Any:
-    """Classic fourth-order Runge-Kutta of ``dx/dt = f(x)`` over ``h`` seconds in ``substeps`` steps."""
-    dt = h / substeps
-    for _ in range(substeps):
-        k1 = f(x)
-        k2 = f(x + dt / 2 * k1)
-        k3 = f(x + dt / 2 * k2)
-        k4 = f(x + dt * k3)
-        x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return x
 
 
 def rk4_step(f: ca.Function, x: Any, u: Any, cr: Any, h: float, substeps: int = 1) -> Any:

@@ -16,7 +16,18 @@ from typing import Any
 import casadi as ca
 import numpy as np
 import scipy.linalg
-from skatelib.pipeline.dynamics import rk4
+
+
+def rk4(f: Callable[[Any], Any], x: Any, h: float, substeps: int = 1) -> Any:
+    """Classic fourth-order Runge-Kutta of ``dx/dt = f(x)`` over ``h`` seconds in ``substeps`` steps."""
+    dt = h / substeps
+    for _ in range(substeps):
+        k1 = f(x)
+        k2 = f(x + dt / 2 * k1)
+        k3 = f(x + dt / 2 * k2)
+        k4 = f(x + dt * k3)
+        x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return x
 
 
 def phi_functions(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

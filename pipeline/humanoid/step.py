@@ -27,7 +27,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.pipeline.gpm import GaussPseudospectral, collocation_defects, lagrange_basis, terminal_state
+from skatelib.pipeline.ocp.gpm import GaussPseudospectral, collocation_defects, lagrange_basis, terminal_state
 
 MAX_EDGES = 8
 TERMINALS = ("walk", "skate", "dcm_on_board", "none", "stop", "stop_on_board")

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.pipeline.config import HumanoidConfig
-from skatelib.pipeline.gpm import GaussPseudospectral
-from skatelib.pipeline.humanoid import StepResult, StepSpec, Support, convex_hull, rectangle, solve_sequence
+from skatelib.pipeline.humanoid.step import StepResult, StepSpec, Support, convex_hull, rectangle, solve_sequence
+from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 
 STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
 STATE_UNITS = ("m", "m", "m", "m/s", "m/s", "m/s")

@@ -1,6 +1,6 @@
 """Optimal-control problem statement: a stage context and cost/constraint terms.
 
-A transcription (here :mod:`skatelib.pipeline.shooting`) gives each term a :class:`Stage`
+A transcription (here :mod:`skatelib.pipeline.ocp.shooting`) gives each term a :class:`Stage`
 holding the symbolic state and control of knots k and k+1 and the stage parameters; cost terms
 return a scalar, constraint terms a column of expressions plus per-stage bounds.
 """

@@ -19,8 +19,8 @@ from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
 from skatelib.library.writer import EntryData, write_library
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.pushoff import SolveResult
-from skatelib.pipeline.system import SkateSystem
+from skatelib.pipeline.quadruped.pushoff import SolveResult
+from skatelib.pipeline.quadruped.system import SkateSystem
 
 BOARD_POS_COLUMNS = ("board_x", "board_y", "board_z", "board_yaw")
 BOARD_POS_UNITS = ("m", "m", "m", "rad")

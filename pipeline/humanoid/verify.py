@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
-from skatelib.pipeline.humanoid import StepSpec
+from skatelib.pipeline.humanoid.step import StepSpec
 
 
 def _lg_nodes(n: int) -> np.ndarray:

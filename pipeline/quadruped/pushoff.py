@@ -18,10 +18,13 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, NX, S_OMEGA, S_POS, S_Q, S_RPY, S_VEL, SWING, U_QD
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.dynamics import contact_points_world, dynamics_function, modes_for
-from skatelib.pipeline.integrators import integrator
-from skatelib.pipeline.ocp import ConstraintTerm, CostTerm
-from skatelib.pipeline.pushoff_terms import (
+from skatelib.pipeline.ocp.integrators import integrator
+from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
+from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm
+from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
+from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.terms import (
     N_PARAMS,
     NXA,
     P_RATE,
@@ -40,9 +43,6 @@ from skatelib.pipeline.pushoff_terms import (
     TorqueLimits,
     TrackingCost,
 )
-from skatelib.pipeline.scheduler import KnotSchedule, knot_schedule
-from skatelib.pipeline.shooting import MultipleShooting, Transcribed, transcribe
-from skatelib.pipeline.system import SkateSystem
 
 
 @dataclass(frozen=True)
@@ -264,7 +264,7 @@ class PushoffProblem:
         p = self.system.push_index
         q_leg = ca.SX.sym("q", 3)
         chain = self.system.robot.chains[p]
-        from skatelib.pipeline.robot import foot_position_leg
+        from skatelib.pipeline.quadruped.robot import foot_position_leg
 
         pos = foot_position_leg(chain, q_leg)
         return ca.Function("leg_fk", [q_leg], [pos, ca.jacobian(pos, q_leg)])

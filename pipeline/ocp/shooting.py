@@ -13,13 +13,13 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from skatelib.pipeline.ocp import ConstraintTerm, CostTerm, Stage
-from skatelib.pipeline.stagewise import (
+from skatelib.pipeline.ocp.stagewise import (
     StagewiseNLP,
     build_stagewise_nlp,
     compiled_stage_functions,
     stage_functions,
 )
+from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, Stage
 
 
 @dataclass(frozen=True)

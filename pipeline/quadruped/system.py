@@ -10,9 +10,9 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
-from skatelib.pipeline.board import BoardModel
 from skatelib.pipeline.config import QuadrupedConfig
-from skatelib.pipeline.robot import Quadruped, SingleRigidBody
+from skatelib.pipeline.quadruped.board import BoardModel
+from skatelib.pipeline.quadruped.robot import Quadruped, SingleRigidBody
 
 
 @dataclass(frozen=True)
