@@ -10,7 +10,8 @@ from typing import Any
 from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.reader import read_library
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 
 
 def amend_library(path: Path | str, root_attrs: Mapping[str, Any],
@@ -26,6 +27,6 @@ def amend_library(path: Path | str, root_attrs: Mapping[str, Any],
             raise LibraryFormatError(path, f"/{schema.G_ENTRIES}/{key}", "no such entry")
     protected = {schema.A_FORMAT, schema.A_FORMAT_VERSION, schema.A_CHECKSUM}
     root = {k: v for k, v in data.attrs.items() if k not in protected} | dict(root_attrs)
-    entries = [EntryData(key=r.key, attrs={**r.attrs, **entry_attrs.get(r.key, {})}, arrays=dict(r.arrays),
+    entries = [EntryRecord(key=r.key, attrs={**r.attrs, **entry_attrs.get(r.key, {})}, arrays=dict(r.arrays),
                          columns=dict(r.columns), units=dict(r.units)) for r in data.entries.values()]
     return write_library(path, root, data.model_attrs, data.model_arrays, data.model_text, entries)

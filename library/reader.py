@@ -21,21 +21,10 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.digest import verify_raw
 from skatelib.library.errors import LibraryFormatError
-from skatelib.library.writer import jsonable
+from skatelib.library.records import EntryRecord, jsonable
 
 _H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError)  # what h5py raises on damaged files
 _USERBLOCK_MAX = 1 << 16  # HDF5 looks for its signature at 0, 512, 1024, ... (a user block before it)
-
-
-@dataclass(frozen=True)
-class EntryRecord:
-    """One entry as stored: attributes, read-only arrays, and column names/units per dataset."""
-
-    key: str
-    attrs: dict[str, Any]
-    arrays: dict[str, np.ndarray]
-    columns: dict[str, tuple[str, ...]]
-    units: dict[str, tuple[str, ...]]
 
 
 @dataclass(frozen=True)

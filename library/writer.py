@@ -8,102 +8,17 @@ and units. Readers that only need the data open a handful of datasets.
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-import shutil
-import tempfile
-from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 from skatelib.library import schema
+from skatelib.library.atomic import atomic_path
 from skatelib.library.digest import placeholder, seal
-
-
-@dataclass(frozen=True)
-class EntryData:
-    """One library entry: named arrays plus scalar attributes.
-
-    Attributes:
-        key: Entry name (``v0.50_s2``).
-        attrs: Scalars (at least ``schema.ENTRY_ATTRS``).
-        arrays: Datasets by name (``t``, ``state``, ``control``, ...); the first axis is time.
-        columns: Column names per dataset that has named columns.
-        units: Column units per dataset, aligned with ``columns``.
-    """
-
-    key: str
-    attrs: Mapping[str, Any]
-    arrays: Mapping[str, np.ndarray]
-    columns: Mapping[str, Sequence[str]] = field(default_factory=dict)
-    units: Mapping[str, Sequence[str]] = field(default_factory=dict)
-
-
-def jsonable(v: Any) -> Any:
-    """Plain JSON value of an attribute (numpy scalars and arrays converted)."""
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, bytes):
-        return v.decode()
-    return v
-
-
-@contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
-    """Yield a temporary path in ``path``'s folder; on success it replaces ``path``, on error it is removed."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # The writer's pid is in the name, so a later run can tell a dead writer's leftover (kill -9)
-    # from a concurrent writer's file in progress (remove_stale_temporaries).
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a library is an ordinary file
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
-def remove_stale_temporaries(folder: Path, prefix: str = "") -> list[Path]:
-    """Remove temporary files and folders (``.NAME.PID.*.tmp`` of :func:`atomic_path`, or
-    ``PREFIX-PID-*`` folders) left in ``folder`` by processes that no longer exist; returns them."""
-    removed: list[Path] = []
-    if not folder.is_dir():
-        return removed
-    for p in folder.iterdir():
-        parts = p.name.split(".") if p.name.endswith(".tmp") else p.name.split("-")
-        is_ours = p.name.endswith(".tmp") and p.name.startswith(".") and len(parts) >= 5
-        is_ours = is_ours or bool(prefix and p.name.startswith(f"{prefix}-") and len(parts) >= 3)
-        pid_part = parts[-3] if p.name.endswith(".tmp") else parts[1] if len(parts) > 1 else ""
-        if not is_ours or not pid_part.isdigit() or _alive(int(pid_part)):
-            continue
-        with contextlib.suppress(OSError):
-            if p.is_dir():
-                shutil.rmtree(p)
-            else:
-                p.unlink()
-            removed.append(p)
-    return removed
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+from skatelib.library.records import EntryRecord, jsonable
 
 
 def _stored(group: h5py.Group, name: str, data: np.ndarray) -> np.ndarray:
@@ -123,7 +38,7 @@ def write_library(
     model_attrs: Mapping[str, Any],
     model_arrays: Mapping[str, np.ndarray],
     model_text: Mapping[str, str],
-    entries: Sequence[EntryData],
+    entries: Sequence[EntryRecord],
 ) -> Path:
     """Write a complete library file; a reader never sees a half-written one.
 
@@ -180,7 +95,7 @@ def _write_h5(
     model_attrs: Mapping[str, Any],
     model_arrays: Mapping[str, np.ndarray],
     model_text: Mapping[str, str],
-    entries: Sequence[EntryData],
+    entries: Sequence[EntryRecord],
     names: list[str],
     index: dict[str, Any],
     stored: dict[str, np.ndarray],

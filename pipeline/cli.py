@@ -338,7 +338,7 @@ def frontier(
     points = find_frontier(cfg, strides or cfg.sweep.strides, search, jobs)
     _frontier_table(points)
     if out is not None:
-        from skatelib.library.writer import atomic_path
+        from skatelib.library.atomic import atomic_path
 
         with atomic_path(out) as tmp:
             tmp.write_text(frontier_json(points, search))

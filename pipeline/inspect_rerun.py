@@ -22,10 +22,10 @@ import numpy as np
 import pinocchio as pin
 import rerun as rr
 import rerun.blueprint as rrb
+from skatelib.library.atomic import atomic_path
 from skatelib.library.channels import BOARD, GROUND, LEGS
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.margins import board_rotations, friction_margins, rpy_matrices
-from skatelib.library.writer import atomic_path
 from skatelib.runtime import Entry, MotionLibrary
 
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)

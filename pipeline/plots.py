@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library.atomic import atomic_path
 from skatelib.library.channels import GROUND
 from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import forward_speed, momentum_speed
-from skatelib.library.writer import atomic_path
 from skatelib.runtime import Entry, MotionLibrary
 
 FORMATS = ("png", "svg")

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
-from skatelib.library.writer import atomic_path
+from skatelib.library.atomic import atomic_path
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.ocp.stagewise import cache_dir
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options

@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, LEGS, STATE_NAMES
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 from skatelib.runtime import MotionLibrary
 
 SOURCE = Path(__file__).resolve().parent.parent / "runtime" / "cpp"
@@ -38,12 +39,12 @@ def dump(tmp_path_factory) -> Path:
     return build / "skatelib_dump"
 
 
-def _entry(v: float, seed: int, uniform: bool) -> EntryData:
+def _entry(v: float, seed: int, uniform: bool) -> EntryRecord:
     rng = np.random.default_rng(seed)
     K = 61
     t = np.arange(K) * 0.03 if uniform else np.cumsum(np.r_[0.0, rng.uniform(0.01, 0.05, K - 1)])
     attrs = dict(zip(schema.ENTRY_ATTRS, (v, 2, True, "Solve_Succeeded", 10, 0.1, 1.0, 1e-9), strict=True))
-    return EntryData(key=schema.entry_key(v, 2), attrs=attrs,
+    return EntryRecord(key=schema.entry_key(v, 2), attrs=attrs,
                      arrays={"t": t, "state": rng.normal(size=(K, 28)), "control": rng.normal(size=(K - 1, 24)),
                              "contact": rng.integers(0, 3, (K, 4)).astype(np.int8),
                              "foot_pos": rng.normal(size=(K, 4, 3)), "board_pos": rng.normal(size=(K, 4))},

@@ -13,7 +13,8 @@ import pytest
 from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.reader import read_library
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 
 ROOT = {schema.A_KIND: "humanoid", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "now",
         schema.A_GIT_COMMIT: "abc", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "x = 1",
@@ -23,7 +24,7 @@ ROOT = {schema.A_KIND: "humanoid", schema.A_NAME: "t", schema.A_SKATELIB_VERSION
 def _entry(key="e", n=11):
     t = np.linspace(0, 1, n)
     attrs = dict(zip(schema.ENTRY_ATTRS, (0.5, 1, True, "Solve_Succeeded", 7, 0.1, 1.0, 1e-9), strict=True))
-    return EntryData(key=key, attrs=attrs, arrays={"t": t, "state": np.outer(t, [1.0, 2.0]),
+    return EntryRecord(key=key, attrs=attrs, arrays={"t": t, "state": np.outer(t, [1.0, 2.0]),
                                                    "control": np.ones((n - 1, 1))},
                      columns={"state": ("a", "b"), "control": ("c",)}, units={"state": ("m", "m/s"), "control": ("N",)})
 
@@ -47,7 +48,7 @@ def test_round_trip_keeps_arrays_columns_and_text(tmp_path):
 def test_failed_write_leaves_no_file(tmp_path):
     """An exception while writing leaves neither the target nor a temporary file behind."""
     target = tmp_path / "b.h5"
-    bad = EntryData(key="e", attrs={"x": object()}, arrays={"t": np.zeros(2)})
+    bad = EntryRecord(key="e", attrs={"x": object()}, arrays={"t": np.zeros(2)})
     with pytest.raises(TypeError):
         write_library(target, ROOT, {}, {}, {}, [bad])
     assert os.listdir(tmp_path) == []

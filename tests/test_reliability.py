@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
-from skatelib.library.writer import atomic_path
 from skatelib.pipeline.preflight import check_output
 from skatelib.runtime import MotionLibrary
 

@@ -13,13 +13,14 @@ from hypothesis import strategies as st
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
 from skatelib.library.errors import SkatelibError
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 from skatelib.runtime import BlendMargin, EntryNotFound, MotionLibrary
 
 K = 41
 
 
-def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryData:
+def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryRecord:
     rng = np.random.default_rng(seed)
     t = np.arange(K) * 0.03
     state = rng.normal(size=(K, 28)) + v
@@ -29,7 +30,7 @@ def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryData:
     control[:, 2::3] = 20.0  # vertical forces: deep inside the cones
     contact = np.ones((K, 4), dtype=np.int8)
     attrs = dict(zip(schema.ENTRY_ATTRS, (v, strides, True, "Solve_Succeeded", 10, 0.1, 1.0, 1e-9), strict=True))
-    return EntryData(key=schema.entry_key(v, strides), attrs=attrs,
+    return EntryRecord(key=schema.entry_key(v, strides), attrs=attrs,
                      arrays={"t": t, "state": state, "control": control, "contact": contact,
                              "foot_pos": rng.normal(size=(K, 4, 3)), "board_pos": rng.normal(size=(K, 4))},
                      columns={"state": STATE_NAMES, "control": CONTROL_NAMES, "contact": LEGS},

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, LEGS, STATE_NAMES
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -21,7 +22,7 @@ def _library(path: Path) -> Path:
     t = np.arange(5) * 0.1
     state = np.outer(t, np.ones(28))
     attrs = dict(zip(schema.ENTRY_ATTRS, (0.5, 2, True, "Solve_Succeeded", 10, 0.1, 1.0, 1e-9), strict=True))
-    e = EntryData(key="v0.50_s2", attrs=attrs, arrays={"t": t, "state": state, "control": np.zeros((4, 24)),
+    e = EntryRecord(key="v0.50_s2", attrs=attrs, arrays={"t": t, "state": state, "control": np.zeros((4, 24)),
                   "contact": np.ones((5, 4), np.int8), "foot_pos": np.zeros((5, 4, 3)), "board_pos": np.zeros((5, 4))},
                   columns={"state": STATE_NAMES, "control": CONTROL_NAMES, "contact": LEGS})
     root = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 from skatelib.pipeline.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import (
     CONTROL_NAMES,
@@ -22,7 +23,7 @@ from skatelib.pipeline.humanoid.motion import (
     solve_motion,
 )
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
-from skatelib.pipeline.quadruped.entries import root_attributes
+from skatelib.pipeline.provenance import root_attributes
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,7 @@ def motion_key(config: HumanoidConfig, m: Motion) -> tuple[str, int]:
     return schema.humanoid_key(config.sweep.motion, m.velocity_mps, strides), strides
 
 
-def entry_from_motion(m: Motion, config: HumanoidConfig) -> EntryData:
+def entry_from_motion(m: Motion, config: HumanoidConfig) -> EntryRecord:
     """A library entry with the sampled trajectory and every step's GPM node values."""
     n_nodes = config.gpm.nodes
     key, strides = motion_key(config, m)
@@ -72,7 +73,7 @@ def entry_from_motion(m: Motion, config: HumanoidConfig) -> EntryData:
                "contact_point": ("x", "y", "z")}
     units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS, "zmp": ("m", "m"),
              "contact_point": ("m", "m", "m")}
-    return EntryData(key=key, attrs=attrs, arrays=arrays, columns=columns,
+    return EntryRecord(key=key, attrs=attrs, arrays=arrays, columns=columns,
                      units=units)
 
 

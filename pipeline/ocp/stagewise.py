@@ -22,7 +22,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.writer import remove_stale_temporaries
+from skatelib.library.atomic import remove_stale_temporaries
 
 CACHE_ENV = "SKATELIB_CACHE_DIR"
 

@@ -3,63 +3,23 @@
 from __future__ import annotations
 
 import dataclasses
-import datetime as dt
 import json
-import re
-import subprocess
 from collections.abc import Sequence
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import casadi as ca
 import numpy as np
-import pinocchio as pin
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
-from skatelib.library.writer import EntryData, write_library
+from skatelib.library.records import EntryRecord
+from skatelib.library.writer import write_library
 from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.provenance import root_attributes
 from skatelib.pipeline.quadruped.pushoff import SolveResult
 from skatelib.pipeline.quadruped.system import SkateSystem
 
 BOARD_POS_COLUMNS = ("board_x", "board_y", "board_z", "board_yaw")
 BOARD_POS_UNITS = ("m", "m", "m", "rad")
-
-
-def ipopt_version() -> str:
-    """Version of the IPOPT library bundled with CasADi (from its file name)."""
-    folder = Path(ca.__file__).parent
-    versions = sorted(m.group(1) for p in folder.glob("libipopt*.so.*")
-                      if (m := re.search(r"libipopt\.so\.(\d+\.\d+\.\d+)$", p.name)))
-    return versions[-1] if versions else "unknown"
-
-
-def git_provenance() -> tuple[str, bool]:
-    """(commit, dirty) of the skatelib source checkout, or ("unknown", False) outside git."""
-    src = Path(__file__).resolve().parent
-    try:
-        commit = subprocess.run(["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True, text=True,
-                                check=True, timeout=10).stdout.strip()
-        dirty = bool(subprocess.run(["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no"],
-                                    capture_output=True, text=True, check=True, timeout=10).stdout.strip())
-        return commit, dirty
-    except (OSError, subprocess.SubprocessError):
-        return "unknown", False
-
-
-def root_attributes(kind: str, name: str, config_text: str, config_json: str,
-                    solver_options: dict[str, Any]) -> dict[str, Any]:
-    commit, dirty = git_provenance()
-    return {
-        schema.A_KIND: kind, schema.A_NAME: name,
-        schema.A_SKATELIB_VERSION: metadata.version("skatelib"),
-        schema.A_CREATED: dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-        schema.A_GIT_COMMIT: commit, schema.A_GIT_DIRTY: dirty,
-        schema.A_CONFIG_TOML: config_text, schema.A_CONFIG_RESOLVED: config_json,
-        schema.A_CASADI: ca.CasadiMeta.version(), schema.A_IPOPT: ipopt_version(),
-        schema.A_PINOCCHIO: pin.__version__,
-        schema.A_SOLVER_OPTIONS: json.dumps(solver_options, sort_keys=True, default=str),
-    }
 
 
 def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
@@ -96,7 +56,7 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
 
 
 def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None,
-                      cache_key: str = "") -> EntryData:
+                      cache_key: str = "") -> EntryRecord:
     attrs = {
         "target_velocity_mps": r.target_velocity_mps, "n_strides": r.n_strides, "success": r.success,
         "status": r.status, "iterations": r.iterations, "solve_time_s": r.solve_time_s,
@@ -114,12 +74,12 @@ def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, floa
     units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS,
              schema.D_CONTACT: ("0 swing, 1 board, 2 ground",) * 4, schema.D_FOOT_POS: ("m",) * 4,
              schema.D_BOARD_POS: BOARD_POS_UNITS}
-    return EntryData(key=schema.entry_key(r.target_velocity_mps, r.n_strides), attrs=attrs, arrays=arrays,
+    return EntryRecord(key=schema.entry_key(r.target_velocity_mps, r.n_strides), attrs=attrs, arrays=arrays,
                      columns=columns, units=units)
 
 
 def write_quadruped_library(path: Path | str, config: QuadrupedConfig, system: SkateSystem,
-                            entries: Sequence[EntryData], solver_options: dict[str, Any],
+                            entries: Sequence[EntryRecord], solver_options: dict[str, Any],
                             frontier_json: str | None = None) -> Path:
     """Write a quadruped motion library atomically (with the reachable-speed frontier when given)."""
     model_attrs, model_arrays = quadruped_model(config, system)
