@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -13,7 +12,7 @@ from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadrup
 from skatelib.pipeline.quadruped.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
 from skatelib.pipeline.quadruped.pushoff import problem_for
 from skatelib.pipeline.quadruped.system import SkateSystem
-from skatelib.pipeline.sweep import EntryOutcome, ordered, run_sweep
+from skatelib.pipeline.sweep import EntryOutcome, ProgressFn, ordered, run_sweep
 
 
 @dataclass(frozen=True)
@@ -36,7 +35,7 @@ def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
 
 def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
                   scheduler: Any = None, use_cache: bool = True,
-                  on_entry: Callable[[str, EntryOutcome | None], None] | None = None,
+                  on_entry: ProgressFn | None = None,
                   frontier: FrontierSearch | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
     marked ``success = false`` with their IPOPT status); with ``frontier``, also search the

@@ -221,17 +221,18 @@ def build(
         done: list[str] = []
         flying: list[str] = []  # entries being solved, oldest first
 
-        def on_entry(key: str, outcome: Any) -> None:
-            if outcome is None:
-                flying.append(key)
+        def on_entry(event: Any) -> None:
+            if not event.done:
+                flying.append(event.key)
             else:
-                done.append(key)
-                if key in flying:
-                    flying.remove(key)
+                done.append(event.key)
+                if event.key in flying:
+                    flying.remove(event.key)
             text = f"solving {', '.join(flying)}" if flying else "solving"
-            if outcome is not None:
-                text += f" (last: {key} {'cached, ' if outcome.cached else ''}{_short_status(outcome)})"
-            bar.update(task, advance=0 if outcome is None else 1, description=escape(text))
+            if event.done:
+                status = "ok" if event.success else event.status.split(":")[0]
+                text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
+            bar.update(task, advance=1 if event.done else 0, description=escape(text))
 
         from skatelib.pipeline.quadruped.frontier import FrontierSearch
 
@@ -270,12 +271,6 @@ def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
     if report.failed and not allow_failures:
         console.print(f"[bold red]{_count(len(report.failed), 'entry')} failed[/] (kept with success=false)")
         raise typer.Exit(1)
-
-
-def _short_status(outcome: Any) -> str:
-    """``ok`` for a solved entry that passed its checks, else its status."""
-    status = str(outcome.result.status)
-    return "ok" if outcome.result.success else status.split(":")[0]
 
 
 def _summary(outcomes: list[Any]) -> None:

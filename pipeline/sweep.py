@@ -44,6 +44,25 @@ class EntryOutcome:
 
 
 @dataclass(frozen=True)
+class EntryEvent:
+    """What the progress display hears of an entry: it started (``done`` False) or finished, with
+    its status. Small, so that no trajectory crosses the process boundary for it."""
+
+    key: str
+    done: bool
+    status: str = ""
+    success: bool = False
+    cached: bool = False
+
+    @staticmethod
+    def finished(key: str, outcome: EntryOutcome) -> EntryEvent:
+        return EntryEvent(key, True, outcome.result.status, outcome.result.success, outcome.cached)
+
+
+ProgressFn = Callable[[EntryEvent], None]
+
+
+@dataclass(frozen=True)
 class Chain:
     """Entries of one stride count, solved in order of increasing velocity."""
 
@@ -167,16 +186,19 @@ _WATCHDOG_STARTED = False  # per process: workers start one watchdog thread
 
 
 def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
-              parent_pid: int | None = None) -> list[EntryOutcome]:
+              parent_pid: int | None = None, worker: bool = False) -> list[EntryOutcome]:
     """Solve one warm-start chain (a module-level function, so worker processes can import it).
 
-    ``events`` is an optional queue that receives ``(key, None)`` as an entry starts and
-    ``(key, outcome)`` when it is finished;
-    ``parent_pid``: the build process, whose death ends this worker (:func:`exit_with_parent`).
+    ``events`` is an optional queue that receives an :class:`EntryEvent` as an entry starts and
+    when it is finished; ``parent_pid``: the build process, whose death ends this worker
+    (:func:`exit_with_parent`); ``worker``: this is a worker process of a cluster, whose BLAS and
+    OpenMP threads this sets to 1 (loky workers start with them at 1; a serial build leaves the
+    user's process as it is).
     """
     exit_with_parent(parent_pid)
-    for var in THREAD_VARS:
-        os.environ[var] = "1"
+    if worker:
+        for var in THREAD_VARS:
+            os.environ[var] = "1"
     out: list[EntryOutcome] = []
     warm: WarmStart | None = None
     warm_key: str | None = None
@@ -185,7 +207,7 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
         spec = PushoffSpec(chain.config, v, chain.n_strides, warm=use_warm, ipopt=chain.ipopt)
         key = entry_key(spec, warm_key if use_warm is not None else None)
         if events is not None:
-            events.put((schema.entry_key(v, chain.n_strides), None))
+            events.put(EntryEvent(schema.entry_key(v, chain.n_strides), done=False))
         path = _cache_file(key)
         hit = _load_cached(path) if use_cache else None
         note = hit if isinstance(hit, str) else ""
@@ -203,12 +225,12 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
         outcome = EntryOutcome(replace(judged, warm=None), attempts, isinstance(hit, tuple), physics, key, note)
         out.append(outcome)
         if events is not None:
-            events.put((schema.entry_key(v, chain.n_strides), outcome))
+            events.put(EntryEvent.finished(schema.entry_key(v, chain.n_strides), outcome))
     return out
 
 
 def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", scheduler: str | None = None,
-              use_cache: bool = True, on_entry: Callable[[str, EntryOutcome | None], None] | None = None,
+              use_cache: bool = True, on_entry: ProgressFn | None = None,
               ipopt: tuple[tuple[str, Any], ...] = ()) -> list[EntryOutcome]:
     """Solve every (velocity, strides) of ``config.sweep`` and return the outcomes.
 
@@ -216,12 +238,10 @@ def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", sch
         jobs: Worker processes (loky backend).
         backend: ``"loky"`` (this machine) or ``"dask"`` (an existing cluster at ``scheduler``).
         scheduler: Dask scheduler address (``tcp://host:port``), or a ``distributed.Client``.
-        on_entry: Called in the main process with ``(key, None)`` as an entry starts (not with
-            the dask backend) and ``(key, outcome)`` as it finishes.
+        on_entry: Called in the main process with an :class:`EntryEvent` as an entry starts (not
+            with the dask backend) and as it finishes.
         ipopt: Extra IPOPT options of every solve (``(("print_level", 5),)`` shows its log).
     """
-    for var in THREAD_VARS:
-        os.environ.setdefault(var, "1")
     chains = chains_for(config, ipopt)
     if backend == "dask":
         return _run_dask(chains, scheduler, use_cache, on_entry)
@@ -236,31 +256,31 @@ def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", sch
 class _Direct:
     """A queue that hands each event straight to the callback (a serial build)."""
 
-    def __init__(self, on_entry: Callable[[str, EntryOutcome | None], None] | None):
+    def __init__(self, on_entry: ProgressFn | None):
         self.on_entry = on_entry
 
-    def put(self, event: tuple[str, EntryOutcome | None]) -> None:
+    def put(self, event: EntryEvent) -> None:
         if self.on_entry:
-            self.on_entry(*event)
+            self.on_entry(event)
 
 
-def _drain(events: Any, on_entry: Callable[[str, EntryOutcome | None], None] | None, stop: threading.Event) -> None:
+def _drain(events: Any, on_entry: ProgressFn | None, stop: threading.Event) -> None:
     import queue
 
     while not stop.is_set() or not events.empty():
         try:
-            key, outcome = events.get(timeout=0.1)
+            event = events.get(timeout=0.1)
         except (queue.Empty, EOFError, OSError):
             continue
         if on_entry:
-            on_entry(key, outcome)
+            on_entry(event)
 
 
 def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
-              on_entry: Callable[[str, EntryOutcome | None], None] | None) -> list[EntryOutcome]:
+              on_entry: ProgressFn | None) -> list[EntryOutcome]:
     from multiprocessing.managers import SyncManager
 
-    from joblib import Parallel, delayed
+    from joblib import Parallel, delayed, parallel_config
 
     manager = SyncManager()
     manager.start(initializer=exit_with_parent, initargs=(os.getpid(),))  # the queue's server dies with us too
@@ -270,9 +290,11 @@ def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
         drain = threading.Thread(target=_drain, args=(events, on_entry, stop), daemon=True)
         drain.start()
         try:
-            results = Parallel(n_jobs=min(jobs, len(chains)), backend="loky", return_as="generator_unordered")(
-                delayed(run_chain)(c, use_cache, events, os.getpid()) for c in chains)
-            outcomes = [o for chain_out in results for o in chain_out]
+            # BLAS and OpenMP at 1 thread in the workers, from their start; the caller's process untouched.
+            with parallel_config(backend="loky", inner_max_num_threads=1):
+                results = Parallel(n_jobs=min(jobs, len(chains)), backend="loky", return_as="generator_unordered")(
+                    delayed(run_chain)(c, use_cache, events, os.getpid()) for c in chains)
+                outcomes = [o for chain_out in results for o in chain_out]
         finally:
             stop.set()
             drain.join(timeout=5)
@@ -280,7 +302,7 @@ def _run_loky(chains: list[Chain], jobs: int, use_cache: bool,
 
 
 def _run_dask(chains: list[Chain], scheduler: Any, use_cache: bool,
-              on_entry: Callable[[str, EntryOutcome | None], None] | None) -> list[EntryOutcome]:
+              on_entry: ProgressFn | None) -> list[EntryOutcome]:
     try:
         from distributed import Client, as_completed
     except ImportError as e:
@@ -288,13 +310,13 @@ def _run_dask(chains: list[Chain], scheduler: Any, use_cache: bool,
     own = not isinstance(scheduler, Client)
     client = Client(scheduler) if own else scheduler
     try:
-        futures = [client.submit(run_chain, c, use_cache, None, pure=False) for c in chains]
+        futures = [client.submit(run_chain, c, use_cache, None, None, True, pure=False) for c in chains]
         outcomes: list[EntryOutcome] = []
         for fut in as_completed(futures):
             chain_out = fut.result()
             for o in chain_out:
                 if on_entry:
-                    on_entry(schema.entry_key(o.result.target_velocity_mps, o.result.n_strides), o)
+                    on_entry(EntryEvent.finished(schema.entry_key(o.result.target_velocity_mps, o.result.n_strides), o))
             outcomes.extend(chain_out)
         return outcomes
     finally:

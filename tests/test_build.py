@@ -117,7 +117,9 @@ def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path
     out, _ = built
     cfg = load_config(TINY)
     events: list[tuple[str, bool]] = []
-    report = build_library(cfg, tmp_path / "again.h5", jobs=1, on_entry=lambda k, o: events.append((k, o is None)))
+    threads = {v: os.environ.get(v) for v in sweep.THREAD_VARS}
+    report = build_library(cfg, tmp_path / "again.h5", jobs=1, on_entry=lambda ev: events.append((ev.key, not ev.done)))
+    assert {v: os.environ.get(v) for v in sweep.THREAD_VARS} == threads  # a serial build leaves the caller's env
     assert all(o.cached for o in report.outcomes)
     # The progress hears of each entry as it starts (in flight) and as it ends, in that order.
     assert events == [("v0.30_s1", True), ("v0.30_s1", False), ("v0.40_s1", True), ("v0.40_s1", False)]

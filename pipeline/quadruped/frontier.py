@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, replace
 
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
-from skatelib.pipeline.sweep import THREAD_VARS, judge
+from skatelib.pipeline.sweep import judge
 
 
 @dataclass(frozen=True)
@@ -71,10 +71,6 @@ def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None
 
 def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch) -> FrontierPoint:
     """Climb, then bisect, along one warm-start chain (a module-level function for worker processes)."""
-    import os
-
-    for var in THREAD_VARS:
-        os.environ[var] = "1"
     probes: list[Probe] = []
     best, best_warm, fail, limit = 0.0, None, None, "search limit"
     v = search.start_mps
@@ -101,11 +97,12 @@ def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch) 
 def find_frontier(config: QuadrupedConfig, strides: Sequence[int], search: FrontierSearch = FrontierSearch(),
                   jobs: int = 2) -> list[FrontierPoint]:
     """The frontier of every stride count, one worker process per stride count."""
-    from joblib import Parallel, delayed
+    from joblib import Parallel, delayed, parallel_config
 
     cfg = replace(config, sweep=replace(config.sweep, strides=tuple(strides)))
-    points = Parallel(n_jobs=min(jobs, len(strides)), backend="loky")(
-        delayed(frontier_for)(cfg, s, search) for s in sorted(strides, reverse=True))
+    with parallel_config(backend="loky", inner_max_num_threads=1):  # BLAS/OpenMP at 1 thread in the workers only
+        points = Parallel(n_jobs=min(jobs, len(strides)), backend="loky")(
+            delayed(frontier_for)(cfg, s, search) for s in sorted(strides, reverse=True))
     return sorted(points, key=lambda p: p.n_strides)
 
 
