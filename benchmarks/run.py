@@ -28,7 +28,7 @@ from typing import Any
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from skatelib.pipeline.config import load_config
+from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig, load_config
 from skatelib.pipeline.quadruped import pushoff
 
 
@@ -40,7 +40,7 @@ def _build_and_solve(cfg, v: float, strides: int, warm=None) -> tuple[float, pus
 
 
 def bench_pushoff(repeats: int = 3) -> None:
-    cfg = load_config()
+    cfg = load_config(None, QuadrupedConfig)
     vm = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
     t0 = time.perf_counter()
     pushoff.problem_for(cfg, 2)  # compiles on a cold cache
@@ -74,7 +74,7 @@ def bench_library() -> Path:
 
     from skatelib.pipeline.build import build_library
 
-    cfg = load_config()
+    cfg = load_config(None, QuadrupedConfig)
     serial_cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, warm_start=False))
     out = Path(tempfile.mkdtemp()) / "default.h5"
     t_serial = time.perf_counter()
@@ -102,7 +102,8 @@ def bench_runtime(path: Path | None = None) -> None:
     if path is None:
         from skatelib.pipeline.build import build_library
 
-        path = build_library(load_config(), Path("out") / "bench-default.h5").path  # resume cache makes this quick
+        # the resume cache makes this quick
+        path = build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
     t_open = min(timeit.repeat(lambda: MotionLibrary.open(path), number=1, repeat=30))
 
     def naive_open() -> dict:
@@ -148,7 +149,7 @@ def bench_rerun(path: Path | None = None) -> None:
     from skatelib.pipeline.inspect_rerun import _Robot, log_library
     from skatelib.runtime import MotionLibrary
 
-    path = path or build_library(load_config(), Path("out") / "bench-default.h5").path
+    path = path or build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
     lib = MotionLibrary.open(path)
     tmp = Path(tempfile.mkdtemp())
     rec = rr.RecordingStream("skatelib-bench")
@@ -191,11 +192,11 @@ def bench_humanoid(repeats: int = 21) -> None:
     import casadi as ca
     import numpy as np
     from scipy.optimize import minimize
-    from skatelib.pipeline.config import CONFIG_DIR, load_humanoid_config
+    from skatelib.pipeline.config import CONFIG_DIR
     from skatelib.pipeline.humanoid.motion import skating_steps
     from skatelib.pipeline.humanoid.step import solve_step, step_problem
 
-    c = load_humanoid_config(CONFIG_DIR / "hrp2_skate.toml")
+    c = load_config(CONFIG_DIR / "hrp2_skate.toml", HumanoidConfig)
     h = c.humanoid
     x0, specs = skating_steps(c, 1.0)
     push = specs[0]
@@ -263,7 +264,7 @@ def bench_mpc(path: Path | None = None) -> None:
     if path is None:
         from skatelib.pipeline.build import build_library
 
-        path = build_library(load_config(), Path("out") / "bench-default.h5").path
+        path = build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
     lib = MotionLibrary.open(path)
     e = lib.select(0.5, 2)
     p = SkateParams.from_library(lib)

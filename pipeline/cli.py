@@ -4,51 +4,24 @@ from __future__ import annotations
 
 import enum
 import json
-import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
-from skatelib.library.errors import Interrupted, SkatelibError
+from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.config import SweepConfig, field_range
+from skatelib.pipeline.report import console, count, err_console, fmt, frontier_table
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
-PIPE_WIDTH = 260
-
-
-def _console(stderr: bool = False) -> Console:
-    """Rich's console; into a pipe or file (no terminal, no COLUMNS) 260 columns instead of rich's
-    80, so that tables are not wrapped or their cells cut ("Solve_S...") in a log."""
-    c = Console(stderr=stderr)
-    if not c.is_terminal and "COLUMNS" not in os.environ:
-        c = Console(stderr=stderr, width=PIPE_WIDTH)
-    return c
-
-
-console = _console()
-err_console = _console(stderr=True)
-
-# Vendor single-rigid-body figures (ROBOT_DATA.md), printed beside ours for comparison.
-VENDOR_MASS_KG = 8.3644
-VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
-
 
 
 def _jsonable(v: Any) -> Any:
     """numpy scalars and arrays as JSON numbers and lists."""
     return v.tolist() if hasattr(v, "tolist") else str(v)
-
-
-def _count(n: int, noun: str) -> str:
-    """'1 entry', '18 entries'."""
-    plural = noun[:-1] + "ies" if noun.endswith("y") else noun + "s"
-    return f"{n} {noun if n == 1 else plural}"
 
 
 def _print_version(value: bool) -> None:
@@ -83,62 +56,15 @@ VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, define
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 
 
-def _humanoid_model(cfg: Any) -> None:
-    import dataclasses
-    import math
-
-    h = cfg.humanoid
-    t = Table(title=f"{cfg.meta.name}: humanoid point-mass model (Takasugi et al.)")
-    t.add_column("quantity")
-    t.add_column("value", justify="right")
-    for f in dataclasses.fields(h):
-        if f.name != "source":
-            t.add_row(escape(f.name), f"{getattr(h, f.name):.4g}")
-    omega = math.sqrt(h.gravity_mps2 / h.com_height_m)
-    t.add_row(escape("LIP natural frequency omega = sqrt(g / z) [1/s]"), f"{omega:.4g}")
-    t.add_row(escape("DCM time constant 1 / omega [s]"), f"{1 / omega:.4g}")
-    console.print(t)
-    if h.source:
-        console.print(escape(f"source: {h.source}"))
-
-
 @app.command()
 def model(config: ConfigArg = None) -> None:
     """Print the robot and board model of a config: SRB mass and inertia from the URDF, board
     figures; for a humanoid config, its point-mass model and the LIP/DCM time constant."""
-    from skatelib.pipeline.config import HumanoidConfig, load_any_config
-    from skatelib.pipeline.quadruped.system import SkateSystem
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import kind_of
 
-    cfg = load_any_config(config)
-    if isinstance(cfg, HumanoidConfig):
-        _humanoid_model(cfg)
-        return
-    s = SkateSystem.from_config(cfg)
-    t = Table(title=f"{cfg.meta.name}: single rigid body at the nominal stance (pinocchio ccrba)")
-    t.add_column("quantity")
-    t.add_column("skatelib (from URDF)", justify="right")
-    t.add_column("vendor MPC", justify="right")
-    t.add_row(escape("mass [kg]"), f"{s.srb.mass_kg:.4f}", f"{VENDOR_MASS_KG:.4f}")
-    for i, axis in enumerate("xyz"):
-        t.add_row(escape(f"I{axis}{axis} [kg m^2]"), f"{s.srb.inertia_kgm2[i, i]:.5f}", f"{VENDOR_INERTIA_KGM2[i]:.5f}")
-    t.add_row(escape("COM in trunk frame [m]"), escape(np.array2string(s.srb.com_offset_m, precision=4)), "-")
-    console.print(t)
-    b = s.board
-    bt = Table(title="skateboard (Eq. 6, 9-14)")
-    bt.add_column("parameter")
-    bt.add_column("value", justify="right")
-    for name, value in (
-        ("board mass m_B [kg]", b.mass_kg), ("roll inertia I_Bx [kg m^2]", b.roll_inertia_kgm2),
-        ("roll stiffness K_B [N m/rad] (calibrated)", b.roll_stiffness_Nm_per_rad),
-        ("roll damping B_B [N m s/rad]", b.roll_damping_Nms_per_rad),
-        ("rolling friction f_fri [N]", b.rolling_friction_nominal_N),
-        ("f_fri the TO plans with [N]", b.rolling_friction_N), ("K_board [m]", b.K_board_m),
-        ("l_f, l_r [m]", f"{b.l_front_m:.3f}, {b.l_rear_m:.3f}"), ("deck height [m]", b.deck_height_m),
-    ):
-        bt.add_row(escape(name), f"{value:.5g}" if isinstance(value, float) else str(value))
-    console.print(bt)
-    q = np.round(s.stance.q_board, 3)
-    console.print(escape(f"nominal stance q [rad] (FL FR RL RR x abad hip knee): {q.tolist()}"))
+    cfg = load_config(config)
+    kind_of(cfg).print_model(cfg)
 
 
 OutOpt = Annotated[Path | None, typer.Option(
@@ -163,152 +89,19 @@ def build(
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
-    from skatelib.pipeline.build import build_library, default_output
-    from skatelib.pipeline.config import HumanoidConfig, load_any_config
-    from skatelib.pipeline.preflight import check_cache_dir, check_output, check_scheduler
-    from skatelib.pipeline.sweep import chains_for
+    from skatelib.pipeline.build import default_output
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import BuildOptions, kind_of
+    from skatelib.pipeline.preflight import check_output
 
-    any_cfg = load_any_config(config)
-    target = out or default_output(any_cfg)
-    check_output(target, [any_cfg.path], force)
-    if isinstance(any_cfg, HumanoidConfig):
-        # A humanoid motion solves in milliseconds in this process: no workers, cluster, cache or
-        # frontier. Say so instead of ignoring the flags.
-        if backend is not Backend.loky or scheduler is not None or frontier:
-            raise typer.BadParameter(f"{any_cfg.path} is a humanoid config: its steps solve in milliseconds in "
-                                     "this process; --backend dask, --scheduler and --frontier are for quadruped "
-                                     "configs")
-        moot = [flag for flag, given in (("--jobs", jobs != 2), ("--no-cache", not cache),
-                                         ("--no-progress", not progress)) if given]
-        if moot:
-            err_console.print(f"note: {', '.join(moot)} do{'es' if len(moot) == 1 else ''} not apply to a humanoid "
-                              "build (solved in this process, milliseconds per step, no cache)")
-        _build_humanoid(any_cfg, target, allow_failures)
-        return
-    cfg = any_cfg
-    if backend is Backend.dask:
-        if scheduler is None:
-            raise typer.BadParameter("--backend dask needs --scheduler tcp://HOST:PORT")
-        check_scheduler(scheduler)
-    if cache or cfg.optimization.compile:
-        check_cache_dir()
-    total = sum(len(c.velocities) for c in chains_for(cfg))
-    console.print(f"building {_count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(target))}")
-    if cfg.optimization.compile:
-        from skatelib.pipeline.ocp.stagewise import c_compiler, cache_dir
-
-        cc = c_compiler()
-        if cc is None:
-            err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
-                              "3-4x slower; install gcc to compile them")
-        else:
-            console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
-                                 f"once; cached in {cache_dir()})"))
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("eta"), TimeRemainingColumn(),
-                  console=console, disable=not progress) as bar:
-        task = bar.add_task("solving", total=total)
-
-        done: list[str] = []
-        flying: list[str] = []  # entries being solved, oldest first
-
-        def on_entry(event: Any) -> None:
-            if not event.done:
-                flying.append(event.key)
-            else:
-                done.append(event.key)
-                if event.key in flying:
-                    flying.remove(event.key)
-            text = f"solving {', '.join(flying)}" if flying else "solving"
-            if event.done:
-                status = "ok" if event.success else event.status.split(":")[0]
-                text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
-            bar.update(task, advance=1 if event.done else 0, description=escape(text))
-
-        from skatelib.pipeline.quadruped.frontier import FrontierSearch
-
-        try:
-            report = build_library(cfg, target, jobs=jobs, backend=backend.value, scheduler=scheduler,
-                                   use_cache=cache, on_entry=on_entry, frontier=FrontierSearch() if frontier else None)
-        except KeyboardInterrupt:
-            kept = f"{len(done)} of {total} entries are cached" if cache else "nothing is cached (--no-cache)"
-            raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
-    _summary(report.outcomes)
-    if report.frontier is not None:
-        _frontier_table(report.frontier)
-    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
-    if report.failed and not allow_failures:
-        failed = _count(len(report.failed), "entry")
-        console.print(f"[bold red]{failed} failed[/] (kept in the file with success=false); "
+    cfg = load_config(config)
+    target = out or default_output(cfg)
+    check_output(target, [cfg.path], force)
+    run = kind_of(cfg).run_build(cfg, target, BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier))
+    if run.failed and not allow_failures:
+        console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
         raise typer.Exit(1)
-
-
-def _build_humanoid(cfg: Any, out: Path | None, allow_failures: bool) -> None:
-    from skatelib.pipeline.humanoid.entries import build_humanoid_library
-
-    report = build_humanoid_library(cfg, out)
-    t = Table(title=f"{cfg.meta.name}: {cfg.sweep.motion} ({cfg.gpm.nodes} LG nodes, {cfg.gpm.solver})")
-    for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
-        t.add_column(escape(col))
-    from skatelib.pipeline.humanoid.entries import motion_key
-
-    for m in report.motions:
-        for r in m.steps:
-            t.add_row(motion_key(cfg, m)[0], r.spec.name, r.status, str(r.iterations),
-                      f"{1e3 * r.solve_time_s:.1f}", f"{r.objective:.4f}")
-    console.print(t)
-    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.2f} s")
-    if report.failed and not allow_failures:
-        console.print(f"[bold red]{_count(len(report.failed), 'entry')} failed[/] (kept with success=false)")
-        raise typer.Exit(1)
-
-
-def _summary(outcomes: list[Any]) -> None:
-    t = Table(title="entries (time: c = from the cache; momentum: the speed robot and board ride at together)")
-    for col in ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
-                "Coulomb margin [N]", "torque [N m]", "defect"):
-        if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
-            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
-        else:
-            t.add_column(escape(col), justify="right")
-    from skatelib.library.schema import entry_key
-
-    for o in outcomes:
-        r, ph = o.result, o.physics
-        status = r.status.replace("Solve_Succeeded", "ok")
-        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
-                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
-                  _fmt(ph, "momentum_speed_mps", "{:.4f}"), _fmt(ph, "momentum_speed_error", "{:.2%}"),
-                  _fmt(ph, "min_friction_margin_N", "{:.3f}"), _fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
-                  _fmt(ph, "max_defect", "{:.1e}"))
-    console.print(t)
-    for o in outcomes:
-        if o.note:
-            console.print(f"[yellow]note:[/] {escape(o.note)}")
-
-
-def _fmt(physics: Any, key: str, fmt: str) -> str:
-    return fmt.format(physics[key]) if key in physics else "-"
-
-
-def _frontier_table(points: list[Any]) -> None:
-    t = Table(title="reachable-speed frontier: fastest label that converges and passes the physics checks")
-    for col in ("strides", "fastest [m/s]", "first failure [m/s]", "what stops it", "probes"):
-        t.add_column(escape(col), justify="left" if col == "what stops it" else "right")
-    for p in points:
-        fail = "-" if p.first_failure_mps is None else f"{p.first_failure_mps:.3f}"
-        t.add_row(str(p.n_strides), f"{p.fastest_mps:.3f}", fail, escape(p.limit), str(len(p.probes)))
-    console.print(t)
 
 
 @app.command()
@@ -325,13 +118,13 @@ def frontier(
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (warm-started climb, then bisection)."""
-    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.config import QuadrupedConfig, load_config
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
 
-    cfg = load_config(config)
+    cfg = load_config(config, QuadrupedConfig)
     search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
     points = find_frontier(cfg, strides or cfg.sweep.strides, search, jobs)
-    _frontier_table(points)
+    frontier_table(points)
     if out is not None:
         from skatelib.library.atomic import atomic_path
 
@@ -354,19 +147,21 @@ def solve(
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build import build_library
-    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.config import QuadrupedConfig, load_config
     from skatelib.pipeline.preflight import check_output
 
     if config is not None and config_option is not None and config != config_option:
         raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
-    cfg = load_config(config or config_option)
+    cfg = load_config(config or config_option, QuadrupedConfig)
     from skatelib.library.schema import entry_key
 
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, jobs=1, use_cache=False, ipopt=(("print_level", 5),) if verbose else ())
-    _summary(report.outcomes)
+    from skatelib.pipeline.quadruped.kind import summary
+
+    summary(report.outcomes)
     console.print(f"wrote {escape(str(report.path))}")
     if report.failed:
         raise typer.Exit(1)
@@ -428,7 +223,7 @@ def info(
         if not str(k).endswith("_source"):
             m.add_row(escape(str(k)), escape(f"{v:.6g}" if isinstance(v, float) else str(v)))
     console.print(m)
-    t = Table(title=_count(len(lib), "entry"))
+    t = Table(title=count(len(lib), "entry"))
     for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]", "solve [s]",
                 "momentum [m/s]", "off label", "Coulomb margin [N]", "defect"):
         if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
@@ -442,9 +237,9 @@ def info(
         t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
                   escape(str(e.attrs["status"])),
                   str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}",
-                  _fmt(e.attrs, "solve_time_s", "{:.2f}"), _fmt(ph, "momentum_speed_mps", "{:.3f}"),
-                  off, _fmt(ph, "min_friction_margin_N", "{:.3f}"),
-                  _fmt(ph, "max_defect", "{:.1e}"))
+                  fmt(e.attrs, "solve_time_s", "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                  off, fmt(ph, "min_friction_margin_N", "{:.3f}"),
+                  fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
 
 
@@ -476,7 +271,7 @@ def validate(
 
     problems = validate_library(library, report)
     if not as_json:
-        console.print(f"[bold red]{_count(problems, 'entry')} failed validation[/]" if problems
+        console.print(f"[bold red]{count(problems, 'entry')} failed validation[/]" if problems
                       else "[green]all entries valid[/]")
     failed = 0
     results: list[Any] = []
@@ -528,7 +323,7 @@ def inspect(
         check_output(save, [library], force, what="recording")
     roots = inspect_library(library, entry, save, spawn, overlay)
     where = escape(f" to {save}; open it with: rerun {save}") if save else ""
-    console.print(f"logged {_count(len(roots), 'entry')}{where}")
+    console.print(f"logged {count(len(roots), 'entry')}{where}")
 
 
 @app.command()
@@ -605,7 +400,7 @@ def track(
         console.print(escape(f"wrote {save}; open it with: rerun {save}"))
     failed = _track_table(results, perturb)
     if failed:
-        console.print(f"[bold red]{failed} of {_count(len(results), 'entry')} failed in closed loop[/]")
+        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
         raise typer.Exit(1)
 
 

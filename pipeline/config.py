@@ -275,14 +275,7 @@ _HUMANOID_SECTIONS: dict[str, type] = {
 }
 
 
-def load_humanoid_config(path: Path | str) -> HumanoidConfig:
-    """Load and validate a humanoid build config.
-
-    Raises:
-        ConfigError: On any invalid field, naming the file and key.
-    """
-    path = Path(path)
-    data, text = read_toml(path)
+def _humanoid(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
     cfg = HumanoidConfig(path=path.resolve(), text=text, **_sections(path, data, _HUMANOID_SECTIONS))
     if cfg.sweep.motion not in ("walk", "skate"):
         raise ConfigError(path, "sweep.motion", f"{cfg.sweep.motion!r}: use 'walk' or 'skate'")
@@ -296,24 +289,9 @@ def load_humanoid_config(path: Path | str) -> HumanoidConfig:
     return cfg
 
 
-def humanoid_config_from_json(text: str, origin: Path) -> HumanoidConfig:
-    """Rebuild a humanoid config from ``HumanoidConfig.resolved_json()`` (as stored in a library)."""
-    data = json.loads(text)
+def _humanoid_from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _HUMANOID_SECTIONS.items()}
     return HumanoidConfig(path=Path(origin), text="", **sections)
-
-
-def load_any_config(path: Path | str | None = None) -> QuadrupedConfig | HumanoidConfig:
-    """Load a config of either kind, dispatching on ``meta.kind``."""
-    if path is None:
-        return load_config(None)
-    data, _ = read_toml(Path(path))
-    kind = _meta(Path(path), data).get("kind")
-    if kind == "humanoid":
-        return load_humanoid_config(path)
-    if kind == "quadruped":
-        return load_config(path)
-    raise ConfigError(Path(path), "meta.kind", f"{kind!r}: use 'quadruped' or 'humanoid'")
 
 
 _SECTIONS: dict[str, type] = {
@@ -444,32 +422,69 @@ def _sections(path: Path, data: dict[str, Any], tables: dict[str, type]) -> dict
     return out
 
 
-def load_config(path: Path | str | None = None) -> QuadrupedConfig:
-    """Load and validate a quadruped build config (the shipped default when ``path`` is None).
-
-    Raises:
-        ConfigError: On any invalid field, naming the file and key.
-    """
-    path = Path(path) if path is not None else CONFIG_DIR / DEFAULT_CONFIG
-    data, text = read_toml(path)
-    meta = _meta(path, data)
-    if meta.get("kind") != "quadruped":
-        raise ConfigError(path, "meta.kind", f"expected 'quadruped', got {meta.get('kind')!r}")
+def _quadruped(path: Path, data: dict[str, Any], text: str) -> QuadrupedConfig:
     cfg = QuadrupedConfig(path=path.resolve(), text=text, **_sections(path, data, _SECTIONS))
     _check_cross_fields(cfg)
     return cfg
 
 
-def config_from_json(text: str, origin: Path, urdf: Path) -> QuadrupedConfig:
-    """Rebuild a config from ``QuadrupedConfig.resolved_json()`` (as stored in a library), with
-    the robot description at ``urdf``. Errors name ``origin``."""
-    data = json.loads(text)
+def _quadruped_from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> QuadrupedConfig:
+    if urdf is None:
+        raise ConfigError(origin, "robot.urdf", "a quadruped config needs its robot description")
     data["robot"]["urdf"] = str(urdf)
     data.setdefault("terminal", {})  # format 1.0 libraries predate the riding end state
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _SECTIONS.items()}
     cfg = QuadrupedConfig(path=Path(origin), text="", **sections)
     _check_cross_fields(cfg)
     return cfg
+
+
+AnyConfig = QuadrupedConfig | HumanoidConfig
+C = typing.TypeVar("C", QuadrupedConfig, HumanoidConfig)
+# meta.kind -> (config class, from a TOML file's tables, from a library's resolved JSON)
+_KINDS: dict[str, tuple[type, Any, Any]] = {
+    "quadruped": (QuadrupedConfig, _quadruped, _quadruped_from_json),
+    "humanoid": (HumanoidConfig, _humanoid, _humanoid_from_json),
+}
+
+
+def _kind(path: Path, name: Any, expect: type | None) -> tuple[type, Any, Any]:
+    if name not in _KINDS:
+        raise ConfigError(path, "meta.kind", f"{name!r}: use one of {', '.join(map(repr, _KINDS))}")
+    row = _KINDS[name]
+    if expect is not None and row[0] is not expect:
+        wanted = next(k for k, r in _KINDS.items() if r[0] is expect)
+        raise ConfigError(path, "meta.kind", f"expected {wanted!r}, got {name!r}: this command takes {wanted} configs")
+    return row
+
+
+@typing.overload
+def load_config(path: Path | str | None = None) -> AnyConfig: ...
+@typing.overload
+def load_config(path: Path | str | None, expect: type[C]) -> C: ...
+def load_config(path: Path | str | None = None, expect: type | None = None) -> Any:
+    """Load and validate a build config of any kind (``meta.kind``), the shipped default when
+    ``path`` is None; with ``expect``, one of that config class only.
+
+    Raises:
+        ConfigError: On any invalid field, naming the file and key.
+    """
+    path = Path(path) if path is not None else CONFIG_DIR / DEFAULT_CONFIG
+    data, text = read_toml(path)
+    _, from_toml, _ = _kind(path, _meta(path, data).get("kind"), expect)
+    return from_toml(path, data, text)
+
+
+@typing.overload
+def config_from_json(text: str, origin: Path, urdf: Path | None = None) -> AnyConfig: ...
+@typing.overload
+def config_from_json(text: str, origin: Path, urdf: Path | None, expect: type[C]) -> C: ...
+def config_from_json(text: str, origin: Path, urdf: Path | None = None, expect: type | None = None) -> Any:
+    """Rebuild a config from its ``resolved_json()`` (as stored in a library), a quadruped one
+    with the robot description at ``urdf``. Errors name ``origin``."""
+    data = json.loads(text)
+    _, _, from_json = _kind(Path(origin), data.get("meta", {}).get("kind"), expect)
+    return from_json(data, Path(origin), urdf)
 
 
 def _check_cross_fields(cfg: QuadrupedConfig) -> None:

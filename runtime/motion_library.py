@@ -480,4 +480,5 @@ def _ro(a: np.ndarray) -> np.ndarray:
 
 
 def _entry(r: EntryRecord) -> Entry:
-    return Entry(r.key, r.attrs, r.arrays, r.columns, r.units)
+    return Entry(r.key, dict(r.attrs), dict(r.arrays), {k: tuple(v) for k, v in r.columns.items()},
+                 {k: tuple(v) for k, v in r.units.items()})

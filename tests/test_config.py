@@ -74,3 +74,23 @@ def test_speeds_that_name_the_same_entry_are_refused(tmp_path):
         load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.3, 0.3]\nstrides = [2]\n"))
     with pytest.raises(ConfigError, match=r"sweep\.strides.*repeats"):
         load_config(_write(tmp_path, "[sweep]\nvelocities_mps = [0.3]\nstrides = [2, 2]\n"))
+
+
+def test_one_loader_for_every_kind_and_the_kind_a_command_needs(tmp_path):
+    """load_config reads either kind from meta.kind; with the class a command needs, another kind
+    is refused naming meta.kind; config_from_json rebuilds either kind from a library's JSON."""
+    from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig, config_from_json
+
+    quad, walk = load_config(None), load_config(CONFIG_DIR / "hrp2_walk.toml")
+    assert isinstance(quad, QuadrupedConfig) and isinstance(walk, HumanoidConfig)
+    with pytest.raises(ConfigError, match=r"hrp2_walk\.toml.*meta\.kind.*expected 'quadruped'"):
+        load_config(CONFIG_DIR / "hrp2_walk.toml", QuadrupedConfig)
+    assert config_from_json(walk.resolved_json(), tmp_path / "lib.h5") == walk.__class__(
+        path=tmp_path / "lib.h5", text="", **{k: getattr(walk, k) for k in ("meta", "humanoid", "gpm", "walk", "skate",
+                                                                             "sweep")})
+    back = config_from_json(quad.resolved_json(), tmp_path / "lib.h5", quad.urdf_path, QuadrupedConfig)
+    assert back.problem_json() == quad.problem_json()
+    bad = tmp_path / "k.toml"
+    bad.write_text('[meta]\nkind = "hexapod"\nname = "x"\n')
+    with pytest.raises(ConfigError, match=r"meta\.kind.*hexapod"):
+        load_config(bad)

@@ -290,7 +290,7 @@ def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
     from skatelib.control.kinematics import LegKinematics
     from skatelib.control.linear_model import rpy_matrix
     from skatelib.pipeline.quadruped.dynamics import joint_torques
-    from skatelib.pipeline.validate import system_from_library
+    from skatelib.pipeline.quadruped.kind import system_from_library
 
     kin = LegKinematics.from_library(lib)
     system = system_from_library(lib)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from skatelib.library.errors import ConfigError
-from skatelib.pipeline.config import CONFIG_DIR, load_humanoid_config
+from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.pipeline.humanoid.entries import build_humanoid_library
 from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, walking_steps
 from skatelib.pipeline.humanoid.verify import check_steps, failures
@@ -23,13 +23,13 @@ WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"
 
 @pytest.fixture(scope="module")
 def walk():
-    c = load_humanoid_config(WALK)
+    c = load_config(WALK)
     return c, solve_motion(c, 0.375)
 
 
 @pytest.fixture(scope="module")
 def skate():
-    c = load_humanoid_config(SKATE)
+    c = load_config(SKATE)
     return c, solve_motion(c, 1.0)
 
 
@@ -87,7 +87,7 @@ def test_checker_catches_a_perturbed_node(skate):
 
 def test_sqp_and_ipopt_reach_the_same_optimum():
     """Both NLP solvers give the same cost per step of the 1.0 m/s skate."""
-    c = load_humanoid_config(SKATE)
+    c = load_config(SKATE)
     a = solve_motion(c, 1.0)
     b = solve_motion(dataclasses.replace(c, gpm=dataclasses.replace(c.gpm, solver="ipopt")), 1.0)
     for x, y in zip(a.steps, b.steps, strict=True):
@@ -116,7 +116,7 @@ def test_library_round_trip_and_cli(tmp_path):
 def test_build_report_marks_all_entries(tmp_path):
     """The walking build writes one successful entry: six walking steps between start and stop
     (eight GPM phases), named for what it is."""
-    rep = build_humanoid_library(load_humanoid_config(WALK), tmp_path / "w.h5")
+    rep = build_humanoid_library(load_config(WALK), tmp_path / "w.h5")
     e = MotionLibrary.open(rep.path).select(0.375)
     assert not rep.failed and e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
 
@@ -126,7 +126,7 @@ def test_unknown_motion_is_a_config_error(tmp_path):
     p = tmp_path / "x.toml"
     p.write_text(f'extends = "{WALK.as_posix()}"\n[sweep]\nmotion = "run"\nvelocities_mps = [1.0]\n')
     with pytest.raises(ConfigError, match=r"sweep\.motion"):
-        load_humanoid_config(p)
+        load_config(p)
     assert Path(WALK).exists()
 
 

@@ -1,0 +1,65 @@
+"""The robot kinds: one row per kind, naming the module that builds, describes and checks it.
+
+Every command goes through this table (``kind_of(config)`` or ``kind_named(lib.kind)``), so a
+third robot is a new subpackage with a ``kind`` module and one row here; the command line does
+not change. A kind module provides:
+
+* ``CONFIG_CLASS``: its config dataclass (``pipeline/config.py``);
+* ``print_model(cfg)``: what ``skatelib model`` shows;
+* ``run_build(cfg, out, options) -> BuildRun``: build and write a library, printing progress and
+  a summary;
+* ``validate_entries(lib, report) -> int``: the independent checks of every entry (failures).
+
+The modules are imported when a command needs them: ``skatelib --help`` imports no solver.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from skatelib.library.errors import LibraryFormatError
+
+KINDS: dict[str, str] = {
+    "quadruped": "skatelib.pipeline.quadruped.kind",
+    "humanoid": "skatelib.pipeline.humanoid.kind",
+}
+
+
+@dataclass(frozen=True)
+class BuildOptions:
+    """How to run a build (``skatelib build``'s options), whatever the kind."""
+
+    jobs: int = 2
+    backend: str = "loky"
+    scheduler: str | None = None
+    progress: bool = True
+    cache: bool = True
+    frontier: bool = False
+
+
+@dataclass(frozen=True)
+class BuildRun:
+    """What a build wrote and how many entries failed."""
+
+    path: Path
+    failed: int
+
+
+def kind_named(name: str, origin: Path | None = None) -> ModuleType:
+    """The kind module of ``name`` (a library's ``kind`` attribute or a config's ``meta.kind``).
+
+    Raises:
+        LibraryFormatError: An unknown kind in the file at ``origin``.
+    """
+    if name not in KINDS:
+        raise LibraryFormatError(origin or Path("?"), "/@kind", f"{name!r} is not one of {', '.join(KINDS)}")
+    return importlib.import_module(KINDS[name])
+
+
+def kind_of(config: Any) -> ModuleType:
+    """The kind module of a loaded config."""
+    return kind_named(config.meta.kind, config.path)
