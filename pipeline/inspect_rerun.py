@@ -230,12 +230,10 @@ def log_humanoid_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, ro
 
 def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str,
                           offset: np.ndarray) -> None:
-    """The support polygon of each contact segment of the plan, on the ground where it starts."""
-    from skatelib.pipeline.config import HumanoidConfig, config_from_json
-    from skatelib.pipeline.humanoid.motion import skating_steps, walking_steps
+    """The support polygon of each contact segment of the entry's stored plan, on the ground where it starts."""
+    from skatelib.pipeline.humanoid.motion import stored_plan
 
-    cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
-    plan = (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
+    plan = stored_plan(lib, e)
     strips = []
     for spec in plan:
         for _, sup in spec.segments:

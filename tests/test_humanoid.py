@@ -143,3 +143,27 @@ def test_humanoid_build_says_which_flags_do_not_apply(tmp_path):
                        capture_output=True, text=True, env=env)
     assert r.returncode == 0 and "--jobs, --no-cache do not apply" in r.stderr
     assert MotionLibrary.open(tmp_path / "w.h5").keys() == ["walk_v0.375_n6"]
+
+
+def test_each_entry_stores_its_plan_and_validate_checks_against_it(tmp_path):
+    """The plan an entry was solved for is stored with it (``plan_json``, exact round trip) and
+    `validate` checks the nodes against that plan, not one rebuilt with today's code: a stored plan
+    whose first step lasts 10 % longer fails the check."""
+    import json
+
+    from skatelib.library.amend import amend_library
+    from skatelib.pipeline.humanoid.motion import plan_from_json, walking_steps
+    from skatelib.pipeline.validate import validate_library
+
+    cfg = load_config(WALK)
+    path = build_humanoid_library(cfg, tmp_path / "w.h5").path
+    e = MotionLibrary.open(path)["walk_v0.375_n6"]
+    assert plan_from_json(e.attrs["plan_json"]) == walking_steps(cfg, 0.375)[1]
+    verdicts: list[str] = []
+    assert validate_library(path, lambda key, status, msg, fig: verdicts.append(status)) == 0 and verdicts == ["ok"]
+    doctored = json.loads(e.attrs["plan_json"])
+    doctored[0]["duration_s"] *= 1.1
+    amend_library(path, {}, {e.key: {"plan_json": json.dumps(doctored)}})
+    messages: list[str] = []
+    assert validate_library(path, lambda key, status, msg, fig: messages.append(msg)) == 1
+    assert "ok" not in messages

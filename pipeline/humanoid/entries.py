@@ -20,6 +20,7 @@ from skatelib.pipeline.humanoid.motion import (
     STATE_UNITS,
     ZMP_NAMES,
     Motion,
+    plan_json,
     solve_motion,
 )
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
@@ -60,6 +61,7 @@ def entry_from_motion(m: Motion, config: HumanoidConfig) -> EntryRecord:
         "status": "Solve_Succeeded" if m.success else status, "iterations": sum(r.iterations for r in steps),
         "solve_time_s": sum(r.solve_time_s for r in steps), "objective": sum(r.objective for r in steps),
         "max_constraint_violation": max(r.max_violation for r in steps),
+        "plan_json": plan_json(m.plan),
         "steps_json": json.dumps([{"name": r.spec.name, "status": r.status, "iterations": r.iterations,
                                    "solve_time_s": r.solve_time_s, "duration_s": r.spec.duration_s,
                                    "terminal": r.spec.terminal} for r in steps]),

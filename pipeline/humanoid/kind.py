@@ -59,8 +59,8 @@ def run_build(cfg: HumanoidConfig, out: Path, opts: BuildOptions) -> BuildRun:
 
 
 def validate_entries(lib: MotionLibrary, report: Any) -> int:
-    """Every step's GPM nodes against its plan (rebuilt from the stored config); returns the failures."""
-    from skatelib.pipeline.humanoid.motion import skating_steps, walking_steps
+    """Every step's GPM nodes against the plan stored with the entry; returns the failures."""
+    from skatelib.pipeline.humanoid.motion import stored_plan
     from skatelib.pipeline.humanoid.verify import check_steps, failures
 
     try:
@@ -73,7 +73,7 @@ def validate_entries(lib: MotionLibrary, report: Any) -> int:
         if not e.success:
             report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
-        plan = (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
+        plan = stored_plan(lib, e)  # as solved, not as today's code would plan it
         rep = check_steps(plan, e.arrays["nodes_t"], e.arrays["nodes_state"], e.arrays["nodes_control"],
                           h.gravity_mps2, h.leg_min_m, h.leg_max_m)
         fails = failures(rep)

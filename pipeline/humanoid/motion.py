@@ -11,7 +11,11 @@ friction along the board; the stop brings the COM back over both feet on the boa
 
 from __future__ import annotations
 
+import dataclasses
+import json
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from skatelib.pipeline.config import HumanoidConfig
@@ -100,6 +104,7 @@ class Motion:
     contact_point: np.ndarray
     step_index: np.ndarray
     n_planned: int = 0  # steps in the plan; fewer results mean a step failed and the rest was not tried
+    plan: tuple[StepSpec, ...] = ()  # every planned step, solved or not (stored with the entry)
 
     @property
     def success(self) -> bool:
@@ -112,7 +117,35 @@ def solve_motion(c: HumanoidConfig, velocity: float) -> Motion:
     h = c.humanoid
     results = solve_sequence(specs, x0, c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, c.gpm.solver)
     t, X, U, Z, P, S = sample(results, c.gpm.sample_dt_s, h.gravity_mps2)
-    return Motion(velocity, results, t, X, U, Z, P, S, n_planned=len(specs))
+    return Motion(velocity, results, t, X, U, Z, P, S, n_planned=len(specs), plan=tuple(specs))
+
+
+def plan_json(plan: Sequence[StepSpec]) -> str:
+    """A plan as stored with its entry (``plan_json``): steps, contact segments with their support
+    polygons and friction, terminal kinds and targets."""
+    return json.dumps([dataclasses.asdict(spec) for spec in plan])
+
+
+def plan_from_json(text: str) -> list[StepSpec]:
+    """The plan an entry was solved for, from its ``plan_json`` (floats round-trip exactly)."""
+
+    def support(d: dict[str, Any]) -> Support:
+        return Support(tuple(d["p0"]), tuple(d["velocity"]), tuple(tuple(v) for v in d["polygon"]),
+                       d["mu_x"], d["mu_y"])
+
+    return [StepSpec(d["name"], d["duration_s"], tuple((t0, support(s)) for t0, s in d["segments"]), d["terminal"],
+                     tuple(d["p_step"]), tuple(d["v_step"]), d["dz_vrp_m"], d["mu_next"]) for d in json.loads(text)]
+
+
+def stored_plan(lib: Any, e: Any) -> list[StepSpec]:
+    """The entry's stored plan; a library from before plans were stored (no ``plan_json``) gets
+    it rebuilt from its stored config with today's code."""
+    if "plan_json" in e.attrs:
+        return plan_from_json(str(e.attrs["plan_json"]))
+    from skatelib.pipeline.config import HumanoidConfig, config_from_json
+
+    cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
+    return (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
 
 
 def sample(results: list[StepResult], dt: float, g: float) -> tuple[np.ndarray, ...]:
@@ -147,4 +180,5 @@ def _contact_at(r: StepResult, t: float) -> np.ndarray:
     return np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
 
 
-__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "skating_steps", "solve_motion", "walking_steps"]
+__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
+           "stored_plan", "walking_steps"]
