@@ -122,9 +122,11 @@ def log_quadruped_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, r
             rec.log(path, shape, static=True)
         rec.send_columns(path, indexes=_time(t),
                          columns=rr.Transform3D.columns(translation=trans[:, i], quaternion=quats[:, i]))
-    # Paths on the ground: the board's, and where the push foot stood on the ground.
+    # Paths: the board's on the ground, each foot's trail, and where the push foot stood on the ground.
     rec.log(f"{root}/board_path", rr.LineStrips3D([e.board_pos[:, 0:3] * [1, 1, 0] + offset], colors=[(160, 110, 60)]),
             static=True)
+    trails = [e.foot_pos[:, i] + offset for i in range(len(LEGS))]  # where each foot went
+    rec.log(f"{root}/foot_trails", rr.LineStrips3D(trails, colors=[(120, 120, 120)], radii=0.002), static=True)
     stood = e.contact == GROUND
     if np.any(stood):
         steps = np.unique(np.round(e.foot_pos[stood], 3), axis=0)

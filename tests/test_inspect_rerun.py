@@ -52,7 +52,8 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
     e = lib["v0.30_s1"]
     root = "/v0.30_s1"
     assert root in roots
-    for sub in ("board", "board_path", "footholds", "robot/trunk_0", "forces/RL", "plots/board_speed/actual",
+    for sub in ("board", "board/deck", "board/wheels", "board/trucks", "ground", "board_path", "foot_trails",
+                "footholds", "robot/trunk_0", "forces/RL", "plots/board_speed/actual",
                 "plots/board_speed/target",
                 "plots/margins/friction_N", "plots/joints/q_FL_knee"):
         path = f"{root}/{sub}"
