@@ -146,7 +146,8 @@ def bench_rerun(path: Path | None = None) -> None:
 
     import rerun as rr
     from skatelib.pipeline.build import build_library
-    from skatelib.pipeline.inspect_rerun import _Robot, log_library
+    from skatelib.pipeline.inspect_rerun import log_library
+    from skatelib.pipeline.quadruped.rerun import Robot
     from skatelib.runtime import MotionLibrary
 
     path = path or build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
@@ -162,7 +163,7 @@ def bench_rerun(path: Path | None = None) -> None:
     # Baseline: the robot's link transforms of 2 entries logged one knot at a time.
     rec2 = rr.RecordingStream("skatelib-bench-rows")
     rec2.save(str(tmp / "rows.rrd"))
-    robot = _Robot(lib.urdf)
+    robot = Robot(lib.urdf)
     t0 = time.perf_counter()
     entries = list(lib)[:2]
     n_rows = 0

@@ -8,7 +8,10 @@ not change. A kind module provides:
 * ``print_model(cfg)``: what ``skatelib model`` shows;
 * ``run_build(cfg, out, options) -> BuildRun``: build and write a library, printing progress and
   a summary;
-* ``validate_entries(lib, report) -> int``: the independent checks of every entry (failures).
+* ``validate_entries(lib, report) -> int``: the independent checks of every entry (failures);
+
+and a ``rerun`` module beside it (imported by ``inspect`` only): ``PANELS`` (the plots of an
+entry's tab) and ``logger(lib)`` (draws one entry).
 
 The modules are imported when a command needs them: ``skatelib --help`` imports no solver.
 """

@@ -1,0 +1,59 @@
+"""The humanoid in a Rerun recording: COM and its path, ZMP, the contact point, the soles and the
+support polygons of the entry's stored plan, and the plots of its tab."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import rerun as rr
+from skatelib.pipeline.rerun_parts import ground, series, time_index
+from skatelib.runtime import Entry, MotionLibrary
+
+PANELS = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), ("ZMP y", "zmp_y")]
+
+
+def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
+    t, x = e.t, e.state
+    zmp = e.arrays["zmp"]
+    cp = e.arrays["contact_point"]
+    m = lib.model
+    rec.send_columns(f"{root}/com", indexes=time_index(t),
+                     columns=rr.Points3D.columns(positions=x[:, 0:3] + offset, radii=np.full(len(t), 0.03)))
+    rec.log(f"{root}/com_path", rr.LineStrips3D([x[:, 0:3] + offset], colors=[(200, 40, 40)]), static=True)
+    ground(rec, root, x[:, 0:2] + offset[:2], 0.5)
+    zmp3 = np.column_stack([zmp, np.zeros(len(zmp))]) + offset
+    green = np.tile(np.array([[20, 160, 60]], dtype=np.uint8), (len(t), 1))
+    rec.send_columns(f"{root}/zmp", indexes=time_index(t),
+                     columns=rr.Points3D.columns(positions=zmp3, radii=np.full(len(t), 0.02), colors=green))
+    rec.send_columns(f"{root}/contact_point", indexes=time_index(t),
+                     columns=rr.Points3D.columns(positions=cp + offset, radii=np.full(len(t), 0.015)))
+    # Soles under the contact point (the footprints of the plan), static.
+    feet = np.unique(np.round(cp[:, :2], 4), axis=0)
+    half = [m["foot_length_m"] / 2, m["foot_width_m"] / 2, 0.005]
+    rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
+                                        half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
+    _log_support_polygons(rec, lib, e, root, offset)
+    for name, col, label in (("com_z", x[:, 2], "COM height [m]"), ("com_vx", x[:, 3], "COM speed [m/s]"),
+                             ("zmp_x", zmp[:, 0], "ZMP x [m]"), ("zmp_y", zmp[:, 1], "ZMP y [m]")):
+        series(rec, root, name, t, col, label)
+
+
+def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str,
+                          offset: np.ndarray) -> None:
+    """The support polygon of each contact segment of the entry's stored plan, on the ground where it starts."""
+    from skatelib.pipeline.humanoid.motion import stored_plan
+
+    plan = stored_plan(lib, e)
+    strips = []
+    for spec in plan:
+        for _, sup in spec.segments:
+            poly = np.asarray(sup.polygon) + np.asarray(sup.p0)[:2]
+            ring = np.vstack([poly, poly[:1]])
+            strips.append(np.column_stack([ring, np.full(len(ring), 0.002)]) + offset)
+    rec.log(f"{root}/support_polygons", rr.LineStrips3D(strips, colors=[(60, 60, 200)]), static=True)
+
+
+def logger(lib: MotionLibrary) -> Any:
+    """``log(rec, e, root, offset)`` for this library's entries."""
+    return lambda rec, e, root, offset: log_entry(rec, lib, e, root, offset)

@@ -1,0 +1,171 @@
+"""The quadruped in a Rerun recording: the robot from the library's URDF posed by pinocchio at
+every knot, the board (deck rolling on trucks and wheels), paths, footholds, contact forces as
+arrows (blue on the board, orange on the ground) and the plots of its tab."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import rerun as rr
+from skatelib.library.channels import BOARD, GROUND, LEGS
+from skatelib.library.margins import board_rotations, friction_margins, rpy_matrices
+from skatelib.pipeline.rerun_parts import ground, quat_rows, series, time_index
+from skatelib.runtime import Entry, MotionLibrary
+
+BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)
+FORCE_SCALE_M_PER_N = 0.004
+DECK_THICKNESS_M = 0.02
+WHEEL_RADIUS_M = 0.03  # drawn only: the paper gives the deck height with wheels (0.11 m), not the wheels
+WHEEL_WIDTH_M = 0.035
+PANELS = [("board speed vs target", "board_speed"), ("deck roll", "board_roll"), ("normal forces", "normal_force"),
+          ("joint angles", "joints"), ("margins", "margins")]
+
+
+class Robot:
+    """Pinocchio model and visual shapes from the URDF stored in the library."""
+
+    def __init__(self, urdf_text: str):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "robot.urdf"
+            path.write_text(urdf_text)
+            self.model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+            self.geoms = pin.buildGeomFromUrdf(self.model, str(path), pin.GeometryType.VISUAL)
+        self.data = self.model.createData()
+        self.gdata = pin.GeometryData(self.geoms)
+        self.q_idx = np.array([self.model.joints[j].idx_q for j in range(2, self.model.njoints)])
+        feet = [f.name for f in self.model.frames if f.name.endswith("_foot")]
+        self.foot_ids = [self.model.getFrameId(f"{leg}_foot") for leg in LEGS] if len(feet) >= 4 else []
+
+    def shape(self, g: Any) -> Any:
+        geo = g.geometry
+        name = type(geo).__name__
+        if name == "Box":
+            return rr.Boxes3D(half_sizes=[geo.halfSide], colors=[(90, 90, 100)])
+        if name == "Cylinder":
+            return rr.Cylinders3D(lengths=[2 * geo.halfLength], radii=[geo.radius], colors=[(120, 120, 130)])
+        if name == "Sphere":
+            return rr.Ellipsoids3D(half_sizes=[[geo.radius] * 3], colors=[(30, 30, 30)], fill_mode="solid")
+        return None
+
+    def poses(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Per knot and shape: translations (K, G, 3) and xyzw quaternions (K, G, 4); per knot and
+        leg the feet's translational Jacobians over the leg's joints (K, 4, 3, 3) (zeros without
+        foot frames)."""
+        K, G = len(q), len(self.geoms.geometryObjects)
+        trans, quats = np.zeros((K, G, 3)), np.zeros((K, G, 4))
+        tau = np.zeros((K, 4, 3, 3))
+        qp = pin.neutral(self.model)
+        for k in range(K):
+            qp[:3] = base_pos[k]
+            qp[3:7] = pin.Quaternion(base_rot[k]).coeffs()
+            qp[self.q_idx] = q[k]
+            pin.forwardKinematics(self.model, self.data, qp)
+            pin.updateGeometryPlacements(self.model, self.data, self.geoms, self.gdata)
+            for i in range(G):
+                M = self.gdata.oMg[i]
+                trans[k, i] = M.translation
+                quats[k, i] = pin.Quaternion(M.rotation).coeffs()
+            if self.foot_ids:
+                pin.computeJointJacobians(self.model, self.data, qp)
+                pin.updateFramePlacements(self.model, self.data)
+                for leg, fid in enumerate(self.foot_ids):
+                    J = pin.getFrameJacobian(self.model, self.data, fid, pin.LOCAL_WORLD_ALIGNED)[:3, 6:]
+                    tau[k, leg] = J[:, 3 * leg: 3 * leg + 3]  # this leg's columns: d foot / d q_leg
+        return trans, quats, tau
+
+
+def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robot, root: str,
+                        offset: np.ndarray) -> None:
+    t, x, u = e.t, e.state, e.control
+    assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
+    K = len(t)
+    R = rpy_matrices(x[:, 3:6])
+    com_off = lib.model_arrays.get("robot_com_offset_m", np.zeros(3))
+    trunk = x[:, 0:3] - np.einsum("kij,j->ki", R, com_off) + offset
+    trans, quats, jac = robot.poses(trunk, R, x[:, 12:24])
+    for i, g in enumerate(robot.geoms.geometryObjects):
+        path = f"{root}/robot/{g.name}"
+        shape = robot.shape(g)
+        if shape is not None:
+            rec.log(path, shape, static=True)
+        rec.send_columns(path, indexes=time_index(t),
+                         columns=rr.Transform3D.columns(translation=trans[:, i], quaternion=quats[:, i]))
+    # Paths: the board's on the ground, each foot's trail, and where the push foot stood on the ground.
+    rec.log(f"{root}/board_path", rr.LineStrips3D([e.board_pos[:, 0:3] * [1, 1, 0] + offset], colors=[(160, 110, 60)]),
+            static=True)
+    trails = [e.foot_pos[:, i] + offset for i in range(len(LEGS))]  # where each foot went
+    rec.log(f"{root}/foot_trails", rr.LineStrips3D(trails, colors=[(120, 120, 120)], radii=0.002), static=True)
+    stood = e.contact == GROUND
+    if np.any(stood):
+        steps = np.unique(np.round(e.foot_pos[stood], 3), axis=0)
+        rec.log(f"{root}/footholds", rr.Points3D(steps + offset, radii=0.012, colors=[(230, 120, 30)]), static=True)
+    _log_board(rec, lib.model, e, root, offset)
+    ground(rec, root, e.board_pos[:, :2] + offset[:2], float(lib.model["board_deck_length_m"]))
+    # Contact forces at the knots where a control acts.
+    forces = u[:, :12].reshape(-1, 4, 3)
+    for i, leg in enumerate(LEGS):
+        c = e.contact[:-1, i]
+        colors = np.array([BOARD_COLOR if ci == BOARD else GROUND_COLOR if ci == GROUND else SWING_COLOR for ci in c],
+                          dtype=np.uint8)
+        rec.send_columns(f"{root}/forces/{leg}", indexes=time_index(t[:-1]),
+                         columns=rr.Arrows3D.columns(origins=e.foot_pos[:-1, i] + offset,
+                                                     vectors=forces[:, i] * FORCE_SCALE_M_PER_N, colors=colors))
+    # Plots.
+    v_fwd = np.cos(x[:, 5]) * x[:, 24] + np.sin(x[:, 5]) * x[:, 25]
+    series(rec, root, "board_speed/actual", t, v_fwd, "board speed [m/s]")
+    series(rec, root, "board_speed/target", t, np.full(K, e.target_velocity_mps), "label [m/s]")
+    series(rec, root, "board_roll", t, x[:, 26], "deck roll [rad]")
+    for i, leg in enumerate(LEGS):
+        series(rec, root, f"normal_force/{leg}", t[:-1], forces[:, i, 2], f"{leg} normal force [N]")
+    names = e.columns["state"][12:24]
+    for j, name in enumerate(names):
+        series(rec, root, f"joints/{name}", t, x[:, 12 + j], f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
+    m = lib.model
+    tau_max = float(m.get("torque_limit_Nm", np.inf))
+    fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
+    touching = np.isin(e.contact[:-1], (BOARD, GROUND))
+    tau = np.abs(np.einsum("klji,klj->kli", jac[:-1], forces)).max(axis=2)  # |J^T f| per leg
+    torque = np.where(touching, tau_max - tau, np.inf).min(axis=1)
+    series(rec, root, "margins/friction_N", t[:-1], fric, "Coulomb margin mu f_n - |f_t| [N]")
+    series(rec, root, "margins/torque_Nm", t[:-1], torque, "torque margin [N m]")
+
+
+def _log_board(rec: rr.RecordingStream, m: dict[str, Any], e: Entry, root: str, offset: np.ndarray) -> None:
+    """The board: the deck rolls about its x axis on two trucks that stay on the ground, four
+    wheels on the trucks' axles; all of it moves and yaws with the board (``board_pos``: the deck
+    top's centre, the deck roll)."""
+    assert e.board_pos is not None
+    t, yaw = e.t, e.state[:, 26]
+    height = float(m["board_deck_height_m"])  # deck top above the ground, wheels included
+    base = e.board_pos[:, :3] * [1.0, 1.0, 0.0] + offset
+    heading = quat_rows(board_rotations(0 * yaw, yaw))
+    rec.send_columns(f"{root}/board", indexes=time_index(t),
+                     columns=rr.Transform3D.columns(translation=base, quaternion=heading))
+    half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, DECK_THICKNESS_M / 2]
+    rec.log(f"{root}/board/deck", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -DECK_THICKNESS_M / 2]],
+                                             colors=[(160, 110, 60)], fill_mode="solid"), static=True)
+    roll = board_rotations(e.board_pos[:, 3], 0 * yaw)
+    rec.send_columns(f"{root}/board/deck", indexes=time_index(t),
+                     columns=rr.Transform3D.columns(translation=np.tile([0.0, 0.0, height], (len(t), 1)),
+                                                    quaternion=quat_rows(roll)))
+    axles = [float(m["board_l_front_m"]), -float(m["board_l_rear_m"])]
+    half_track = float(m.get("board_truck_width_m", m["board_deck_width_m"])) / 2
+    hanger = height - DECK_THICKNESS_M - WHEEL_RADIUS_M
+    rec.log(f"{root}/board/trucks", rr.Boxes3D(
+        centers=[[x, 0.0, WHEEL_RADIUS_M + hanger / 2] for x in axles],
+        half_sizes=[[0.02, half_track - WHEEL_WIDTH_M / 2, hanger / 2]] * 2, colors=[(150, 150, 160)],
+        fill_mode="solid"), static=True)
+    rec.log(f"{root}/board/wheels", rr.Cylinders3D(
+        centers=[[x, side * half_track, WHEEL_RADIUS_M] for x in axles for side in (-1.0, 1.0)],
+        lengths=[WHEEL_WIDTH_M] * 4, radii=[WHEEL_RADIUS_M] * 4, colors=[(235, 235, 225)],
+        rotation_axis_angles=[rr.RotationAxisAngle(axis=[1.0, 0.0, 0.0], degrees=90.0)] * 4), static=True)
+
+
+def logger(lib: MotionLibrary) -> Any:
+    """``log(rec, e, root, offset)`` for this library's entries (the robot built once)."""
+    robot = Robot(lib.urdf)
+    return lambda rec, e, root, offset: log_entry(rec, lib, e, robot, root, offset)
