@@ -29,6 +29,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig, load_config
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped import pushoff
 
 
@@ -78,10 +79,10 @@ def bench_library() -> Path:
     serial_cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, warm_start=False))
     out = Path(tempfile.mkdtemp()) / "default.h5"
     t_serial = time.perf_counter()
-    rs = build_library(serial_cfg, out, jobs=1, use_cache=False)
+    rs = build_library(serial_cfg, out, BuildOptions(jobs=1, cache=False))
     t_serial = time.perf_counter() - t_serial
     t_par = time.perf_counter()
-    rp = build_library(cfg, out, jobs=2, use_cache=False)
+    rp = build_library(cfg, out, BuildOptions(jobs=2, cache=False))
     t_par = time.perf_counter() - t_par
     it_s = sum(o.result.iterations for o in rs.outcomes)
     it_p = sum(o.result.iterations for o in rp.outcomes)

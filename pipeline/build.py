@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 from skatelib.pipeline.quadruped.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
 from skatelib.pipeline.quadruped.pushoff import problem_for
@@ -33,23 +34,23 @@ def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
     return Path("out") / f"{config.meta.name}.h5"
 
 
-def build_library(config: QuadrupedConfig, out: Path | None = None, jobs: int = 2, backend: str = "loky",
-                  scheduler: Any = None, use_cache: bool = True,
-                  on_entry: ProgressFn | None = None,
-                  frontier: FrontierSearch | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
+def build_library(config: QuadrupedConfig, out: Path | None = None, options: BuildOptions | None = None,
+                  on_entry: ProgressFn | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
     marked ``success = false`` with their IPOPT status); with ``frontier``, also search the
     reachable-speed frontier of every stride count and store it in the file."""
     t0 = time.perf_counter()
     out = out or default_output(config)
-    if config.optimization.compile and backend == "loky":
+    options = options or BuildOptions()
+    if config.optimization.compile and options.backend == "loky":
         # Compile the stage functions once here, so parallel workers load them instead of all compiling.
         problem_for(config, min(config.sweep.strides))
-    outcomes = ordered(run_sweep(config, jobs, backend, scheduler, use_cache, on_entry, ipopt))
+    outcomes = ordered(run_sweep(config, options, on_entry, ipopt))
     system = SkateSystem.from_config(config)
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
-    options = outcomes[0].result.ipopt_options if outcomes else {}
-    points = find_frontier(config, config.sweep.strides, frontier, jobs) if frontier is not None else None
-    stored = frontier_json(points, frontier) if points is not None and frontier is not None else None
-    path = write_quadruped_library(out, config, system, entries, options, stored)
+    solver_options = outcomes[0].result.ipopt_options if outcomes else {}
+    search = FrontierSearch() if options.frontier else None
+    points = find_frontier(config, config.sweep.strides, search, options.jobs) if search is not None else None
+    stored = frontier_json(points, search) if points is not None and search is not None else None
+    path = write_quadruped_library(out, config, system, entries, solver_options, stored)
     return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0, frontier=points)

@@ -148,6 +148,7 @@ def solve(
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build import build_library
     from skatelib.pipeline.config import QuadrupedConfig, load_config
+    from skatelib.pipeline.kinds import BuildOptions
     from skatelib.pipeline.preflight import check_output
 
     if config is not None and config_option is not None and config != config_option:
@@ -158,7 +159,7 @@ def solve(
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
-    report = build_library(cfg, out, jobs=1, use_cache=False, ipopt=(("print_level", 5),) if verbose else ())
+    report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
     from skatelib.pipeline.quadruped.kind import summary
 
     summary(report.outcomes)

@@ -23,6 +23,7 @@ from typing import Any
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
 from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.ocp.stagewise import cache_dir
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
 from skatelib.pipeline.quadruped.verify import check_trajectory
@@ -229,24 +230,25 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
     return out
 
 
-def run_sweep(config: QuadrupedConfig, jobs: int = 2, backend: str = "loky", scheduler: str | None = None,
-              use_cache: bool = True, on_entry: ProgressFn | None = None,
+def run_sweep(config: QuadrupedConfig, options: BuildOptions | None = None, on_entry: ProgressFn | None = None,
               ipopt: tuple[tuple[str, Any], ...] = ()) -> list[EntryOutcome]:
     """Solve every (velocity, strides) of ``config.sweep`` and return the outcomes.
 
     Args:
-        jobs: Worker processes (loky backend).
-        backend: ``"loky"`` (this machine) or ``"dask"`` (an existing cluster at ``scheduler``).
-        scheduler: Dask scheduler address (``tcp://host:port``), or a ``distributed.Client``.
+        options: ``jobs`` (worker processes of the loky backend), ``backend`` (``"loky"``: this
+            machine, or ``"dask"``: an existing cluster at ``scheduler``, ``tcp://host:port``),
+            ``cache`` (reuse and store finished entries).
         on_entry: Called in the main process with an :class:`EntryEvent` as an entry starts (not
             with the dask backend) and as it finishes.
         ipopt: Extra IPOPT options of every solve (``(("print_level", 5),)`` shows its log).
     """
+    options = options or BuildOptions()
     chains = chains_for(config, ipopt)
-    if backend == "dask":
-        return _run_dask(chains, scheduler, use_cache, on_entry)
-    if backend != "loky":
-        raise ValueError(f"unknown backend {backend!r}; use 'loky' or 'dask'")
+    jobs, use_cache = options.jobs, options.cache
+    if options.backend == "dask":
+        return _run_dask(chains, options.scheduler, use_cache, on_entry)
+    if options.backend != "loky":
+        raise ValueError(f"unknown backend {options.backend!r}; use 'loky' or 'dask'")
     if jobs <= 1:
         direct = _Direct(on_entry)
         return [o for c in chains for o in run_chain(c, use_cache, direct)]

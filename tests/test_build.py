@@ -15,6 +15,7 @@ from skatelib.library.reader import read_library
 from skatelib.pipeline import sweep
 from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
 from skatelib.runtime import MotionLibrary
 
@@ -118,7 +119,8 @@ def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path
     cfg = load_config(TINY)
     events: list[tuple[str, bool]] = []
     threads = {v: os.environ.get(v) for v in sweep.THREAD_VARS}
-    report = build_library(cfg, tmp_path / "again.h5", jobs=1, on_entry=lambda ev: events.append((ev.key, not ev.done)))
+    report = build_library(cfg, tmp_path / "again.h5", BuildOptions(jobs=1),
+                           on_entry=lambda ev: events.append((ev.key, not ev.done)))
     assert {v: os.environ.get(v) for v in sweep.THREAD_VARS} == threads  # a serial build leaves the caller's env
     assert all(o.cached for o in report.outcomes)
     # The progress hears of each entry as it starts (in flight) and as it ends, in that order.
@@ -166,8 +168,8 @@ def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
     cfg = load_config(TINY)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
-        report = build_library(cfg, tmp_path / "dask.h5", backend="dask", scheduler=cluster.scheduler_address,
-                               use_cache=False)
+        report = build_library(cfg, tmp_path / "dask.h5",
+                               BuildOptions(backend="dask", scheduler=cluster.scheduler_address, cache=False))
     a, b = MotionLibrary.open(out), MotionLibrary.open(report.path)
     for e in a:
         assert np.allclose(e.state, b[e.key].state, atol=1e-9)
@@ -206,3 +208,22 @@ def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
                        capture_output=True, text=True, env=env, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "no C compiler found" in r.stderr and MotionLibrary.open(tmp_path / "a.h5")["v0.30_s1"].success
+
+
+def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
+    """`build --frontier` (BuildOptions.frontier) searches each stride count's fastest passing label
+    and stores it: the fastest is a probe that passed, the first failure one that did not, and they
+    bracket within the resolution (a coarse search here, to keep the test short)."""
+    from skatelib.pipeline import build as build_module
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch
+
+    monkeypatch.setattr(build_module, "FrontierSearch",
+                        lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.2, max_mps=1.75))
+    report = build_library(load_config(TINY), tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
+    stored = json.loads(MotionLibrary.open(report.path).attrs["frontier_json"])
+    (point,) = stored["points"]
+    ok = {p["velocity_mps"] for p in point["probes"] if p["ok"]}
+    bad = {p["velocity_mps"] for p in point["probes"] if not p["ok"]}
+    assert point["n_strides"] == 1 and point["fastest_mps"] in ok and point["first_failure_mps"] in bad
+    assert 0 < point["first_failure_mps"] - point["fastest_mps"] <= 0.2
+    assert report.frontier is not None and report.frontier[0].fastest_mps == point["fastest_mps"]

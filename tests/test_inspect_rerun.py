@@ -17,6 +17,7 @@ from skatelib.pipeline.build import build_library  # noqa: E402
 from skatelib.pipeline.config import CONFIG_DIR, load_config  # noqa: E402
 from skatelib.pipeline.humanoid.entries import build_humanoid_library  # noqa: E402
 from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
+from skatelib.pipeline.kinds import BuildOptions  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
 
 TINY = Path(__file__).parent / "configs" / "tiny.toml"
@@ -40,7 +41,7 @@ def _columns(rrd: Path) -> dict[str, dict[str, list]]:
 @pytest.fixture(scope="module")
 def quad_lib(tmp_path_factory):
     cfg = load_config(TINY)
-    return build_library(cfg, tmp_path_factory.mktemp("q") / "tiny.h5", jobs=1, use_cache=False).path
+    return build_library(cfg, tmp_path_factory.mktemp("q") / "tiny.h5", BuildOptions(jobs=1, cache=False)).path
 
 
 def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path):

@@ -16,6 +16,7 @@ pytest.importorskip("matplotlib")
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.plots import push_foot_forces, write_figures
 from skatelib.runtime import MotionLibrary
 
@@ -25,7 +26,8 @@ CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
 
 @pytest.fixture(scope="module")
 def lib_path(tmp_path_factory):
-    return build_library(load_config(TINY), tmp_path_factory.mktemp("p") / "tiny.h5", jobs=1, use_cache=False).path
+    out = tmp_path_factory.mktemp("p") / "tiny.h5"
+    return build_library(load_config(TINY), out, BuildOptions(jobs=1, cache=False)).path
 
 
 def test_plot_writes_every_figure(lib_path, tmp_path):

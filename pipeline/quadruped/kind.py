@@ -98,7 +98,6 @@ def run_build(cfg: QuadrupedConfig, out: Path, opts: BuildOptions) -> BuildRun:
     )
     from skatelib.pipeline.build import build_library
     from skatelib.pipeline.preflight import check_cache_dir, check_scheduler
-    from skatelib.pipeline.quadruped.frontier import FrontierSearch
     from skatelib.pipeline.sweep import chains_for
 
     if opts.backend == "dask":
@@ -113,9 +112,7 @@ def run_build(cfg: QuadrupedConfig, out: Path, opts: BuildOptions) -> BuildRun:
                   TextColumn("eta"), TimeRemainingColumn(), console=console, disable=not opts.progress) as bar:
         progress = _Progress(bar, bar.add_task("solving", total=total))
         try:
-            report = build_library(cfg, out, jobs=opts.jobs, backend=opts.backend, scheduler=opts.scheduler,
-                                   use_cache=opts.cache, on_entry=progress,
-                                   frontier=FrontierSearch() if opts.frontier else None)
+            report = build_library(cfg, out, opts, on_entry=progress)
         except KeyboardInterrupt:
             kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
                     else "nothing is cached (--no-cache)")
