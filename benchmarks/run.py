@@ -195,7 +195,7 @@ def bench_humanoid(repeats: int = 21) -> None:
     import numpy as np
     from scipy.optimize import minimize
     from skatelib.pipeline.config import CONFIG_DIR
-    from skatelib.pipeline.humanoid.motion import skating_steps
+    from skatelib.pipeline.humanoid.motion import skating_steps, step_model
     from skatelib.pipeline.humanoid.step import solve_step, step_problem
 
     c = load_config(CONFIG_DIR / "hrp2_skate.toml", HumanoidConfig)
@@ -206,7 +206,7 @@ def bench_humanoid(repeats: int = 21) -> None:
     for solver in ("sqp", "ipopt"):
         times = []
         for _ in range(repeats):
-            r = solve_step(push, x0, 0.0, c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, solver)
+            r = solve_step(push, x0, 0.0, dataclasses.replace(step_model(c), solver=solver))
             assert r.success, r.status
             times.append(r.solve_time_s)
         rows[solver] = (statistics.median(times), r.iterations, r.objective)

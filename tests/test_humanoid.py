@@ -14,7 +14,7 @@ import pytest
 from skatelib.library.errors import ConfigError
 from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.pipeline.humanoid.entries import build_humanoid_library
-from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, walking_steps
+from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, step_model, walking_steps
 from skatelib.pipeline.humanoid.verify import check_steps, failures
 from skatelib.runtime import MotionLibrary
 
@@ -38,8 +38,7 @@ def _report(c, m):
     nodes_t = np.stack([r.t0 + np.concatenate([(np.concatenate([[-1.0], np.polynomial.legendre.leggauss(
         len(r.U))[0]]) + 1) / 2 * r.spec.duration_s, [r.spec.duration_s]]) for r in m.steps])
     nodes_X = np.stack([np.vstack([r.X, r.Xf]) for r in m.steps])
-    h = c.humanoid
-    return plan, nodes_t, nodes_X, np.stack([r.U for r in m.steps]), (h.gravity_mps2, h.leg_min_m, h.leg_max_m)
+    return plan, nodes_t, nodes_X, np.stack([r.U for r in m.steps]), step_model(c)
 
 
 def test_skate_push_reaches_one_metre_per_second_at_one_second(skate):
@@ -69,8 +68,8 @@ def test_every_constraint_holds_by_independent_check(motion, walk, skate):
     """Dynamics, quadrature, continuity, unilateral, ZMP, friction, skating, reach and every
     terminal condition hold at the nodes, checked with scipy interpolation."""
     c, m = walk if motion == "walk" else skate
-    plan, nt, nx, nu, (g, rmin, rmax) = _report(c, m)
-    rep = check_steps(plan, nt, nx, nu, g, rmin, rmax)
+    plan, nt, nx, nu, model = _report(c, m)
+    rep = check_steps(plan, nt, nx, nu, model)
     assert failures(rep) == [], rep
     expected = {"dynamics_position", "zmp_in_polygon", "friction", "reach", "continuity", "stop", "dcm_terminal"}
     assert expected <= set(rep)
@@ -79,10 +78,10 @@ def test_every_constraint_holds_by_independent_check(motion, walk, skate):
 def test_checker_catches_a_perturbed_node(skate):
     """Moving one node's acceleration by 0.05 m/s^2 is reported (the check can fail)."""
     c, m = skate
-    plan, nt, nx, nu, args = _report(c, m)
+    plan, nt, nx, nu, model = _report(c, m)
     nu = nu.copy()
     nu[0, 4, 0] += 0.05
-    assert any("dynamics_velocity" in f for f in failures(check_steps(plan, nt, nx, nu, *args)))
+    assert any("dynamics_velocity" in f for f in failures(check_steps(plan, nt, nx, nu, model)))
 
 
 def test_sqp_and_ipopt_reach_the_same_optimum():

@@ -60,14 +60,13 @@ def run_build(cfg: HumanoidConfig, out: Path, opts: BuildOptions) -> BuildRun:
 
 def validate_entries(lib: MotionLibrary, report: Any) -> int:
     """Every step's GPM nodes against the plan stored with the entry; returns the failures."""
-    from skatelib.pipeline.humanoid.motion import stored_plan
+    from skatelib.pipeline.humanoid.motion import step_model, stored_plan
     from skatelib.pipeline.humanoid.verify import check_steps, failures
 
     try:
         cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
     except SkatelibError as err:
         raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {err}") from err
-    h = cfg.humanoid
     bad = 0
     for e in lib:
         if not e.success:
@@ -75,7 +74,7 @@ def validate_entries(lib: MotionLibrary, report: Any) -> int:
             continue
         plan = stored_plan(lib, e)  # as solved, not as today's code would plan it
         rep = check_steps(plan, e.arrays["nodes_t"], e.arrays["nodes_state"], e.arrays["nodes_control"],
-                          h.gravity_mps2, h.leg_min_m, h.leg_max_m)
+                          step_model(cfg))
         fails = failures(rep)
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})

@@ -19,7 +19,15 @@ from typing import Any
 
 import numpy as np
 from skatelib.pipeline.config import HumanoidConfig
-from skatelib.pipeline.humanoid.step import StepResult, StepSpec, Support, convex_hull, rectangle, solve_sequence
+from skatelib.pipeline.humanoid.step import (
+    StepModel,
+    StepResult,
+    StepSpec,
+    Support,
+    convex_hull,
+    rectangle,
+    solve_sequence,
+)
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 
 STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
@@ -111,11 +119,17 @@ class Motion:
         return bool(self.steps) and all(r.success for r in self.steps) and len(self.steps) == self.n_planned
 
 
+def step_model(c: HumanoidConfig) -> StepModel:
+    """The config's node count, gravity, leg reach and solver, shared by every step."""
+    h = c.humanoid
+    return StepModel(c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, c.gpm.solver)
+
+
 def solve_motion(c: HumanoidConfig, velocity: float) -> Motion:
     """Plan and solve a walk or a skate at ``velocity``, step by step, then sample it."""
     x0, specs = (walking_steps if c.sweep.motion == "walk" else skating_steps)(c, velocity)
     h = c.humanoid
-    results = solve_sequence(specs, x0, c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, c.gpm.solver)
+    results = solve_sequence(specs, x0, step_model(c))
     t, X, U, Z, P, S = sample(results, c.gpm.sample_dt_s, h.gravity_mps2)
     return Motion(velocity, results, t, X, U, Z, P, S, n_planned=len(specs), plan=tuple(specs))
 

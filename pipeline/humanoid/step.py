@@ -66,6 +66,18 @@ class StepSpec:
 
 
 @dataclass(frozen=True)
+class StepModel:
+    """What every step of a motion shares: LG node count, gravity [m/s^2], leg reach [m] (Eq. 21)
+    and the NLP solver."""
+
+    n_nodes: int
+    g: float
+    rmin: float
+    rmax: float
+    solver: str = "ipopt"
+
+
+@dataclass(frozen=True)
 class StepResult:
     """A solved step: node values, solver outcome, and the per-node contact data used."""
 
@@ -265,17 +277,16 @@ def step_problem(n_nodes: int, terminal: str, solver: str = "ipopt") -> StepProb
     return _PROBLEMS[key]
 
 
-def solve_step(spec: StepSpec, x0: np.ndarray, t0: float, n_nodes: int, g: float, rmin: float, rmax: float,
-               solver: str = "ipopt") -> StepResult:
+def solve_step(spec: StepSpec, x0: np.ndarray, t0: float, model: StepModel) -> StepResult:
     """Solve one step from ``x0``; a failure is returned with its status, never raised."""
-    prob = step_problem(n_nodes, spec.terminal, solver)
-    p, P0, sup = prob.parameters(spec, x0, g, rmin, rmax)
+    prob = step_problem(model.n_nodes, spec.terminal, model.solver)
+    p, P0, sup = prob.parameters(spec, x0, model.g, model.rmin, model.rmax)
     tic = time.perf_counter()
     sol = prob.solver(x0=prob.initial_guess(x0, spec), p=p, lbg=prob.lbg, ubg=prob.ubg)
     dt = time.perf_counter() - tic
     st = prob.solver.stats()
     w = np.asarray(sol["x"]).reshape(-1)
-    N = n_nodes
+    N = model.n_nodes
     X = w[: 6 * (N + 1)].reshape(N + 1, 6, order="F")
     U = w[6 * (N + 1): 6 * (N + 1) + 3 * N].reshape(N, 3, order="F")
     Xf = w[6 * (N + 1) + 3 * N:]
@@ -287,12 +298,11 @@ def solve_step(spec: StepSpec, x0: np.ndarray, t0: float, n_nodes: int, g: float
                       supports=sup)
 
 
-def solve_sequence(steps: list[StepSpec], x0: np.ndarray, n_nodes: int, g: float, rmin: float, rmax: float,
-                   solver: str = "ipopt") -> list[StepResult]:
+def solve_sequence(steps: list[StepSpec], x0: np.ndarray, model: StepModel) -> list[StepResult]:
     """Solve steps one after another, each starting from the previous final state (Eq. 22)."""
     out, t0, x = [], 0.0, np.asarray(x0, dtype=float)
     for spec in steps:
-        r = solve_step(spec, x, t0, n_nodes, g, rmin, rmax, solver)
+        r = solve_step(spec, x, t0, model)
         out.append(r)
         if not r.success:
             break

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
-from skatelib.pipeline.humanoid.step import StepSpec
+from skatelib.pipeline.humanoid.step import StepModel, StepSpec
 
 
 def _lg_nodes(n: int) -> np.ndarray:
@@ -13,8 +13,10 @@ def _lg_nodes(n: int) -> np.ndarray:
 
 
 def check_steps(specs: list[StepSpec], nodes_t: np.ndarray, nodes_state: np.ndarray, nodes_control: np.ndarray,
-                g: float, rmin: float, rmax: float, tol: float = 1e-6) -> dict[str, float]:
-    """Largest violation of each constraint of the humanoid paper over all steps (0 = holds)."""
+                model: StepModel, tol: float = 1e-6) -> dict[str, float]:
+    """Largest violation of each constraint of the humanoid paper over all steps (0 = holds), with
+    the model's gravity and leg reach."""
+    g, rmin, rmax = model.g, model.rmin, model.rmax
     worst: dict[str, float] = {}
 
     def note(name: str, value: float | np.floating) -> None:
