@@ -26,7 +26,7 @@ from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.ocp.stagewise import cache_dir
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
-from skatelib.pipeline.quadruped.verify import check_trajectory
+from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -135,8 +135,7 @@ def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[st
     if not r.success:
         return r, {}
     system = problem_for(config, r.n_strides).system
-    report = check_trajectory(system, r.t, r.state, r.control, r.contact, r.foot_pos, r.board_pos,
-                              target_velocity_mps=r.target_velocity_mps)
+    report = check_trajectory(system, Trajectory.of(r), r.target_velocity_mps)
     failures = report.failures(system)
     if failures:
         r = replace(r, success=False, status=f"Physics_Check_Failed: {'; '.join(failures)}")

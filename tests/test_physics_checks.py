@@ -12,7 +12,7 @@ from skatelib.library.margins import board_rotations, friction_margins
 from skatelib.pipeline.quadruped import pushoff
 from skatelib.pipeline.quadruped.pushoff import PushoffProblem, PushoffSpec, solve
 from skatelib.pipeline.quadruped.terms import FinalSpeed
-from skatelib.pipeline.quadruped.verify import check_trajectory
+from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 from skatelib.pipeline.sweep import judge
 
 
@@ -29,9 +29,7 @@ def honest(small_cfg):
 
 
 def _check(system, r, **arrays):
-    a = {"t": r.t, "state": r.state, "control": r.control, "contact": r.contact, "foot_pos": r.foot_pos,
-         "board_pos": r.board_pos, **arrays}
-    return check_trajectory(system, target_velocity_mps=r.target_velocity_mps, **a)
+    return check_trajectory(system, dataclasses.replace(Trajectory.of(r), **arrays), r.target_velocity_mps)
 
 
 def test_honest_entry_rides_at_its_label(honest, system):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from skatelib.library.channels import GROUND, LEGS
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
-from skatelib.pipeline.quadruped.verify import check_trajectory
+from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
 from tests import reference_model as ref
 
@@ -55,8 +55,7 @@ def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
 
 def test_solved_trajectory_respects_contact_and_limits(solved, system):
     """Friction, no slip on ground or deck, joint/torque/speed limits, all measured on the arrays."""
-    rep = check_trajectory(system, solved.t, solved.state, solved.control, solved.contact,
-                           solved.foot_pos, solved.board_pos, target_velocity_mps=solved.target_velocity_mps)
+    rep = check_trajectory(system, Trajectory.of(solved), solved.target_velocity_mps)
     assert rep.failures(system) == [], rep.as_dict()
     assert rep.max_defect < 1e-3
 

@@ -163,7 +163,7 @@ def system_from_library(lib: MotionLibrary) -> Any:
 
 def validate_entries(lib: MotionLibrary, report: Any) -> int:
     """The independent physics checks of every successful entry; returns the failures."""
-    from skatelib.pipeline.quadruped.verify import check_trajectory
+    from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
     system = system_from_library(lib)
     bad = 0
@@ -171,9 +171,7 @@ def validate_entries(lib: MotionLibrary, report: Any) -> int:
         if not e.success:
             report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
-        assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
-        rep = check_trajectory(system, e.t, e.state, e.control, e.contact, e.foot_pos, e.board_pos,
-                               target_velocity_mps=e.target_velocity_mps)
+        rep = check_trajectory(system, Trajectory.of(e), e.target_velocity_mps)
         failures = rep.failures(system)
         bad += bool(failures)
         ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({100 * rep.momentum_speed_error:.2f} % off), "

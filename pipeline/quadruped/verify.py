@@ -7,7 +7,9 @@ stored arrays. ``skatelib validate`` runs these on every library entry.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -126,15 +128,36 @@ class PhysicsReport:
         return [msg for bad, msg in checks if bad]
 
 
-def check_trajectory(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray,
-                     contact: np.ndarray, foot_pos: np.ndarray, board_pos: np.ndarray,
-                     target_velocity_mps: float, substeps: int = 40) -> PhysicsReport:
+@dataclass(frozen=True)
+class Trajectory:
+    """The arrays of a push-off as a library stores them (``docs/library-format.md``)."""
+
+    t: np.ndarray
+    state: np.ndarray
+    control: np.ndarray
+    contact: np.ndarray
+    foot_pos: np.ndarray
+    board_pos: np.ndarray
+
+    @classmethod
+    def of(cls, x: Any) -> Trajectory:
+        """The six arrays of a solve result, a library entry or anything else that has them."""
+        arrays = [getattr(x, f.name) for f in dataclasses.fields(cls)]
+        if any(a is None for a in arrays):
+            raise ValueError(f"{x!r} lacks push-off arrays (a humanoid entry?)")
+        return cls(*arrays)
+
+
+def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps: float,
+                     substeps: int = 40) -> PhysicsReport:
     """Measure a push-off trajectory (library arrays) against the model's physics.
 
     Args:
         target_velocity_mps: The entry's label: the speed robot and board must ride at together.
         substeps: RK4 steps per knot interval of the fine re-integration.
     """
+    t, state, control, contact = traj.t, traj.state, traj.control, traj.contact
+    foot_pos, board_pos = traj.foot_pos, traj.board_pos
     margins, normals = friction_margins(state, control, contact, system.friction_mu)
     f = control[:, :12].reshape(len(control), 4, 3)
     swing = contact[:len(control)] == SWING
