@@ -349,38 +349,42 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
     return data, text
 
 
+# Scalar types of config fields: what a TOML value must be, and the words for a wrong one.
+_SCALARS: dict[type, tuple[Any, str]] = {
+    float: (lambda v: isinstance(v, int | float) and not isinstance(v, bool), "a number"),
+    int: (lambda v: isinstance(v, int) and not isinstance(v, bool), "an integer"),
+    bool: (lambda v: isinstance(v, bool), "true or false"),
+    str: (lambda v: isinstance(v, str), "a string"),
+}
+
+
 def _convert(path: Path, key: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> Any:
-    origin = typing.get_origin(tp)
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
             raise ConfigError(path, key, f"must be a table, got {value!r}")
         return build_section(path, key, tp, value)
-    if origin is tuple:
+    if typing.get_origin(tp) is tuple:
         if not isinstance(value, list):
             raise ConfigError(path, key, f"must be a list, got {value!r}")
         (inner,) = set(typing.get_args(tp)) - {Ellipsis}
         return tuple(_convert(path, f"{key}[{i}]", inner, v, meta) for i, v in enumerate(value))
+    if tp in _SCALARS:
+        valid, words = _SCALARS[tp]
+        if not valid(value):
+            raise ConfigError(path, key, f"must be {words}, got {value!r}")
     if tp is float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ConfigError(path, key, f"must be a number, got {value!r}")
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(path, key, f"must be a finite number, got {value!r} ({meta.get('doc', '')})")
-    elif tp is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(path, key, f"must be an integer, got {value!r}")
-    elif tp is bool:
-        if not isinstance(value, bool):
-            raise ConfigError(path, key, f"must be true or false, got {value!r}")
-        return value
-    elif tp is str:
-        if not isinstance(value, str):
-            raise ConfigError(path, key, f"must be a string, got {value!r}")
-        return value
+    if tp in (float, int):
+        _check_range(path, key, value, meta)
+    return value
+
+
+def _check_range(path: Path, key: str, value: float, meta: typing.Mapping[str, Any]) -> None:
     lo, hi = meta.get("lo"), meta.get("hi")
     if (lo is not None and value < lo) or (hi is not None and value > hi):
         raise ConfigError(path, key, f"{value!r} is out of range [{lo}, {hi}] ({meta.get('doc', '')})")
-    return value
 
 
 def build_section(path: Path, prefix: str, cls: type, data: dict[str, Any]) -> Any:
@@ -489,25 +493,27 @@ def config_from_json(text: str, origin: Path, urdf: Path | None = None, expect: 
 
 def _check_cross_fields(cfg: QuadrupedConfig) -> None:
     p = cfg.path
-    if cfg.schedule.push_leg not in LEGS:
-        raise ConfigError(p, "schedule.push_leg", f"{cfg.schedule.push_leg!r} is not a leg; use one of {LEGS}")
-    if len(cfg.robot.joint_names) != 12:
-        raise ConfigError(p, "robot.joint_names", "needs 12 names (FL FR RL RR x abad hip knee)")
-    if len(cfg.robot.foot_frames) != 4:
-        raise ConfigError(p, "robot.foot_frames", "needs 4 frame names (FL FR RL RR)")
-    if cfg.meta.kind != "quadruped":
-        raise ConfigError(p, "meta.kind", "must be 'quadruped' here")
-    if cfg.optimization.integrator not in ("etdrk4", "rk4"):
-        raise ConfigError(p, "optimization.integrator", f"{cfg.optimization.integrator!r}: use 'etdrk4' or 'rk4'")
-    if cfg.optimization.friction_model not in FRICTION_MODELS:
-        raise ConfigError(p, "optimization.friction_model",
-                          f"{cfg.optimization.friction_model!r}: use one of {', '.join(FRICTION_MODELS)}")
-    if cfg.optimization.mu_strategy not in ("monotone", "adaptive"):
-        raise ConfigError(p, "optimization.mu_strategy", "use 'monotone' or 'adaptive'")
+    for key, value, allowed in (
+        ("schedule.push_leg", cfg.schedule.push_leg, LEGS), ("meta.kind", cfg.meta.kind, ("quadruped",)),
+        ("optimization.integrator", cfg.optimization.integrator, ("etdrk4", "rk4")),
+        ("optimization.friction_model", cfg.optimization.friction_model, FRICTION_MODELS),
+        ("optimization.mu_strategy", cfg.optimization.mu_strategy, ("monotone", "adaptive")),
+    ):
+        if value not in allowed:
+            raise ConfigError(p, key, f"{value!r}: use one of {', '.join(map(repr, allowed))}")
+    for key, names, n, what in (("robot.joint_names", cfg.robot.joint_names, 12, "names (FL FR RL RR x abad hip knee)"),
+                                ("robot.foot_frames", cfg.robot.foot_frames, 4, "frame names (FL FR RL RR)")):
+        if len(names) != n:
+            raise ConfigError(p, key, f"needs {n} {what}")
     if cfg.urdf_path.is_dir():
         raise ConfigError(p, "robot.urdf", f"{cfg.urdf_path} is a folder; name the URDF file in it")
     if not cfg.urdf_path.is_file():
         raise ConfigError(p, "robot.urdf", f"file {cfg.urdf_path} does not exist")
+    _check_sweep(cfg)
+
+
+def _check_sweep(cfg: QuadrupedConfig) -> None:
+    p = cfg.path
     if not cfg.sweep.velocities_mps or not cfg.sweep.strides:
         raise ConfigError(p, "sweep", "velocities_mps and strides must not be empty")
     check_unique_keys(p, cfg.sweep.velocities_mps)
