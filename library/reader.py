@@ -95,37 +95,13 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
     digest = _verify_before_parsing(path, raw) if verify_checksum else None
     try:
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
-            fmt = f.attrs.get(schema.A_FORMAT)
-            if fmt is None or _str(fmt) != schema.FORMAT_NAME:
-                raise LibraryFormatError(
-                    path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})"
-                )
-            version = f.attrs.get(schema.A_FORMAT_VERSION)
-            if version is None:
-                raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
-            check_version(path, _str(version))
-            stored_sum = f.attrs.get(schema.A_CHECKSUM)
-            arrays: dict[str, np.ndarray] = {}
-            for gname in (schema.G_MODEL, schema.G_PACKED) if full else (schema.G_PACKED,):
-                if gname not in f:
-                    raise LibraryFormatError(path, f"/{gname}", "required group missing")
-                for name, obj in f[gname].items():
-                    if not isinstance(obj, h5py.Dataset):
-                        raise LibraryFormatError(path, f"/{gname}/{name}", "damaged or unexpected object; rebuild it")
-                    arrays[f"{gname}/{name}"] = obj[()]
+            _check_format(path, f)
+            arrays = _read_groups(path, f, (schema.G_MODEL, schema.G_PACKED) if full else (schema.G_PACKED,))
             index_key = f"{schema.G_PACKED}/{schema.D_INDEX}"
             if index_key not in arrays:
                 raise LibraryFormatError(path, f"/{index_key}", "required dataset missing")
             if verify_checksum:
-                if stored_sum is None:
-                    raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
-                field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
-                if field.decode(errors="replace") != digest:  # the attribute HDF5 reads is the verified one
-                    raise LibraryFormatError(
-                        path,
-                        f"/@{schema.A_CHECKSUM}",
-                        "the file does not match its checksum: it is corrupt; rebuild it",
-                    )
+                _check_checksum_attribute(path, f.attrs.get(schema.A_CHECKSUM), digest)
             index = _parse_index(path, arrays[index_key])
             if full:
                 _check_against_index(path, f, index, arrays)
@@ -135,7 +111,61 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         ) from e
     for arr in arrays.values():
         arr.setflags(write=False)
-    root = index["root"]
+    root, model = index["root"], index["model"]
+    kind = _check_root(path, root, model)
+    model_arrays = {}
+    for k, spec in index.get("model_arrays", {}).items():
+        a = np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"])
+        a.setflags(write=False)
+        model_arrays[k] = a
+    return LibraryData(
+        path=path,
+        attrs=root,
+        model_attrs=model,
+        model_arrays=model_arrays,
+        model_text=dict(index.get("model_text", {})),
+        entries=_entries(path, kind, index, arrays),
+        content_sha256=digest,
+    )
+
+
+def _check_format(path: Path, f: h5py.File) -> None:
+    """The file says it is a skatelib library of a version this reader reads."""
+    fmt = f.attrs.get(schema.A_FORMAT)
+    if fmt is None or _str(fmt) != schema.FORMAT_NAME:
+        raise LibraryFormatError(path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})")
+    version = f.attrs.get(schema.A_FORMAT_VERSION)
+    if version is None:
+        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
+    check_version(path, _str(version))
+
+
+def _read_groups(path: Path, f: h5py.File, groups: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Every dataset of the groups, as ``group/name`` -> array."""
+    arrays: dict[str, np.ndarray] = {}
+    for gname in groups:
+        if gname not in f:
+            raise LibraryFormatError(path, f"/{gname}", "required group missing")
+        for name, obj in f[gname].items():
+            if not isinstance(obj, h5py.Dataset):
+                raise LibraryFormatError(path, f"/{gname}/{name}", "damaged or unexpected object; rebuild it")
+            arrays[f"{gname}/{name}"] = obj[()]
+    return arrays
+
+
+def _check_checksum_attribute(path: Path, stored_sum: Any, digest: str | None) -> None:
+    """The checksum attribute HDF5 reads is the one verified on the raw bytes."""
+    if stored_sum is None:
+        raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
+    field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
+    if field.decode(errors="replace") != digest:
+        raise LibraryFormatError(
+            path, f"/@{schema.A_CHECKSUM}", "the file does not match its checksum: it is corrupt; rebuild it"
+        )
+
+
+def _check_root(path: Path, root: dict[str, Any], model: dict[str, Any]) -> str:
+    """Required root attributes, a known kind and its required model parameters; returns the kind."""
     for key in schema.ROOT_REQUIRED:
         if key not in root and key != schema.A_CHECKSUM:
             raise LibraryFormatError(path, f"/@{key}", "required root attribute missing")
@@ -144,26 +174,11 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         raise LibraryFormatError(
             path, f"/@{schema.A_KIND}", f"unknown kind {kind!r}; known: {', '.join(schema.ENTRY_DATASETS)}"
         )
-    model = index["model"]
     if kind == "quadruped":
         for key in schema.QUADRUPED_MODEL_ATTRS:
             if key not in model:
                 raise LibraryFormatError(path, f"/{schema.G_MODEL}@{key}", "required model parameter missing")
-    model_arrays = {}
-    for k, spec in index.get("model_arrays", {}).items():
-        a = np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"])
-        a.setflags(write=False)
-        model_arrays[k] = a
-    model_text = dict(index.get("model_text", {}))
-    return LibraryData(
-        path=path,
-        attrs=root,
-        model_attrs=model,
-        model_arrays=model_arrays,
-        model_text=model_text,
-        entries=_entries(path, kind, index, arrays),
-        content_sha256=digest,
-    )
+    return kind
 
 
 def _verify_before_parsing(path: Path, raw: bytes) -> str:
@@ -226,31 +241,44 @@ def _entries(path: Path, kind: str, index: dict[str, Any], arrays: dict[str, np.
         for a in schema.ENTRY_ATTRS:
             if a not in meta["attrs"]:
                 raise LibraryFormatError(path, f"{base}@{a}", "required entry attribute missing")
-        data = {}
-        for d in schema.ENTRY_DATASETS[kind]:
-            if d not in meta["rows"] or f"{schema.G_PACKED}/{d}" not in arrays:
-                raise LibraryFormatError(path, f"{base}/{d}", "required dataset missing")
-        for d, (a, b) in meta["rows"].items():
-            src = arrays.get(f"{schema.G_PACKED}/{d}")
-            if src is None or b > len(src) or a < 0 or a > b:
-                raise LibraryFormatError(path, f"{base}/{d}", "rows outside the packed data; rebuild the library")
-            data[d] = src[a:b]
-        cols = {k: tuple(v) for k, v in meta["columns"].items()}
-        for d in (schema.D_STATE, schema.D_CONTROL):
-            if d not in cols:
-                raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
-            if len(cols[d]) != data[d].shape[-1]:
-                raise LibraryFormatError(
-                    path, f"{base}/{d}@{schema.A_COLUMNS}", f"{len(cols[d])} names for {data[d].shape[-1]} columns"
-                )
+        data = _entry_arrays(path, base, kind, meta, arrays)
         out[key] = EntryRecord(
             key=key,
             attrs=meta["attrs"],
             arrays=data,
-            columns=cols,
+            columns=_entry_columns(path, base, meta, data),
             units={k: tuple(v) for k, v in meta["units"].items()},
         )
     return out
+
+
+def _entry_arrays(path: Path, base: str, kind: str, meta: dict[str, Any],
+                  arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """An entry's rows of the packed datasets (every dataset its kind requires)."""
+    for d in schema.ENTRY_DATASETS[kind]:
+        if d not in meta["rows"] or f"{schema.G_PACKED}/{d}" not in arrays:
+            raise LibraryFormatError(path, f"{base}/{d}", "required dataset missing")
+    data = {}
+    for d, (a, b) in meta["rows"].items():
+        src = arrays.get(f"{schema.G_PACKED}/{d}")
+        if src is None or b > len(src) or a < 0 or a > b:
+            raise LibraryFormatError(path, f"{base}/{d}", "rows outside the packed data; rebuild the library")
+        data[d] = src[a:b]
+    return data
+
+
+def _entry_columns(path: Path, base: str, meta: dict[str, Any],
+                   data: dict[str, np.ndarray]) -> dict[str, tuple[str, ...]]:
+    """Column names per dataset; state and control must name every column."""
+    cols = {k: tuple(v) for k, v in meta["columns"].items()}
+    for d in (schema.D_STATE, schema.D_CONTROL):
+        if d not in cols:
+            raise LibraryFormatError(path, f"{base}/{d}@{schema.A_COLUMNS}", "channel names missing")
+        if len(cols[d]) != data[d].shape[-1]:
+            raise LibraryFormatError(
+                path, f"{base}/{d}@{schema.A_COLUMNS}", f"{len(cols[d])} names for {data[d].shape[-1]} columns"
+            )
+    return cols
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -260,18 +288,36 @@ def _same(a: Any, b: Any) -> bool:
     return bool(a == b)
 
 
+def _compare_attrs(path: Path, where: str, attrs: Any, expected: dict[str, Any], skip: tuple[str, ...] = ()) -> None:
+    for k, v in attrs.items():
+        if k in skip:
+            continue
+        if k not in expected or not _same(v, expected[k]):
+            raise LibraryFormatError(path, f"{where}@{k}", "attribute differs from the checksummed index")
+
+
 def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
     """Every HDF5 attribute and per-entry view equals what the checksummed index says."""
+    _compare_attrs(path, "/", f.attrs, index["root"], skip=(schema.A_CHECKSUM,))
+    _compare_attrs(path, f"/{schema.G_MODEL}", f[schema.G_MODEL].attrs, index["model"])
+    _check_model_datasets(path, index, arrays)
+    for meta in index["entries"]:
+        base = f"{schema.G_ENTRIES}/{meta['key']}"
+        _compare_attrs(path, f"/{base}", f[base].attrs, meta["attrs"])
+        for d, (a, b) in meta["rows"].items():
+            view = f[f"{base}/{d}"]
+            if not np.array_equal(view[()], arrays[f"{schema.G_PACKED}/{d}"][a:b]):
+                raise LibraryFormatError(path, f"/{base}/{d}", "view differs from the packed data")
+            for attr, expected in ((schema.A_COLUMNS, meta["columns"].get(d)), (schema.A_UNITS, meta["units"].get(d))):
+                got = view.attrs.get(attr)
+                if (got is None) != (expected is None) or (
+                    got is not None and [_str(x) for x in got] != list(expected or [])
+                ):
+                    raise LibraryFormatError(path, f"/{base}/{d}@{attr}", "differs from the checksummed index")
 
-    def compare(where: str, attrs: Any, expected: dict[str, Any], skip: tuple[str, ...] = ()) -> None:
-        for k, v in attrs.items():
-            if k in skip:
-                continue
-            if k not in expected or not _same(v, expected[k]):
-                raise LibraryFormatError(path, f"{where}@{k}", "attribute differs from the checksummed index")
 
-    compare("/", f.attrs, index["root"], skip=(schema.A_CHECKSUM,))
-    compare(f"/{schema.G_MODEL}", f[schema.G_MODEL].attrs, index["model"])
+def _check_model_datasets(path: Path, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    """/model's datasets are exactly the index's model arrays and texts, with the same content."""
     mirrored = set(index.get("model_arrays", {})) | set(index.get("model_text", {}))
     stored = {k.split("/", 1)[1] for k in arrays if k.startswith(schema.G_MODEL + "/")}
     if mirrored != stored:
@@ -287,16 +333,3 @@ def _check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays
     for k, text in index.get("model_text", {}).items():
         if arrays[f"{schema.G_MODEL}/{k}"].tobytes().decode() != text:
             raise LibraryFormatError(path, f"/{schema.G_MODEL}/{k}", "differs from the checksummed index")
-    for meta in index["entries"]:
-        base = f"{schema.G_ENTRIES}/{meta['key']}"
-        compare(f"/{base}", f[base].attrs, meta["attrs"])
-        for d, (a, b) in meta["rows"].items():
-            view = f[f"{base}/{d}"]
-            if not np.array_equal(view[()], arrays[f"{schema.G_PACKED}/{d}"][a:b]):
-                raise LibraryFormatError(path, f"/{base}/{d}", "view differs from the packed data")
-            for attr, expected in ((schema.A_COLUMNS, meta["columns"].get(d)), (schema.A_UNITS, meta["units"].get(d))):
-                got = view.attrs.get(attr)
-                if (got is None) != (expected is None) or (
-                    got is not None and [_str(x) for x in got] != list(expected or [])
-                ):
-                    raise LibraryFormatError(path, f"/{base}/{d}@{attr}", "differs from the checksummed index")
