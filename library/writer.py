@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -81,54 +82,58 @@ def write_library(
                 "units": {k: list(v) for k, v in e.units.items()},
             }
         )
-    stored: dict[str, np.ndarray] = {}
     marker = placeholder()
     with atomic_path(path) as tmp:
-        _write_h5(tmp, root, model_attrs, model_arrays, model_text, entries, names, index, stored, marker)
+        _write_h5(tmp, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
         seal(tmp, marker)
     return path
 
 
-def _write_h5(
-    tmp: Path,
-    root: dict[str, Any],
-    model_attrs: Mapping[str, Any],
-    model_arrays: Mapping[str, np.ndarray],
-    model_text: Mapping[str, str],
-    entries: Sequence[EntryRecord],
-    names: list[str],
-    index: dict[str, Any],
-    stored: dict[str, np.ndarray],
-    marker: bytes,
-) -> None:
+@dataclass(frozen=True)
+class _Model:
+    """What goes into /model: attributes, arrays, texts (the URDF)."""
+
+    attrs: Mapping[str, Any]
+    arrays: Mapping[str, np.ndarray]
+    text: Mapping[str, str]
+
+
+def _write_h5(tmp: Path, index: dict[str, Any], model: _Model, entries: Sequence[EntryRecord], marker: bytes) -> None:
+    names = list(entries[0].arrays) if entries else []
+    stored: dict[str, np.ndarray] = {}
     with h5py.File(tmp, "w") as f:
-        model = f.create_group(schema.G_MODEL)
-        for k, v in model_attrs.items():
-            model.attrs[k] = v
-        for k, arr in model_arrays.items():
-            stored[f"{schema.G_MODEL}/{k}"] = _stored(model, k, arr)
-        for k, text in model_text.items():
-            stored[f"{schema.G_MODEL}/{k}"] = _stored(model, k, np.frombuffer(text.encode(), dtype=np.uint8))
+        group = f.create_group(schema.G_MODEL)
+        for k, v in model.attrs.items():
+            group.attrs[k] = v
+        for k, arr in model.arrays.items():
+            stored[f"{schema.G_MODEL}/{k}"] = _stored(group, k, arr)
+        for k, text in model.text.items():
+            stored[f"{schema.G_MODEL}/{k}"] = _stored(group, k, np.frombuffer(text.encode(), dtype=np.uint8))
         packed = f.create_group(schema.G_PACKED)
         for n in names:
             stored[f"{schema.G_PACKED}/{n}"] = _stored(packed, n, np.concatenate([e.arrays[n] for e in entries]))
-        group = f.create_group(schema.G_ENTRIES)
-        for e, meta in zip(entries, index["entries"], strict=True):
-            g = group.create_group(e.key)
-            for k, v in e.attrs.items():
-                g.attrs[k] = v
-            for n in names:
-                src = stored[f"{schema.G_PACKED}/{n}"]
-                a, b = meta["rows"][n]
-                layout = h5py.VirtualLayout(shape=(b - a, *src.shape[1:]), dtype=src.dtype)
-                layout[:] = h5py.VirtualSource(".", f"{schema.G_PACKED}/{n}", shape=src.shape)[a:b]
-                d = g.create_virtual_dataset(n, layout)
-                if n in e.columns:
-                    d.attrs[schema.A_COLUMNS] = _strings(e.columns[n])
-                if n in e.units:
-                    d.attrs[schema.A_UNITS] = _strings(e.units[n])
+        _write_views(f.create_group(schema.G_ENTRIES), entries, index, names, stored)
         blob = np.frombuffer(json.dumps(index, sort_keys=True).encode(), dtype=np.uint8)
-        stored[f"{schema.G_PACKED}/{schema.D_INDEX}"] = _stored(packed, schema.D_INDEX, blob)
-        for k, v in root.items():
+        _stored(packed, schema.D_INDEX, blob)
+        for k, v in index["root"].items():
             f.attrs[k] = v
         f.attrs[schema.A_CHECKSUM] = np.bytes_(marker)  # fixed length: sealed in place after closing
+
+
+def _write_views(group: h5py.Group, entries: Sequence[EntryRecord], index: dict[str, Any], names: list[str],
+                 stored: dict[str, np.ndarray]) -> None:
+    """/entries/<key>: attributes and virtual views into the packed rows, with column names and units."""
+    for e, meta in zip(entries, index["entries"], strict=True):
+        g = group.create_group(e.key)
+        for k, v in e.attrs.items():
+            g.attrs[k] = v
+        for n in names:
+            src = stored[f"{schema.G_PACKED}/{n}"]
+            a, b = meta["rows"][n]
+            layout = h5py.VirtualLayout(shape=(b - a, *src.shape[1:]), dtype=src.dtype)
+            layout[:] = h5py.VirtualSource(".", f"{schema.G_PACKED}/{n}", shape=src.shape)[a:b]
+            d = g.create_virtual_dataset(n, layout)
+            if n in e.columns:
+                d.attrs[schema.A_COLUMNS] = _strings(e.columns[n])
+            if n in e.units:
+                d.attrs[schema.A_UNITS] = _strings(e.units[n])
