@@ -137,6 +137,105 @@ def convex_hull(points: np.ndarray) -> tuple[tuple[float, float], ...]:
     return tuple(lower[:-1] + upper[:-1])
 
 
+_SOLVERS: dict[str, tuple[str, dict[str, Any]]] = {
+    "ipopt": ("ipopt", {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-9,
+                        "ipopt.max_iter": 200}),
+    "sqp": ("sqpmethod", {"print_time": False, "print_header": False, "print_iteration": False,
+                          "print_status": False, "qpsol": "qrqp",
+                          "qpsol_options": {"print_iter": False, "print_header": False, "error_on_fail": False},
+                          "tol_pr": 1e-9, "tol_du": 1e-9, "max_iter": 100, "error_on_fail": False}),
+}
+
+
+@dataclass(frozen=True)
+class _Symbols:
+    """The step NLP's variables (X, U, Xf) and parameters, in the order of ``params()``."""
+
+    X: Any
+    U: Any
+    Xf: Any
+    x0: Any
+    T: Any
+    P0: Any
+    E: Any
+    MU: Any
+    p_step: Any
+    v_step: Any
+    b: Any
+    mu_next: Any
+    rmin: Any
+    rmax: Any
+    g: Any
+
+    @classmethod
+    def make(cls, N: int) -> _Symbols:
+        b, mu_next, rmin, rmax, g = (ca.SX.sym(n) for n in ("b", "mu_next", "rmin", "rmax", "g"))
+        return cls(ca.SX.sym("X", N + 1, 6), ca.SX.sym("U", N, 3), ca.SX.sym("Xf", 1, 6), ca.SX.sym("x0", 1, 6),
+                   ca.SX.sym("T"), ca.SX.sym("P0", N, 3), ca.SX.sym("E", N, 3 * MAX_EDGES), ca.SX.sym("MU", N, 2),
+                   ca.SX.sym("p_step", 1, 3), ca.SX.sym("v_step", 1, 3), b, mu_next, rmin, rmax, g)
+
+    def params(self) -> list[Any]:
+        return [ca.vec(self.x0), self.T, ca.vec(self.P0), ca.vec(self.E), ca.vec(self.MU), ca.vec(self.p_step),
+                ca.vec(self.v_step), self.b, self.mu_next, self.rmin, self.rmax, self.g]
+
+
+class _Rows:
+    """Inequality rows with their bounds, in the order added."""
+
+    def __init__(self) -> None:
+        self.exprs: list[Any] = []
+        self.lo: list[np.ndarray] = []
+        self.hi: list[np.ndarray] = []
+
+    def add(self, expr: Any, lb: float, ub: float) -> None:
+        self.exprs.append(expr)
+        self.lo.append(np.full(expr.numel(), lb))
+        self.hi.append(np.full(expr.numel(), ub))
+
+
+def _node_rows(s: _Symbols, k: int, rows: _Rows) -> None:
+    """Eq. (15)-(21) at LG node k: unilateral, ZMP in the support polygon, friction, leg reach."""
+    r = s.X[k + 1, 0:3].T - s.P0[k, :].T
+    F = s.U[k, :].T + ca.vertcat(0, 0, s.g)  # Eq. (15)
+    Nm = ca.cross(r, F)  # Eq. (16)
+    rows.add(F[2], 0.0, ca.inf)  # Eq. (17)
+    for e in range(MAX_EDGES):
+        a_, b_, c_ = s.E[k, 3 * e], s.E[k, 3 * e + 1], s.E[k, 3 * e + 2]
+        rows.add(-a_ * Nm[1] + b_ * Nm[0] + c_ * F[2], 0.0, ca.inf)  # Eq. (18)
+    for j in range(2):  # Eq. (19), (20): |F_j| <= mu_j F_z
+        rows.add(s.MU[k, j] * F[2] - F[j], 0.0, ca.inf)
+        rows.add(s.MU[k, j] * F[2] + F[j], 0.0, ca.inf)
+    rows.add(ca.sumsqr(r) - s.rmin**2, 0.0, ca.inf)  # Eq. (21)
+    rows.add(s.rmax**2 - ca.sumsqr(r), 0.0, ca.inf)
+
+
+def _terminal_rows(s: _Symbols, terminal: str, gpm: GaussPseudospectral, rows: _Rows) -> list[Any]:
+    """The terminal conditions of the step's kind: equality rows returned, inequalities added."""
+    Pf, Vf = s.Xf[0, 0:3], s.Xf[0, 3:6]
+    dcm_error = Pf + s.b * (Vf - s.v_step) - s.p_step - ca.horzcat(0, 0, s.b**2 * s.g)  # Eq. (25)-(27)
+    eq: list[Any] = []
+    if terminal in ("walk", "skate"):
+        eq.append(ca.vec(dcm_error))
+    if terminal == "dcm_on_board":
+        # Along a frictionless board x follows from the dynamics: the DCM is placed across it only.
+        eq.append(ca.vec(dcm_error[1:3]))
+    if terminal == "walk":  # Eq. (30) along the walking direction x, relative to the next support
+        rows.add(s.mu_next * Pf[2] - (Pf[0] - s.p_step[0]), 0.0, ca.inf)
+        rows.add(s.mu_next * Pf[2] + (Pf[0] - s.p_step[0]), 0.0, ca.inf)
+    if terminal == "skate":
+        eq.append(Pf[0] - s.p_step[0])  # Eq. (31), sliding direction x
+        eq.append(Vf[2])  # the paper sets the COM's vertical velocity to 0 at the transition
+        u_end = ca.DM(lagrange_basis(gpm.tau, 1.0)) @ s.U  # control interpolant at tau = 1
+        eq.append(u_end[0])  # Eq. (32), see the module docstring
+    if terminal == "stop":
+        eq += [ca.vec(Pf - s.p_step), ca.vec(Vf - s.v_step)]  # Eq. (23), (24)
+    if terminal == "stop_on_board":
+        # On a rolling board nothing pushes along x (no friction there), so x of P_f and V_f
+        # follows from the dynamics; Eq. (23)-(24) are imposed across the board only.
+        eq += [ca.vec(Pf[1:3] - s.p_step[1:3]), ca.vec(Vf[1:3] - s.v_step[1:3])]
+    return eq
+
+
 class StepProblem:
     """The NLP of one step for a node count and terminal kind; parameters carry everything else.
 
@@ -147,92 +246,32 @@ class StepProblem:
     def __init__(self, n_nodes: int, terminal: str, solver: str = "ipopt"):
         if terminal not in TERMINALS:
             raise ValueError(f"terminal {terminal!r}; use one of {TERMINALS}")
+        if solver not in _SOLVERS:
+            raise ValueError(f"solver {solver!r}; use 'ipopt' or 'sqp'")
         self.gpm = gpm = GaussPseudospectral(n_nodes)
         N = n_nodes
-        X = ca.SX.sym("X", N + 1, 6)
-        U = ca.SX.sym("U", N, 3)
-        Xf = ca.SX.sym("Xf", 1, 6)
-        x0 = ca.SX.sym("x0", 1, 6)
-        T = ca.SX.sym("T")
-        P0 = ca.SX.sym("P0", N, 3)
-        E = ca.SX.sym("E", N, 3 * MAX_EDGES)
-        MU = ca.SX.sym("MU", N, 2)
-        p_step, v_step = ca.SX.sym("p_step", 1, 3), ca.SX.sym("v_step", 1, 3)
-        b, mu_next, rmin, rmax, g = (ca.SX.sym(n) for n in ("b", "mu_next", "rmin", "rmax", "g"))
-        params = [ca.vec(x0), T, ca.vec(P0), ca.vec(E), ca.vec(MU), ca.vec(p_step), ca.vec(v_step), b, mu_next,
-                  rmin, rmax, g]
+        s = _Symbols.make(N)
+        params = s.params()
         self.param_sizes = [int(p.numel()) for p in params]
-        F_dyn = ca.horzcat(X[1:, 3:6], U)  # [V, A] at the nodes
-        eq: list[Any] = [ca.vec(collocation_defects(gpm, X, F_dyn, 0.0, T)),  # Eq. (12)
-              ca.vec(Xf - terminal_state(gpm, X[0, :], F_dyn, 0.0, T)),  # Eq. (6)
-              ca.vec(X[0, :] - x0)]  # Eq. (22)
-        ineq: list[Any] = []
-        lo: list[np.ndarray] = []
-        hi: list[np.ndarray] = []
-
-        def add(expr: Any, lb: float, ub: float) -> None:
-            ineq.append(expr)
-            lo.append(np.full(expr.numel(), lb))
-            hi.append(np.full(expr.numel(), ub))
-
+        F_dyn = ca.horzcat(s.X[1:, 3:6], s.U)  # [V, A] at the nodes
+        eq: list[Any] = [ca.vec(collocation_defects(gpm, s.X, F_dyn, 0.0, s.T)),  # Eq. (12)
+                         ca.vec(s.Xf - terminal_state(gpm, s.X[0, :], F_dyn, 0.0, s.T)),  # Eq. (6)
+                         ca.vec(s.X[0, :] - s.x0)]  # Eq. (22)
+        rows = _Rows()
         for k in range(N):
-            r = X[k + 1, 0:3].T - P0[k, :].T
-            F = U[k, :].T + ca.vertcat(0, 0, g)  # Eq. (15)
-            Nm = ca.cross(r, F)  # Eq. (16)
-            add(F[2], 0.0, ca.inf)  # Eq. (17)
-            for e in range(MAX_EDGES):
-                a_, b_, c_ = E[k, 3 * e], E[k, 3 * e + 1], E[k, 3 * e + 2]
-                add(-a_ * Nm[1] + b_ * Nm[0] + c_ * F[2], 0.0, ca.inf)  # Eq. (18)
-            for j in range(2):  # Eq. (19), (20): |F_j| <= mu_j F_z
-                add(MU[k, j] * F[2] - F[j], 0.0, ca.inf)
-                add(MU[k, j] * F[2] + F[j], 0.0, ca.inf)
-            add(ca.sumsqr(r) - rmin**2, 0.0, ca.inf)  # Eq. (21)
-            add(rmax**2 - ca.sumsqr(r), 0.0, ca.inf)
-        Pf, Vf = Xf[0, 0:3], Xf[0, 3:6]
-        dz = b**2 * g
-        dcm_error = Pf + b * (Vf - v_step) - p_step - ca.horzcat(0, 0, dz)  # Eq. (25)-(27)
-        if terminal in ("walk", "skate"):
-            eq.append(ca.vec(dcm_error))
-        if terminal == "dcm_on_board":
-            # Along a frictionless board x follows from the dynamics: the DCM is placed across it only.
-            eq.append(ca.vec(dcm_error[1:3]))
-        if terminal == "walk":  # Eq. (30) along the walking direction x, relative to the next support
-            add(mu_next * Pf[2] - (Pf[0] - p_step[0]), 0.0, ca.inf)
-            add(mu_next * Pf[2] + (Pf[0] - p_step[0]), 0.0, ca.inf)
-        if terminal == "skate":
-            eq.append(Pf[0] - p_step[0])  # Eq. (31), sliding direction x
-            eq.append(Vf[2])  # the paper sets the COM's vertical velocity to 0 at the transition
-            u_end = ca.DM(lagrange_basis(gpm.tau, 1.0)) @ U  # control interpolant at tau = 1
-            eq.append(u_end[0])  # Eq. (32), see the module docstring
-        if terminal == "stop":
-            eq.append(ca.vec(Pf - p_step))  # Eq. (23)
-            eq.append(ca.vec(Vf - v_step))  # Eq. (24)
-        if terminal == "stop_on_board":
-            # On a rolling board nothing pushes along x (no friction there), so x of P_f and V_f
-            # follows from the dynamics; Eq. (23)-(24) are imposed across the board only.
-            eq.append(ca.vec(Pf[1:3] - p_step[1:3]))
-            eq.append(ca.vec(Vf[1:3] - v_step[1:3]))
-        J = T / 2 * ca.dot(ca.DM(gpm.weights), ca.sum2(U**2))  # Eq. (14)
+            _node_rows(s, k, rows)
+        eq += _terminal_rows(s, terminal, gpm, rows)
+        J = s.T / 2 * ca.dot(ca.DM(gpm.weights), ca.sum2(s.U**2))  # Eq. (14)
         geq = ca.vertcat(*eq)
-        gin = ca.vertcat(*ineq)
+        gin = ca.vertcat(*rows.exprs)
         self.n_eq = geq.numel()
-        self.lbg = np.concatenate([np.zeros(self.n_eq), *lo])
-        self.ubg = np.concatenate([np.zeros(self.n_eq), *hi])
-        w = ca.vertcat(ca.vec(X), ca.vec(U), ca.vec(Xf))
+        self.lbg = np.concatenate([np.zeros(self.n_eq), *rows.lo])
+        self.ubg = np.concatenate([np.zeros(self.n_eq), *rows.hi])
+        w = ca.vertcat(ca.vec(s.X), ca.vec(s.U), ca.vec(s.Xf))
         self.n_w = w.numel()
-        p = ca.vertcat(*params)
-        nlp = {"x": w, "p": p, "f": J, "g": ca.vertcat(geq, gin)}
-        if solver == "ipopt":
-            opts: dict[str, Any] = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                                    "ipopt.tol": 1e-9, "ipopt.max_iter": 200}
-        elif solver == "sqp":
-            opts = {"print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
-                    "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False,
-                                                        "error_on_fail": False},
-                    "tol_pr": 1e-9, "tol_du": 1e-9, "max_iter": 100, "error_on_fail": False}
-        else:
-            raise ValueError(f"solver {solver!r}; use 'ipopt' or 'sqp'")
-        self.solver = ca.nlpsol(f"com_step_{terminal}", "ipopt" if solver == "ipopt" else "sqpmethod", nlp, opts)
+        nlp = {"x": w, "p": ca.vertcat(*params), "f": J, "g": ca.vertcat(geq, gin)}
+        plugin, opts = _SOLVERS[solver]
+        self.solver = ca.nlpsol(f"com_step_{terminal}", plugin, nlp, opts)
         self.nlp = nlp
         self.N = N
 
