@@ -88,9 +88,10 @@ class Window:
 
     __slots__ = ("_contact", "_ctable", "_dt", "_idx", "_t", "_t0", "channels", "control", "state")
 
-    def __init__(self, t0: float, dt: float, state: np.ndarray, control: np.ndarray, idx: np.ndarray,
+    def __init__(self, grid: tuple[float, float], state: np.ndarray, control: np.ndarray, idx: np.ndarray,
                  ctable: np.ndarray | None, channels: Channels):
-        self._t0, self._dt, self._idx, self._ctable = t0, dt, idx, ctable
+        """``grid``: (t0, dt) of the horizon; ``idx`` into ``ctable``, the contact table."""
+        (self._t0, self._dt), self._idx, self._ctable = grid, idx, ctable
         self._t: np.ndarray | None = None
         self._contact: np.ndarray | None = None
         self.state, self.control, self.channels = state, control, channels
@@ -312,7 +313,7 @@ class Entry:
         state = rows[:, :a]
         state += slope
         rows.flags.writeable = False  # views made from here on are read-only too
-        return Window(t0, dt, rows[:, :a], rows[:, b:], contact_idx, self._ctable, self.channels)
+        return Window((t0, dt), rows[:, :a], rows[:, b:], contact_idx, self._ctable, self.channels)
 
     def __repr__(self) -> str:
         return (f"Entry({self.key!r}, v={self.target_velocity_mps} m/s, strides={self.n_strides}, "

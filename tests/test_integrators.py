@@ -26,7 +26,7 @@ def test_etdrk4_is_exact_for_a_forced_linear_oscillator():
     bvec = np.array([0.0, 120.0])
     x, u = ca.SX.sym("x", 2), ca.SX.sym("u", 0)
     f = ca.Function("f", [x, u], [ca.DM(L) @ x + ca.DM(bvec)])
-    F = integrator("etdrk4", f, 2, 0, 0.03, 1, L)
+    F = integrator("etdrk4", f, 0.03, 1, L)
     x0 = np.array([0.05, -1.0])
     E, p1, _, _ = phi_functions(0.03 * L)
     exact = E @ x0 + 0.03 * p1 @ bvec
@@ -38,8 +38,8 @@ def test_etdrk4_without_linear_part_is_classic_rk4(system):
     f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
     x, u = ca.SX.sym("x", 28), ca.SX.sym("u", 24)
     fx = ca.Function("fx", [x, u], [f(x, u, ca.DM(system.stance.cr))])
-    E = integrator("etdrk4", fx, 28, 24, 0.03, 1, np.zeros((28, 28)))
-    R = integrator("rk4", fx, 28, 24, 0.03, 1)
+    E = integrator("etdrk4", fx, 0.03, 1, np.zeros((28, 28)))
+    R = integrator("rk4", fx, 0.03, 1)
     rng = np.random.default_rng(5)
     x0 = np.concatenate([[0, 0, 0.3], rng.uniform(-0.2, 0.2, 9), system.stance.q_board, [0.3, 0, 0.01, 0.1]])
     u0 = rng.uniform(-20, 20, 24)
@@ -59,6 +59,6 @@ def test_fourth_order_convergence_on_skateboard_dynamics(system, kind):
     u0 = np.concatenate([[3, 1, 25, -2, 1, 20, 0, 0, 0, 1, -1, 30], np.full(12, 0.5)])
     T = 0.12
     ref = np.asarray(rk4_step(f, ca.DM(x0), ca.DM(u0), cr, T, 400)).reshape(-1)
-    errs = [float(np.abs(np.asarray(integrator(kind, fx, 28, 24, T, n, L)(x0, u0)).reshape(-1) - ref).max())
+    errs = [float(np.abs(np.asarray(integrator(kind, fx, T, n, L)(x0, u0)).reshape(-1) - ref).max())
             for n in (2, 4)]
     assert 10 < errs[0] / errs[1] < 24, errs

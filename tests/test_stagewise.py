@@ -17,7 +17,7 @@ def _toy(keep=None):
     dt = 0.1
     cost = u0**2 + p[0] * (x1[0] - 1) ** 2 + 0.1 * (z[5] - u0) ** 2 + ca.sin(x0[0]) * x0[1] ** 2
     cons = ca.vertcat(x1[0] - (x0[0] + dt * x0[1]), x1[1] - (x0[1] + dt * u0), x1[0] ** 3 - x1[1], ca.cos(u0))
-    return build_stagewise_nlp(stage_functions(z, p, cost, cons), N_V, N_STAGES, 1, 4, keep=keep)
+    return build_stagewise_nlp(stage_functions(z, p, cost, cons), N_STAGES, keep=keep)
 
 
 @pytest.mark.parametrize("drop", [False, True])

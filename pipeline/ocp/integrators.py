@@ -69,14 +69,14 @@ def etdrk4_step(f: Callable[[Any], Any], L: np.ndarray, x: Any, h: float) -> Any
     return E @ x + h * (B1 @ Nx + B2 @ (Na + Nb) + B4 @ Nc)
 
 
-def integrator(kind: str, f: ca.Function, nx: int, nu: int, dt: float, substeps: int,
-               L: np.ndarray | None = None) -> ca.Function:
-    """``x_next = F(x, u)`` over ``dt`` in ``substeps`` steps of the named scheme.
+def integrator(kind: str, f: ca.Function, dt: float, substeps: int, L: np.ndarray | None = None) -> ca.Function:
+    """``x_next = F(x, u)`` over ``dt`` in ``substeps`` steps of the named scheme, for the dynamics
+    ``f(x, u)`` (its input sizes are the state's and the control's).
 
     Raises:
         ValueError: For an unknown scheme, or ``etdrk4`` without a linear part.
     """
-    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    x, u = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("u", f.size1_in(1))
     h = dt / substeps
     xk = x
     if kind == "rk4":

@@ -54,9 +54,11 @@ class Transcribed:
         return pos
 
 
-def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs: Sequence[CostTerm],
+def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Sequence[CostTerm],
                constraints: Sequence[ConstraintTerm], compile_c: bool = False) -> Transcribed:
-    """Build the stage function from the terms and assemble the NLP over all intervals."""
+    """Build the stage function from the terms and assemble the NLP over all intervals; ``sizes``
+    is (state, control, stage parameters)."""
+    nx, nu, n_params = sizes
     n = nx + nu
     z = ca.SX.sym("z", 2 * n)
     p = ca.SX.sym("p", n_params)
@@ -76,7 +78,7 @@ def transcribe(method: MultipleShooting, nx: int, nu: int, n_params: int, costs:
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     oracle = ca.Function("stage_value", [z, p], [cost, cons])
-    nlp = build_stagewise_nlp(fns, n, N, n_params, cons.shape[0], oracle_value=oracle, keep=keep)
+    nlp = build_stagewise_nlp(fns, N, oracle_value=oracle, keep=keep)
     fingerprint = hashlib.sha256(oracle.serialize().encode()).hexdigest()
     return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices,
                        rows_per_stage=cons.shape[0], fingerprint=fingerprint)

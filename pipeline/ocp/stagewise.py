@@ -148,10 +148,11 @@ class StagewiseNLP:
     kept_rows: np.ndarray
 
 
-def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_g_stage: int,
-                        oracle_value: ca.Function | None = None, keep: np.ndarray | None = None) -> StagewiseNLP:
-    """Assemble the NLP over ``w = [v_0, ..., v_N]`` (each v of size n) and stage windows
-    ``z_k = [v_k, v_{k+1}]``; the parameter is the (n_p x N) matrix of per-stage parameters.
+def build_stagewise_nlp(fns: StageFunctions, n_stages: int, oracle_value: ca.Function | None = None,
+                        keep: np.ndarray | None = None) -> StagewiseNLP:
+    """Assemble the NLP over ``w = [v_0, ..., v_N]`` and stage windows ``z_k = [v_k, v_{k+1}]``;
+    the parameter is the (n_p x N) matrix of per-stage parameters. The sizes (n of each v, n_p,
+    the rows per stage) are those of ``fns.value(z, p) -> (l, g)``.
 
     Args:
         oracle_value: A differentiable (SX) version of ``fns.value`` for the NLP's f and g: the
@@ -159,6 +160,7 @@ def build_stagewise_nlp(fns: StageFunctions, n: int, n_stages: int, n_p: int, n_
         keep: Boolean mask over all stage rows (stage-major); rows left out (free rows with
             infinite bounds on both sides) never reach the solver.
     """
+    n, n_p, n_g_stage = fns.value.size1_in(0) // 2, fns.value.size1_in(1), fns.value.size1_out(1)
     n_w = n * (n_stages + 1)
     n_full = n_g_stage * n_stages
     keep = np.ones(n_full, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)

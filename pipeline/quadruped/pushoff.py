@@ -121,7 +121,7 @@ class PushoffProblem:
         xa, ua = ca.SX.sym("x", NXA), ca.SX.sym("u", NU)
         cr = ca.DM(system.stance.cr)
         f_aug = ca.Function("f_aug", [xa, ua], [ca.vertcat(f(xa[:NX], ua, cr), xa[24:26])])
-        step = integrator(opt.integrator, f_aug, NXA, NU, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
+        step = integrator(opt.integrator, f_aug, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
         p = system.push_index
         board_legs = tuple(i for i in range(4) if i != p)
         self.x0 = self._initial_state()
@@ -139,7 +139,7 @@ class PushoffProblem:
             Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
         ]
-        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), NXA, NU, N_PARAMS, costs,
+        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
                                           self.constraints, compile_c=opt.compile)
         x_sym = ca.SX.sym("x", NX)
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
