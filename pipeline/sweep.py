@@ -9,24 +9,19 @@ end, atomically.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-import pickle
 import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
-from skatelib.library.atomic import atomic_path
+from skatelib.pipeline.cache import cache_file, entry_key, load_cached, store
 from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.ocp.stagewise import cache_dir
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solve, solver_options
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.attempts import judge, solve_with_retries
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -81,90 +76,6 @@ def chains_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ())
 
 # Bump when the retry ladder, the solve's post-processing or the cached payload changes: the key
 # covers the problem itself (stage function, bounds, guess, options) but not that code.
-CACHE_VERSION = "2"
-_MAGIC = b"skatelib-entry-cache 2\n"
-
-
-def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
-    """Cache key of an entry: what determines its solution.
-
-    The problem's fingerprint (stage function, problem config with the URDF by content, parameters,
-    bounds, cold guess), the IPOPT options, target and strides, the key of the entry whose solution
-    warm-starts it (``None`` when cold), the library format and :data:`CACHE_VERSION`.
-    """
-    prob = problem_for(spec.config, spec.n_strides)
-    v = spec.target_velocity_mps
-    src = json.dumps([CACHE_VERSION, schema.FORMAT_VERSION_STR, prob.fingerprint(v, spec.guess),
-                      solver_options(spec), round(v, 9), spec.n_strides, predecessor], sort_keys=True, default=str)
-    return hashlib.sha256(src.encode()).hexdigest()[:32]
-
-
-def _cache_file(key: str) -> Path:
-    return cache_dir() / "entries" / f"{key}.pkl"
-
-
-def _load_cached(path: Path) -> tuple[SolveResult, int] | str | None:
-    """The cached (result, attempts), ``None`` when absent, or a message when the file is damaged."""
-    try:
-        blob = path.read_bytes()
-    except FileNotFoundError:
-        return None
-    except OSError as e:
-        return f"cache entry {path} unreadable ({e.strerror})"
-    head, sep, payload = blob.partition(b"\n" + b"-" * 8 + b"\n")
-    if not sep or not head.startswith(_MAGIC) or head[len(_MAGIC):].decode(errors="replace") != (
-            hashlib.sha256(payload).hexdigest()):
-        return f"cache entry {path} is damaged (checksum mismatch)"
-    try:
-        obj = pickle.loads(payload)
-        return obj["result"], obj["attempts"]
-    except (pickle.UnpicklingError, EOFError, KeyError, AttributeError, ImportError, TypeError) as e:
-        return f"cache entry {path} cannot be loaded ({type(e).__name__})"
-
-
-def _store(path: Path, result: SolveResult, attempts: int) -> None:
-    payload = pickle.dumps({"result": result, "attempts": attempts})
-    blob = _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + b"-" * 8 + b"\n" + payload
-    with atomic_path(path) as tmp:  # parallel workers never read a half-written entry
-        tmp.write_bytes(blob)
-
-
-def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[str, float]]:
-    """Run the independent physics checks on a converged result; a result that fails them is
-    returned with ``success = False`` and the failed checks as its status."""
-    if not r.success:
-        return r, {}
-    system = problem_for(config, r.n_strides).system
-    report = check_trajectory(system, Trajectory.of(r), r.target_velocity_mps)
-    failures = report.failures(system)
-    if failures:
-        r = replace(r, success=False, status=f"Physics_Check_Failed: {'; '.join(failures)}")
-    return r, report.as_dict()
-
-
-def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
-    """The specs tried in order when a solve fails: as given, cold ramp, cold hold, then a longer
-    adaptive-barrier run."""
-    cold = replace(spec, warm=None)
-    ladder = [spec] if spec.warm is None else [spec, cold]
-    ladder.append(replace(cold, guess="hold"))
-    ladder.append(replace(cold, ipopt=(*spec.ipopt, ("mu_strategy", "adaptive"),
-                                       ("max_iter", 2 * spec.config.optimization.max_iter))))
-    return ladder
-
-
-def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
-    """Solve, walking the retry ladder until one converges; the last failure is returned as is."""
-    result = None
-    ladder = retry_ladder(spec)
-    for attempt, s in enumerate(ladder, 1):
-        result = solve(s)
-        if result.success:
-            return result, attempt
-    assert result is not None
-    return result, len(ladder)
-
-
 def exit_with_parent(parent_pid: int | None, poll_s: float = 0.5) -> None:
     """In a worker process: exit at once when the build process ``parent_pid`` is gone (killed with
     SIGKILL, it cannot stop its workers itself). Started once per process; a no-op without a pid or
@@ -208,15 +119,15 @@ def run_chain(chain: Chain, use_cache: bool = True, events: Any = None,
         key = entry_key(spec, warm_key if use_warm is not None else None)
         if events is not None:
             events.put(EntryEvent(schema.entry_key(v, chain.n_strides), done=False))
-        path = _cache_file(key)
-        hit = _load_cached(path) if use_cache else None
+        path = cache_file(key)
+        hit = load_cached(path) if use_cache else None
         note = hit if isinstance(hit, str) else ""
         if isinstance(hit, tuple):
             result, attempts = hit
         else:
             result, attempts = solve_with_retries(spec)
             if use_cache:
-                _store(path, result, attempts)
+                store(path, result, attempts)
         if note:
             note += "; solved again"
         if result.success:

@@ -16,6 +16,7 @@ from skatelib.pipeline import sweep
 from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.kinds import BuildOptions
+from skatelib.pipeline.quadruped.attempts import retry_ladder
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
 from skatelib.runtime import MotionLibrary
 
@@ -180,7 +181,7 @@ def test_retry_ladder_goes_cold_then_other_guesses():
     """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run."""
     cfg = load_config(TINY)
     spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1)))
-    ladder = sweep.retry_ladder(spec)
+    ladder = retry_ladder(spec)
     assert [s.warm is not None for s in ladder] == [True, False, False, False]
     assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]
     assert ("mu_strategy", "adaptive") in ladder[-1].ipopt

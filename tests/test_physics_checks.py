@@ -10,10 +10,10 @@ import pytest
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import board_rotations, friction_margins
 from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped.attempts import judge
 from skatelib.pipeline.quadruped.pushoff import PushoffProblem, PushoffSpec, solve
 from skatelib.pipeline.quadruped.terms import FinalSpeed
 from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
-from skatelib.pipeline.sweep import judge
 
 
 @pytest.fixture(scope="module")

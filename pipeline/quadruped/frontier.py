@@ -15,8 +15,8 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 
 from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.attempts import judge
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
-from skatelib.pipeline.sweep import judge
 
 
 @dataclass(frozen=True)
