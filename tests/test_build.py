@@ -6,8 +6,6 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +18,7 @@ from skatelib.pipeline.quadruped.attempts import retry_ladder
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
 from skatelib.runtime import MotionLibrary
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"
-CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+from tests.helpers import CLI, TINY
 
 
 @pytest.fixture(scope="module")

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 from skatelib.pipeline.config import CONFIG_DIR
 
-SKATELIB = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+from tests.helpers import CLI
+
+SKATELIB = CLI
 
 
 def test_model_prints_srb_beside_vendor_figures():

@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,8 +24,7 @@ from skatelib.control.params import PerturbationError, SkateParams, parse_pertur
 from skatelib.control.plant import NB, Plant
 from skatelib.runtime import MotionLibrary
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"
-CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+from tests.helpers import CLI, TINY
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import pytest
 from skatelib.pipeline import sweep
@@ -11,7 +10,7 @@ from skatelib.pipeline.config import load_config
 from skatelib.pipeline.quadruped import pushoff
 from skatelib.pipeline.quadruped import terms as pushoff_terms
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"
+from tests.helpers import TINY
 
 
 @pytest.fixture()

@@ -20,7 +20,7 @@ from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
 from skatelib.pipeline.kinds import BuildOptions  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"
+from tests.helpers import TINY  # noqa: E402
 
 
 def _columns(rrd: Path) -> dict[str, dict[str, list]]:

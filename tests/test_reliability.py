@@ -19,9 +19,9 @@ from skatelib.library.errors import LibraryFormatError
 from skatelib.pipeline.preflight import check_output
 from skatelib.runtime import MotionLibrary
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"
+from tests.helpers import CLI, TINY
+
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
-CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
 
 
 def _run(args: list[str], env: dict[str, str] | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
