@@ -28,9 +28,11 @@ from typing import Any
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig, load_config
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
 
 def _build_and_solve(cfg, v: float, strides: int, warm=None) -> tuple[float, pushoff.SolveResult]:

@@ -7,8 +7,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig
+from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.kinds import BuildOptions
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 from skatelib.pipeline.quadruped.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
 from skatelib.pipeline.quadruped.pushoff import problem_for

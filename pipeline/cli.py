@@ -12,7 +12,8 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.config import SweepConfig, field_range
+from skatelib.pipeline.config import field_range
+from skatelib.pipeline.quadruped.config import SweepConfig
 from skatelib.pipeline.report import console, count, err_console, fmt, frontier_table
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
@@ -118,7 +119,8 @@ def frontier(
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (warm-started climb, then bisection)."""
-    from skatelib.pipeline.config import QuadrupedConfig, load_config
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
 
     cfg = load_config(config, QuadrupedConfig)
@@ -147,9 +149,10 @@ def solve(
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build import build_library
-    from skatelib.pipeline.config import QuadrupedConfig, load_config
+    from skatelib.pipeline.config import load_config
     from skatelib.pipeline.kinds import BuildOptions
     from skatelib.pipeline.preflight import check_output
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
     if config is not None and config_option is not None and config != config_option:
         raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")

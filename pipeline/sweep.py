@@ -18,9 +18,9 @@ from typing import Any
 
 from skatelib.library import schema
 from skatelib.pipeline.cache import cache_file, entry_key, load_cached, store
-from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped.attempts import judge, solve_with_retries
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")

@@ -79,7 +79,9 @@ def test_speeds_that_name_the_same_entry_are_refused(tmp_path):
 def test_one_loader_for_every_kind_and_the_kind_a_command_needs(tmp_path):
     """load_config reads either kind from meta.kind; with the class a command needs, another kind
     is refused naming meta.kind; config_from_json rebuilds either kind from a library's JSON."""
-    from skatelib.pipeline.config import HumanoidConfig, QuadrupedConfig, config_from_json
+    from skatelib.pipeline.config import config_from_json
+    from skatelib.pipeline.humanoid.config import HumanoidConfig
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
     quad, walk = load_config(None), load_config(CONFIG_DIR / "hrp2_walk.toml")
     assert isinstance(quad, QuadrupedConfig) and isinstance(walk, HumanoidConfig)

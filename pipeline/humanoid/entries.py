@@ -12,7 +12,7 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
-from skatelib.pipeline.config import HumanoidConfig
+from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import (
     CONTROL_NAMES,
     CONTROL_UNITS,

@@ -11,7 +11,8 @@ from typing import Any
 from rich.markup import escape
 from rich.table import Table
 from skatelib.library.errors import LibraryFormatError, SkatelibError
-from skatelib.pipeline.config import HumanoidConfig, config_from_json
+from skatelib.pipeline.config import config_from_json
+from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.kinds import BuildOptions, BuildRun
 from skatelib.pipeline.report import console, err_console, parameter_table
 from skatelib.runtime import MotionLibrary

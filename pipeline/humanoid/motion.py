@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from skatelib.pipeline.config import HumanoidConfig
+from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.step import (
     StepModel,
     StepResult,
@@ -156,7 +156,8 @@ def stored_plan(lib: Any, e: Any) -> list[StepSpec]:
     it rebuilt from its stored config with today's code."""
     if "plan_json" in e.attrs:
         return plan_from_json(str(e.attrs["plan_json"]))
-    from skatelib.pipeline.config import HumanoidConfig, config_from_json
+    from skatelib.pipeline.config import config_from_json
+    from skatelib.pipeline.humanoid.config import HumanoidConfig
 
     cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
     return (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]

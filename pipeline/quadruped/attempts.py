@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from skatelib.pipeline.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, problem_for, solve
 from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 

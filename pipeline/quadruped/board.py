@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
-from skatelib.pipeline.config import BoardConfig
+from skatelib.pipeline.quadruped.config import BoardConfig
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,9 @@ from rich.markup import escape
 from rich.table import Table
 from skatelib.library.errors import Interrupted, LibraryFormatError, SkatelibError
 from skatelib.library.schema import entry_key
-from skatelib.pipeline.config import QuadrupedConfig, config_from_json
+from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.kinds import BuildOptions, BuildRun
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.report import console, count, err_console, fmt, frontier_table, parameter_table
 from skatelib.runtime import MotionLibrary
 

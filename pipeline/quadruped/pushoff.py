@@ -17,10 +17,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, NX, S_OMEGA, S_POS, S_Q, S_RPY, S_VEL, SWING, U_QD
-from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
 from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
 from skatelib.pipeline.quadruped.system import SkateSystem

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, LEGS, SWING
-from skatelib.pipeline.config import ScheduleConfig
+from skatelib.pipeline.quadruped.config import ScheduleConfig
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,8 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
-from skatelib.pipeline.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.board import BoardModel
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.robot import Quadruped, SingleRigidBody
 
 

@@ -26,8 +26,8 @@ from skatelib.library.channels import (
     U_F,
     U_QD,
 )
-from skatelib.pipeline.config import StanceConfig, WeightsConfig
 from skatelib.pipeline.ocp.terms import Stage, fixed
+from skatelib.pipeline.quadruped.config import StanceConfig, WeightsConfig
 from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
 from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import SkateSystem

@@ -1,0 +1,104 @@
+"""The humanoid's build config: point-mass model, GPM, walk, skate and sweep tables
+(``configs/hrp2_walk.toml``), loaded by :func:`skatelib.pipeline.config.load_config`."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from skatelib.library.errors import ConfigError
+from skatelib.pipeline.config import MetaConfig, build_section, check_unique_keys, sections
+from skatelib.pipeline.config import setting as _f
+
+
+@dataclass(frozen=True)
+class HumanoidModelConfig:
+    mass_kg: float = _f(1.0, 500.0, "Robot mass M [kg] (HRP-2: about 58).")
+    gravity_mps2: float = _f(0.0, 30.0, "Gravity magnitude [m/s^2].")
+    com_height_m: float = _f(0.2, 2.0, "COM height when walking and at rest [m] (paper: 0.80).")
+    foot_length_m: float = _f(0.05, 0.6, "Sole length [m] (HRP-2: about 0.24).")
+    foot_width_m: float = _f(0.03, 0.4, "Sole width [m] (HRP-2: about 0.14).")
+    step_width_m: float = _f(0.05, 0.6, "Lateral distance between the feet [m].")
+    friction_mu: float = _f(0.05, 2.0, "Static friction coefficient of the soles [-].")
+    leg_min_m: float = _f(0.1, 2.0, "Least COM-to-contact distance r_min, Eq. (21) [m].")
+    leg_max_m: float = _f(0.1, 2.0, "Largest COM-to-contact distance r_max, Eq. (21) [m].")
+    source: str = _f(doc="Where the figures come from.", default="")
+
+
+@dataclass(frozen=True)
+class GpmConfig:
+    nodes: int = _f(2, 60, "Legendre-Gauss nodes per step [-] (paper: 10).")
+    solver: str = _f(doc="NLP solver: 'ipopt' or 'sqp' (CasADi sqpmethod with qrqp).", default="ipopt")
+    sample_dt_s: float = _f(0.001, 0.1, "Spacing of the stored trajectory samples [s].", default=0.01)
+
+
+@dataclass(frozen=True)
+class WalkConfig:
+    steps: int = _f(1, 50, "Walking steps [-] (paper: 6).")
+    single_support_s: float = _f(0.05, 5.0, "Single-support time per step [s] (paper: 0.6).")
+    double_support_s: float = _f(0.0, 5.0, "Double-support time per step [s] (paper: 0.2).")
+    start_s: float = _f(0.05, 5.0, "Initial double-support phase [s].")
+    stop_s: float = _f(0.05, 5.0, "Final stopping phase [s].")
+
+
+@dataclass(frozen=True)
+class SkateConfig:
+    push_s: float = _f(0.05, 5.0, "Accelerating (push) phase [s] (paper: 1.0).")
+    slide_s: float = _f(0.05, 10.0, "Sliding phase [s] (paper: 2.0).")
+    stop_s: float = _f(0.05, 5.0, "Stop and return to the initial posture [s] (paper: 1.0).")
+    transition_com_height_m: float = _f(0.2, 2.0, "COM height of the DCM at the push-to-slide transition [m] (0.73).")
+
+
+@dataclass(frozen=True)
+class HumanoidSweepConfig:
+    motion: str = _f(doc="'walk' or 'skate'.")
+    velocities_mps: tuple[float, ...] = _f(0.01, 5.0, "Walking: step length / step period; skating: board speed [m/s].")
+
+
+@dataclass(frozen=True)
+class HumanoidConfig:
+    """A complete humanoid (GPM) motion-library build."""
+
+    path: Path
+    text: str
+    meta: MetaConfig
+    humanoid: HumanoidModelConfig
+    gpm: GpmConfig
+    walk: WalkConfig
+    skate: SkateConfig
+    sweep: HumanoidSweepConfig
+
+    def resolved_json(self) -> str:
+        d = dataclasses.asdict(self)
+        d.pop("path")
+        d.pop("text")
+        return json.dumps(d, sort_keys=True, default=str)
+
+_HUMANOID_SECTIONS: dict[str, type] = {
+    "meta": MetaConfig, "humanoid": HumanoidModelConfig, "gpm": GpmConfig, "walk": WalkConfig,
+    "skate": SkateConfig, "sweep": HumanoidSweepConfig,
+}
+
+
+def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
+    cfg = HumanoidConfig(path=path.resolve(), text=text, **sections(path, data, _HUMANOID_SECTIONS))
+    if cfg.sweep.motion not in ("walk", "skate"):
+        raise ConfigError(path, "sweep.motion", f"{cfg.sweep.motion!r}: use 'walk' or 'skate'")
+    if cfg.gpm.solver not in ("ipopt", "sqp"):
+        raise ConfigError(path, "gpm.solver", f"{cfg.gpm.solver!r}: use 'ipopt' or 'sqp'")
+    if cfg.humanoid.leg_min_m >= cfg.humanoid.leg_max_m:
+        raise ConfigError(path, "humanoid.leg_min_m", "must be below humanoid.leg_max_m")
+    if not cfg.sweep.velocities_mps:
+        raise ConfigError(path, "sweep.velocities_mps", "is empty: list at least one speed")
+    check_unique_keys(path, cfg.sweep.velocities_mps)
+    return cfg
+
+
+def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
+    sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _HUMANOID_SECTIONS.items()}
+    return HumanoidConfig(path=Path(origin), text="", **sections)
+
+CONFIG_CLASS = HumanoidConfig
