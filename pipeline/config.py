@@ -10,7 +10,6 @@ tables are merged key by key, the extending file winning.
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import json
 import math
 import tomllib
@@ -22,6 +21,7 @@ from typing import Any
 
 from skatelib.library.errors import ConfigError
 from skatelib.library.schema import HDF5_SIGNATURE
+from skatelib.pipeline.kinds import KINDS, part
 
 # The checkout's configs/ (editable install) or the installed package skatelib.configs (package
 # data of a wheel): the same place relative to this file.
@@ -171,19 +171,14 @@ if typing.TYPE_CHECKING:
 
 AnyConfig = typing.Union["QuadrupedConfig", "HumanoidConfig"]
 C = typing.TypeVar("C", "QuadrupedConfig", "HumanoidConfig")
-# meta.kind -> the module of its config (CONFIG_CLASS, from_toml, from_json), imported when used
-_KINDS: dict[str, str] = {
-    "quadruped": "skatelib.pipeline.quadruped.config",
-    "humanoid": "skatelib.pipeline.humanoid.config",
-}
-
-
 def _kind(path: Path, name: Any, expect: type | None) -> Any:
-    if name not in _KINDS:
-        raise ConfigError(path, "meta.kind", f"{name!r}: use one of {', '.join(map(repr, _KINDS))}")
-    module = importlib.import_module(_KINDS[name])
+    """The ``config`` module of the kind's subpackage (CONFIG_CLASS, from_toml, from_json), from
+    the kind table (``pipeline/kinds.py``)."""
+    if name not in KINDS:
+        raise ConfigError(path, "meta.kind", f"{name!r}: use one of {', '.join(map(repr, KINDS))}")
+    module = part(name, "config")
     if expect is not None and module.CONFIG_CLASS is not expect:
-        wanted = next(k for k, m in _KINDS.items() if importlib.import_module(m).CONFIG_CLASS is expect)
+        wanted = next(k for k in KINDS if part(k, "config").CONFIG_CLASS is expect)
         raise ConfigError(path, "meta.kind", f"expected {wanted!r}, got {name!r}: this command takes {wanted} configs")
     return module
 

@@ -9,7 +9,6 @@ a tab with every entry side by side, and the viewer.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import json
 import os
 import sys
@@ -21,7 +20,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
-from skatelib.pipeline.kinds import KINDS
+from skatelib.pipeline.kinds import check_library_kind, part
 from skatelib.runtime import Entry, MotionLibrary
 
 SPACING_M = 1.2  # side-by-side entries are this far apart along y
@@ -29,9 +28,8 @@ SPACING_M = 1.2  # side-by-side entries are this far apart along y
 
 def kind_rerun(lib: MotionLibrary) -> ModuleType:
     """The Rerun module of the library's kind (``<kind>.rerun``: ``PANELS``, ``logger(lib)``)."""
-    if lib.kind not in KINDS:
-        raise LibraryFormatError(lib.path, "/@kind", f"{lib.kind!r} is not one of {', '.join(KINDS)}")
-    return importlib.import_module(KINDS[lib.kind].rsplit(".", 1)[0] + ".rerun")
+    check_library_kind(lib.kind, lib.path)
+    return part(lib.kind, "rerun")
 
 
 def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:

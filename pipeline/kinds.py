@@ -1,10 +1,12 @@
-"""The robot kinds: one row per kind, naming the module that builds, describes and checks it.
+"""The robot kinds: one row per kind, naming the robot's subpackage.
 
-Every command goes through this table (``kind_of(config)`` or ``kind_named(lib.kind)``), so a
-third robot is a new subpackage with a ``kind`` module and one row here; the command line does
-not change. A kind module provides:
+Every command goes through this table (``load_config``, ``kind_of(config)``,
+``kind_named(lib.kind)``, ``inspect``), so a third robot is a new subpackage with ``config``,
+``kind`` and ``rerun`` modules and one row here; the command line does not change. The ``config``
+module gives ``CONFIG_CLASS``, ``from_toml`` and ``from_json`` (read by ``pipeline/config.py``);
+the ``kind`` module:
 
-* ``CONFIG_CLASS``: its config dataclass (``pipeline/config.py``);
+* ``CONFIG_CLASS``: its config dataclass;
 * ``print_model(cfg)``: what ``skatelib model`` shows;
 * ``run_build(cfg, out, options) -> BuildRun``: build and write a library, printing progress and
   a summary;
@@ -26,10 +28,26 @@ from typing import Any
 
 from skatelib.library.errors import LibraryFormatError
 
+# meta.kind (and a library's kind attribute) -> the robot's subpackage
 KINDS: dict[str, str] = {
-    "quadruped": "skatelib.pipeline.quadruped.kind",
-    "humanoid": "skatelib.pipeline.humanoid.kind",
+    "quadruped": "skatelib.pipeline.quadruped",
+    "humanoid": "skatelib.pipeline.humanoid",
 }
+
+
+def part(name: str, module: str) -> ModuleType:
+    """A module of a known kind's subpackage (``config``, ``kind``, ``rerun``), imported when asked."""
+    return importlib.import_module(f"{KINDS[name]}.{module}")
+
+
+def check_library_kind(name: str, origin: Path | None = None) -> None:
+    """Refuse a library whose ``kind`` is not in the table.
+
+    Raises:
+        LibraryFormatError: ``name`` is no kind of the table (in the file at ``origin``).
+    """
+    if name not in KINDS:
+        raise LibraryFormatError(origin or Path("?"), "/@kind", f"{name!r} is not one of {', '.join(KINDS)}")
 
 
 @dataclass(frozen=True)
@@ -58,9 +76,8 @@ def kind_named(name: str, origin: Path | None = None) -> ModuleType:
     Raises:
         LibraryFormatError: An unknown kind in the file at ``origin``.
     """
-    if name not in KINDS:
-        raise LibraryFormatError(origin or Path("?"), "/@kind", f"{name!r} is not one of {', '.join(KINDS)}")
-    return importlib.import_module(KINDS[name])
+    check_library_kind(name, origin)
+    return part(name, "kind")
 
 
 def kind_of(config: Any) -> ModuleType:
