@@ -14,7 +14,7 @@ from rich.table import Table
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
-from skatelib.pipeline.report import console, count, err_console, fmt, frontier_table
+from skatelib.pipeline.report import console, count, entry_table, err_console, fmt, frontier_table
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
@@ -227,13 +227,9 @@ def info(
         if not str(k).endswith("_source"):
             m.add_row(escape(str(k)), escape(f"{v:.6g}" if isinstance(v, float) else str(v)))
     console.print(m)
-    t = Table(title=count(len(lib), "entry"))
-    for col in ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots", "duration [s]", "solve [s]",
-                "momentum [m/s]", "off label", "Coulomb margin [N]", "defect"):
-        if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
-            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
-        else:
-            t.add_column(escape(col), justify="right")
+    t = entry_table(count(len(lib), "entry"), ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots",
+                                                "duration [s]", "solve [s]", "momentum [m/s]", "off label",
+                                                "Coulomb margin [N]", "defect"))
     for e in lib:
         ph = json.loads(str(e.attrs.get("physics_json", "{}")))
         off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"

@@ -36,6 +36,18 @@ def fmt(figures: dict[str, Any], key: str, pattern: str) -> str:
     return pattern.format(figures[key]) if key in figures else "-"
 
 
+def entry_table(title: str, columns: tuple[str, ...]) -> Table:
+    """A table with one row per entry: the key and status columns stay whole in a narrow terminal
+    (the numbers, right-aligned, give way)."""
+    t = Table(title=title)
+    for col in columns:
+        if col in ("entry", "status"):
+            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
+        else:
+            t.add_column(escape(col), justify="right")
+    return t
+
+
 def parameter_table(title: str, rows: list[tuple[str, Any]], number: str = "{:.4g}", head: str = "parameter") -> None:
     """Print a two-column table of named values (numbers as ``number``)."""
     t = Table(title=title)

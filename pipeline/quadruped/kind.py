@@ -15,7 +15,15 @@ from skatelib.library.schema import entry_key
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.kinds import BuildOptions, BuildRun
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.report import console, count, err_console, fmt, frontier_table, parameter_table
+from skatelib.pipeline.report import (
+    console,
+    count,
+    entry_table,
+    err_console,
+    fmt,
+    frontier_table,
+    parameter_table,
+)
 from skatelib.runtime import MotionLibrary
 
 CONFIG_CLASS = QuadrupedConfig
@@ -127,13 +135,9 @@ def run_build(cfg: QuadrupedConfig, out: Path, opts: BuildOptions) -> BuildRun:
 
 def summary(outcomes: list[Any]) -> None:
     """One row per entry: status, iterations, tries, time and the independent checks' figures."""
-    t = Table(title="entries (time: c = from the cache; momentum: the speed robot and board ride at together)")
-    for col in ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
-                "Coulomb margin [N]", "torque [N m]", "defect"):
-        if col in ("entry", "status"):  # whole in a narrow terminal (the numbers give way)
-            t.add_column(escape(col), no_wrap=col == "entry", min_width=8 if col == "entry" else 6, overflow="fold")
-        else:
-            t.add_column(escape(col), justify="right")
+    t = entry_table("entries (time: c = from the cache; momentum: the speed robot and board ride at together)",
+                    ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
+                     "Coulomb margin [N]", "torque [N m]", "defect"))
     for o in outcomes:
         r, ph = o.result, o.physics
         status = r.status.replace("Solve_Succeeded", "ok")
