@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import rerun as rr
-from skatelib.library.channels import BOARD, GROUND, LEGS
-from skatelib.library.margins import board_rotations, friction_margins, rpy_matrices
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, LEGS, S_Q, S_RPY
+from skatelib.library.margins import board_rotations, forward_speed, friction_margins, rpy_matrices
 from skatelib.pipeline.rerun_parts import ground, quat_rows, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -115,15 +115,13 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
                          columns=rr.Arrows3D.columns(origins=e.foot_pos[:-1, i] + offset,
                                                      vectors=forces[:, i] * FORCE_SCALE_M_PER_N, colors=colors))
     # Plots.
-    v_fwd = np.cos(x[:, 5]) * x[:, 24] + np.sin(x[:, 5]) * x[:, 25]
-    series(rec, root, "board_speed/actual", t, v_fwd, "board speed [m/s]")
+    series(rec, root, "board_speed/actual", t, forward_speed(x), "board speed [m/s]")
     series(rec, root, "board_speed/target", t, np.full(K, e.target_velocity_mps), "label [m/s]")
-    series(rec, root, "board_roll", t, x[:, 26], "deck roll [rad]")
+    series(rec, root, "board_roll", t, x[:, I_BOARD_ROLL], "deck roll [rad]")
     for i, leg in enumerate(LEGS):
         series(rec, root, f"normal_force/{leg}", t[:-1], forces[:, i, 2], f"{leg} normal force [N]")
-    names = e.columns["state"][12:24]
-    for j, name in enumerate(names):
-        series(rec, root, f"joints/{name}", t, x[:, 12 + j], f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
+    for name, q in zip(e.columns["state"][S_Q], x[:, S_Q].T, strict=True):
+        series(rec, root, f"joints/{name}", t, q, f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
     m = lib.model
     tau_max = float(m.get("torque_limit_Nm", np.inf))
     fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
@@ -139,19 +137,18 @@ def _log_board(rec: rr.RecordingStream, m: dict[str, Any], e: Entry, root: str, 
     wheels on the trucks' axles; all of it moves and yaws with the board (``board_pos``: the deck
     top's centre, the deck roll)."""
     assert e.board_pos is not None
-    t, yaw = e.t, e.state[:, 26]
+    t, yaw, roll = e.t, e.state[:, S_RPY][:, 2], e.state[:, I_BOARD_ROLL]
     height = float(m["board_deck_height_m"])  # deck top above the ground, wheels included
     base = e.board_pos[:, :3] * [1.0, 1.0, 0.0] + offset
-    heading = quat_rows(board_rotations(0 * yaw, yaw))
+    heading = quat_rows(board_rotations(yaw, 0 * roll))
     rec.send_columns(f"{root}/board", indexes=time_index(t),
                      columns=rr.Transform3D.columns(translation=base, quaternion=heading))
     half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, DECK_THICKNESS_M / 2]
     rec.log(f"{root}/board/deck", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -DECK_THICKNESS_M / 2]],
                                              colors=[(160, 110, 60)], fill_mode="solid"), static=True)
-    roll = board_rotations(e.board_pos[:, 3], 0 * yaw)
     rec.send_columns(f"{root}/board/deck", indexes=time_index(t),
                      columns=rr.Transform3D.columns(translation=np.tile([0.0, 0.0, height], (len(t), 1)),
-                                                    quaternion=quat_rows(roll)))
+                                                    quaternion=quat_rows(board_rotations(0 * yaw, roll))))
     axles = [float(m["board_l_front_m"]), -float(m["board_l_rear_m"])]
     half_track = float(m.get("board_truck_width_m", m["board_deck_width_m"])) / 2
     hanger = height - DECK_THICKNESS_M - WHEEL_RADIUS_M
