@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import board_rotations, friction_margins
-from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped import problem, pushoff
 from skatelib.pipeline.quadruped.attempts import judge
-from skatelib.pipeline.quadruped.pushoff import PushoffProblem, PushoffSpec, solve
+from skatelib.pipeline.quadruped.bounds import bound_terms
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
 from skatelib.pipeline.quadruped.terms import FinalSpeed
 from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
@@ -52,7 +53,7 @@ def shove(small_cfg):
     mp = pytest.MonkeyPatch()
     try:
         mp.setattr(FinalSpeed, "bounds", board_only)
-        mp.setattr(PushoffProblem, "_riding_end", lambda self, *a: None)
+        mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
         mp.setattr(pushoff, "_PROBLEMS", {})
         shove = solve(PushoffSpec(small_cfg, 0.3, 1))
     finally:

@@ -6,8 +6,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from skatelib.library.channels import GROUND, LEGS
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
+from skatelib.library.channels import CONTROL_NAMES, GROUND, LEGS, STATE_NAMES
+from skatelib.pipeline.ocp.terms import Box, variable_bounds
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, problem_for, solve
 from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
 from tests import reference_model as ref
@@ -77,3 +78,29 @@ def test_warm_start_cuts_iterations(small_cfg, solved):
     assert cold.success and warm.success
     assert warm.iterations <= (2 * cold.iterations) // 3, (warm.iterations, cold.iterations)
     assert abs(warm.final_velocity_mps - cold.final_velocity_mps) < 0.01
+
+
+def test_solution_sits_in_every_named_bound(small_cfg, solved):
+    """Each bound term names its channels; the solved knots (state, board position, control) read
+    back by those names lie inside each term's box, e.g. the riding end's trunk height at the last knot."""
+    prob = problem_for(small_cfg, 1)
+    K = len(solved.t)
+    by_name = {n: solved.state[:, i] for i, n in enumerate(STATE_NAMES)}
+    by_name |= {"board_x": solved.board_pos[:, 0], "board_y": solved.board_pos[:, 1]}
+    control = np.vstack([solved.control, np.zeros((1, len(CONTROL_NAMES)))])  # u_N, a placeholder held at 0
+    by_name |= {n: control[:, i] for i, n in enumerate(CONTROL_NAMES)}
+    names = list(by_name)
+    for term in prob.bound_terms:
+        lo, hi = term.bounds(K)
+        cols = np.column_stack([by_name[n] for n in names[term.columns]])
+        assert np.all(cols >= lo - 1e-7) and np.all(cols <= hi + 1e-7), term.name
+    end = next(t for t in prob.bound_terms if t.name == "end_height")
+    assert end.columns == slice(2, 3) and np.isfinite(end.bounds(K)[0][-1]).all()
+    assert not np.isfinite(end.bounds(K)[0][:-1]).any()
+
+
+def test_conflicting_bound_terms_are_named():
+    lo, hi = variable_bounds([Box("a", slice(0, 2), -1.0, 1.0), Box("b", slice(1, 2), 0.5, 2.0)], 3, 2)
+    assert lo.reshape(3, 2)[:, 1].tolist() == [0.5] * 3 and hi.reshape(3, 2)[:, 1].tolist() == [1.0] * 3
+    with pytest.raises(ValueError, match="'c' leaves no value at knots \\[2\\]"):
+        variable_bounds([Box("a", slice(0, 2), -1.0, 1.0), Box("c", slice(0, 1), 2.0, 3.0, knots=slice(2, 3))], 3, 2)

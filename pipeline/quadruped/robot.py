@@ -175,3 +175,30 @@ def foot_position_leg(chain: LegChain, q_leg: Sym) -> Sym:
         p = p + R @ ca.DM(link.translation)
         R = R @ ca.DM(link.rotation) @ _axis_rotation(link.axis, q_leg[i])
     return p + R @ ca.DM(chain.foot_translation)
+
+
+@dataclass(frozen=True)
+class DampedNewton:
+    """Damped (Levenberg) Newton steps on joint angles toward a foot target."""
+
+    damping: float
+    tol: float  # residual norm at which to stop [m]
+    max_iter: int
+
+    def solve(self, fn: Any, goal: np.ndarray, q0: np.ndarray,
+              limits: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, float]:
+        """Steps toward ``fn(q)[0] == goal``, where ``fn(q) -> (p, dp/dq)``, each clipped to ``limits``
+        when given. Returns the joints and the last residual norm [m]."""
+        q = np.array(q0, dtype=float)
+        goal = np.asarray(goal, dtype=float).reshape(-1)
+        residual = np.inf
+        for _ in range(self.max_iter):
+            pos, J = (np.asarray(v) for v in fn(q))
+            err = goal - pos.reshape(-1)
+            residual = float(np.linalg.norm(err))
+            if residual < self.tol:
+                break
+            q = q + np.linalg.solve(J.T @ J + self.damping * np.eye(len(q)), J.T @ err)
+            if limits is not None:
+                q = np.clip(q, *limits)
+        return q, residual

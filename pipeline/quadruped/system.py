@@ -12,7 +12,7 @@ from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
 from skatelib.pipeline.quadruped.board import BoardModel
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.robot import Quadruped, SingleRigidBody
+from skatelib.pipeline.quadruped.robot import DampedNewton, Quadruped, SingleRigidBody
 
 
 @dataclass(frozen=True)
@@ -103,16 +103,10 @@ def solve_leg_ik(robot: Quadruped, targets: np.ndarray, q0: np.ndarray | None = 
     q_sym = ca.SX.sym("q", 12)
     p: Any = ca.vec(robot.foot_positions_body(q_sym))
     fn = ca.Function("ik", [q_sym], [p, ca.jacobian(p, q_sym)])
-    q = np.tile([0.0, -0.8, 1.6], 4) if q0 is None else np.array(q0, dtype=float)
-    goal = np.asarray(targets, dtype=float).reshape(-1)
-    for _ in range(max_iter):
-        pv, J = (np.asarray(v) for v in fn(q))
-        err = goal - pv.reshape(-1)
-        if np.linalg.norm(err) < tol:
-            break
-        q = q + np.linalg.solve(J.T @ J + 1e-9 * np.eye(12), J.T @ err)
-    else:
-        raise ModelError(f"stance IK did not converge (residual {np.linalg.norm(err):.2e} m): "
+    q_init = np.tile([0.0, -0.8, 1.6], 4) if q0 is None else q0
+    q, residual = DampedNewton(1e-9, tol, max_iter).solve(fn, targets, q_init)
+    if residual >= tol:
+        raise ModelError(f"stance IK did not converge (residual {residual:.2e} m): "
                          "a foot target is out of reach; check [stance] heights and foot positions")
     lo, hi = robot.lower_limits, robot.upper_limits
     bad = np.flatnonzero((q < lo - 1e-9) | (q > hi + 1e-9))

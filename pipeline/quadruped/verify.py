@@ -13,7 +13,19 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_Q, S_VEL, SWING, U_QD
+from skatelib.library.channels import (
+    BOARD,
+    GROUND,
+    I_BOARD_ROLL,
+    NX,
+    S_BOARD_V,
+    S_OMEGA,
+    S_Q,
+    S_RPY,
+    S_VEL,
+    SWING,
+    U_QD,
+)
 from skatelib.library.margins import board_rotations, friction_margins, momentum_speed
 from skatelib.pipeline.quadruped.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
 from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
@@ -232,7 +244,7 @@ def _ground_slip(contact: np.ndarray, foot: np.ndarray) -> float:
 def _board_slip(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray,
                 board_pos: np.ndarray) -> float:
     """Largest distance of a foot on the deck from its deck point (Eq. 8) [m]."""
-    R_B = board_rotations(state[:, 5], state[:, I_BOARD_ROLL])
+    R_B = board_rotations(state[:, S_RPY][:, 2], state[:, I_BOARD_ROLL])
     cr = np.vstack([system.stance.cr, np.zeros(4)])  # (3, 4) deck points in the board frame
     points = board_pos[:, None, :3] + np.einsum("kij,jl->kli", R_B, cr)
     dist = np.linalg.norm(foot_pos - points, axis=-1)
@@ -248,7 +260,7 @@ def _swing_clearance(system: SkateSystem, state: np.ndarray, contact: np.ndarray
     if k.size == 0:
         return float("inf")
     bottom = foot_pos[k, p]
-    R_B = board_rotations(state[k, 5], state[k, I_BOARD_ROLL])
+    R_B = board_rotations(state[k, S_RPY][:, 2], state[k, I_BOARD_ROLL])
     local = np.einsum("kji,kj->ki", R_B, bottom - board_pos[k, :3])
     b = system.board
     over = (np.abs(local[:, 0]) <= b.deck_length_m / 2) & (np.abs(local[:, 1]) <= b.deck_width_m / 2)

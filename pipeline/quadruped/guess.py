@@ -1,0 +1,80 @@
+"""Cold initial guesses of the push-off NLP: the static stance riding a board whose speed ramps to
+the target (``"ramp"``) or at rest (``"hold"``), with the push leg posed by inverse kinematics.
+Never random: the same problem always starts from the same point."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F
+from skatelib.pipeline.quadruped.robot import DampedNewton, foot_position_leg
+from skatelib.pipeline.quadruped.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.terms import I_BOARD_XY, NXA
+
+
+def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v_target: float,
+                  kind: str) -> np.ndarray:
+    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp (or held), the push leg
+    by IK, and contact forces that carry the ramp's momentum."""
+    sch = schedule
+    K = len(sch.t)
+    guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
+    a = v_target / sch.t[-1] if kind == "ramp" else 0.0
+    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = a * sch.t
+    guess[:, S_POS.start] += 0.5 * a * sch.t**2
+    guess[:, I_BOARD_XY.start] = 0.5 * a * sch.t**2
+    guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m)
+    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v_target, a, kind)
+    guess[-1, NXA:] = 0.0
+    return guess.reshape(-1)
+
+
+def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray) -> np.ndarray:
+    """Joint angles per knot: the board stance, the push foot held where it touched down while the
+    trunk rides on, and between pushes the joints interpolated from lift-off to the next touchdown."""
+    p, K = system.push_index, len(sch.t)
+    leg = slice(3 * p, 3 * p + 3)
+    q = np.tile(system.stance.q_board, (K, 1))
+    runs = sch.stance_intervals(p, GROUND)
+    lo, hi = system.robot.lower_limits[leg], system.robot.upper_limits[leg]
+    fk, newton = _leg_fk(system), DampedNewton(damping=1e-6, tol=1e-9, max_iter=20)
+    for k0, k1 in runs:
+        foot_world = trunk[k0] + np.asarray(system.robot.foot_positions_body(system.stance.q_push))[:, p]
+        q_leg = system.stance.q_push[leg].copy()
+        for k in range(k0, k1 + 1):
+            q_leg, _ = newton.solve(fk, foot_world - trunk[k], q_leg, (lo, hi))
+            q[k, leg] = q_leg
+    lifts = [k1 for _, k1 in runs]
+    downs = [k0 for k0, _ in runs[1:]] + [K - 1]
+    for k1, k2 in zip(lifts, downs, strict=True):
+        end = q[k2, leg] if k2 < K - 1 else system.stance.q_push[leg]
+        for k in range(k1 + 1, k2 + (1 if k2 == K - 1 else 0)):
+            w = (k - k1) / max(k2 - k1, 1)
+            q[k, leg] = (1 - w) * q[k1, leg] + w * end
+    return q
+
+
+def _forces(system: SkateSystem, sch: KnotSchedule, v_target: float, a: float, kind: str) -> np.ndarray:
+    """Forces (K - 1, 12): weight shared by the feet in contact, the push foot's forward force over the
+    push time carrying robot and board to the target, the deck feet accelerating the board."""
+    p = system.push_index
+    m_r, m_b = system.srb.mass_kg, system.board.mass_kg
+    push_time = sum(k1 - k0 for k0, k1 in sch.stance_intervals(p, GROUND)) * (sch.t[1] - sch.t[0])
+    f_push = (m_r + m_b) * v_target / push_time if kind == "ramp" and push_time > 0 else 0.0
+    f = np.zeros((len(sch.t) - 1, 12))
+    for k in range(len(sch.t) - 1):
+        on = [i for i in range(4) if sch.contact[k, i] != SWING]
+        for i in on:
+            f[k, 3 * i + 2] = m_r * system.gravity_mps2 / len(on)
+            f[k, 3 * i] = f_push if i == p else -m_b * a / 3
+    return f
+
+
+def _leg_fk(system: SkateSystem) -> ca.Function:
+    """Push-leg foot position in the trunk frame and its 3x3 Jacobian, from the leg's joints (built
+    once per guess, about a millisecond)."""
+    q_leg = ca.SX.sym("q", 3)
+    pos = foot_position_leg(system.robot.chains[system.push_index], q_leg)
+    return ca.Function("leg_fk", [q_leg], [pos, ca.jacobian(pos, q_leg)])
+

@@ -1,0 +1,160 @@
+"""The transcribed push-off NLP for one config and stride count (paper Sec. IV-B): the system, the
+knot schedule, the cost, constraint and bound terms, and what turns a solution vector back into
+trajectories. Reused across target speeds: the target enters through the stage parameters.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from functools import cached_property
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from skatelib.library.channels import NU, NX, S_POS, S_Q, S_RPY
+from skatelib.pipeline.ocp.integrators import integrator
+from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
+from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
+from skatelib.pipeline.quadruped.bounds import bound_terms
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.quadruped.guess import initial_guess
+from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
+from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.terms import (
+    I_BOARD_XY,
+    N_PARAMS,
+    NXA,
+    P_RATE,
+    P_TARGET,
+    P_TERMINAL,
+    P_VDES,
+    DynamicsDefect,
+    EffortCost,
+    FeetOnBoard,
+    FinalSpeed,
+    FrictionCones,
+    Propulsion,
+    PushFoot,
+    Steering,
+    TerminalSpeedCost,
+    TorqueLimits,
+    TrackingCost,
+)
+
+
+class PushoffProblem:
+    """The transcribed NLP for one config and stride count, reusable across target speeds."""
+
+    def __init__(self, config: QuadrupedConfig, n_strides: int):
+        t0 = time.perf_counter()
+        self.config = config
+        self.n_strides = n_strides
+        opt = config.optimization
+        self.system = system = SkateSystem.from_config(config)
+        self.schedule: KnotSchedule = knot_schedule(config.schedule, n_strides, opt.dt_s)
+        N = self.schedule.n_intervals
+        self.mode = modes_for(config.schedule.push_leg)["accelerating"]
+        f = dynamics_function(system, self.mode)
+        xa, ua = ca.SX.sym("x", NXA), ca.SX.sym("u", NU)
+        cr = ca.DM(system.stance.cr)
+        f_aug = ca.Function("f_aug", [xa, ua], [ca.vertcat(f(xa[:NX], ua, cr), xa[24:26])])
+        step = integrator(opt.integrator, f_aug, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
+        p = system.push_index
+        board_legs = tuple(i for i in range(4) if i != p)
+        self.x0 = self._initial_state()
+        com_rel0 = self.x0[S_POS] - np.array([0.0, 0.0, system.board.deck_height_m])
+        q_nom = system.stance.q_board.copy()
+        q_nom[3 * p: 3 * p + 3] = system.stance.q_push[3 * p: 3 * p + 3]
+        w = opt.weights
+        costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
+        mu_plan = opt.friction_margin * system.friction_mu
+        term = config.terminal
+        self.constraints: list[ConstraintTerm] = [
+            DynamicsDefect(step), FeetOnBoard(system, board_legs),
+            PushFoot(system, self.schedule, config.stance, term.push_foot_height_m),
+            FrictionCones(system, self.schedule, self.mode.board_legs, mu_plan, opt.friction_model),
+            Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),
+            FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
+        ]
+        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
+                                          self.constraints, compile_c=opt.compile)
+        self.bound_terms = bound_terms(config, system, self.schedule, self.x0)
+        x_sym = ca.SX.sym("x", NX)
+        self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
+        self.build_time_s = time.perf_counter() - t0
+        self._solvers: dict[tuple[Any, ...], ca.Function] = {}
+
+    @property
+    def n(self) -> int:
+        return NXA + NU
+
+    def _initial_state(self) -> np.ndarray:
+        """Static stance on the board at rest, the push foot on the ground (accelerating mode)."""
+        s = self.system
+        x = np.zeros(NXA)
+        trunk = np.array([self.config.stance.base_x_offset_m, 0.0, s.stance.trunk_height_m])
+        x[S_POS] = trunk + s.srb.com_offset_m
+        x[S_Q] = s.stance.q_push
+        return x
+
+    def solver(self, options: dict[str, Any]) -> ca.Function:
+        key = tuple(sorted(options.items()))
+        if key not in self._solvers:
+            opts = {"print_time": False, "calc_lam_p": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+                    **{f"ipopt.{k}": v for k, v in options.items()}, **self.tr.nlp.options}
+            self._solvers[key] = ca.nlpsol("pushoff", "ipopt", self.tr.nlp.nlp, opts)
+        return self._solvers[key]
+
+    def parameters(self, v_target: float) -> np.ndarray:
+        N = self.schedule.n_intervals
+        P = np.zeros((N, N_PARAMS))
+        P[:, P_VDES] = v_target * self.schedule.t[:N] / self.schedule.t[-1]
+        P[:, P_RATE] = 1.0
+        P[-1, P_RATE] = 0.0
+        P[-1, P_TERMINAL] = 1.0
+        P[:, P_TARGET] = v_target
+        return P.reshape(-1)  # row-major (N, n_p) == column-major (n_p, N)
+
+    def bounds(self, v_target: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Variable bounds (the bound terms' intersection) and constraint-row bounds; the same for every
+        target (the target enters through the stage parameters)."""
+        lbx, ubx = variable_bounds(self.bound_terms, len(self.schedule.t), self.n)
+        return lbx, ubx, self.tr.lbg.copy(), self.tr.ubg.copy()
+
+    def initial_guess(self, v_target: float, kind: str) -> np.ndarray:
+        return initial_guess(self.system, self.schedule, self.x0, v_target, kind)
+
+    def fingerprint(self, v_target: float, guess: str) -> str:
+        """SHA-256 of everything this problem feeds IPOPT for one target besides its options and warm
+        start: the stage function (every cost and constraint term), the problem config (URDF by
+        content), parameters, bounds and the cold initial guess."""
+        h = hashlib.sha256()
+        h.update(self.tr.fingerprint.encode())
+        h.update(self.config.problem_json().encode())
+        h.update(str(self.n_strides).encode())
+        for a in (self.parameters(v_target), *self.bounds(v_target), self.initial_guess(v_target, guess)):
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+        return h.hexdigest()
+
+    @cached_property
+    def _g_fn(self) -> ca.Function:
+        return ca.Function("g", [self.tr.nlp.nlp["x"], self.tr.nlp.nlp["p"]], [self.tr.nlp.nlp["g"]])
+
+    def violation(self, w: np.ndarray, P: np.ndarray, bounds: tuple[np.ndarray, ...]) -> float:
+        """Largest violation of constraint rows and variable bounds at ``w``."""
+        lbx, ubx, lbg, ubg = bounds
+        g = np.asarray(self._g_fn(w, P)).reshape(-1)
+        viol = [np.max(np.maximum(lbg - g, 0.0), initial=0.0), np.max(np.maximum(g - ubg, 0.0), initial=0.0),
+                np.max(np.maximum(lbx - w, 0.0), initial=0.0), np.max(np.maximum(w - ubx, 0.0), initial=0.0)]
+        return float(max(viol))
+
+    def extract(self, w: np.ndarray) -> dict[str, np.ndarray]:
+        K = len(self.schedule.t)
+        W = w.reshape(K, self.n)
+        state = W[:, :NX].copy()
+        feet = np.stack([np.asarray(self._contacts(state[k])).T for k in range(K)])
+        board = np.column_stack([W[:, I_BOARD_XY], np.full(K, self.system.board.deck_height_m), state[:, S_RPY][:, 2]])
+        return {"t": self.schedule.t.copy(), "state": state, "control": W[:-1, NXA:].copy(),
+                "contact": self.schedule.contact.copy(), "foot_pos": feet, "board_pos": board}
