@@ -7,8 +7,8 @@ import dataclasses
 import pytest
 from skatelib.pipeline import sweep
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped import costs as pushoff_costs
 from skatelib.pipeline.quadruped import pushoff
-from skatelib.pipeline.quadruped import terms as pushoff_terms
 
 from tests.helpers import TINY
 
@@ -48,8 +48,8 @@ def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
     assert not first[0].cached and again[0].cached
     assert again[0].cache_key == first[0].cache_key
 
-    original = pushoff_terms.EffortCost.cost
-    monkeypatch.setattr(pushoff_terms.EffortCost, "cost", lambda self, s: 2.0 * original(self, s))
+    original = pushoff_costs.EffortCost.cost
+    monkeypatch.setattr(pushoff_costs.EffortCost, "cost", lambda self, s: 2.0 * original(self, s))
     monkeypatch.setattr(pushoff, "_PROBLEMS", {})
     changed = sweep.run_chain(_chain())
     assert not changed[0].cached

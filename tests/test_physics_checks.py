@@ -132,7 +132,7 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
 
     import pinocchio as pin
     from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
-    from skatelib.pipeline.quadruped.verify import _max_torque
+    from skatelib.pipeline.quadruped.measures import max_torque as _max_torque
 
     r = honest
     full = rigid_leg_torques(system, r.t, r.state, r.control, r.contact, r.foot_pos)

@@ -1,7 +1,7 @@
 """Variable bounds of the push-off NLP (Sec. IV-B) as terms that name the channels they bound.
 
-The knot vector is the transcription state (the 28 channels, board_x, board_y) followed by the
-24 controls; :func:`columns` turns channel names into its columns. The NLP's bounds are the
+The knot vector (:mod:`skatelib.pipeline.quadruped.knots`) is the transcription state followed by
+the 24 controls; ``columns`` turns channel names into its columns. The NLP's bounds are the
 intersection of these boxes (:func:`skatelib.pipeline.ocp.terms.variable_bounds`).
 """
 
@@ -10,24 +10,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from skatelib.library.channels import CONTROL_NAMES, STATE_NAMES, SWING
+from skatelib.library.channels import SWING
 from skatelib.pipeline.ocp.terms import INF, BoundTerm, Box
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.knots import NXA, columns
 from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import SkateSystem
-from skatelib.pipeline.quadruped.terms import NXA
 
 LAST = slice(-1, None)
 BEFORE_LAST = slice(-2, -1)
-KNOT_NAMES = (*STATE_NAMES, "board_x", "board_y", *CONTROL_NAMES)
-assert len(KNOT_NAMES) == NXA + len(CONTROL_NAMES)
-
-
-def columns(first: str, last: str | None = None) -> slice:
-    """Knot-vector columns of the channels ``first`` .. ``last`` (inclusive, in channel order)."""
-    return slice(KNOT_NAMES.index(first), KNOT_NAMES.index(last or first) + 1)
-
-
 FORCES = columns("f_FL_x", "f_RR_z")
 JOINT_SPEEDS = columns("qd_FL_abad", "qd_RR_knee")
 CONTROLS = columns("f_FL_x", "qd_RR_knee")

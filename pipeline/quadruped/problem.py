@@ -18,29 +18,21 @@ from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transc
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
 from skatelib.pipeline.quadruped.bounds import bound_terms
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
 from skatelib.pipeline.quadruped.guess import initial_guess
+from skatelib.pipeline.quadruped.knots import I_BOARD_XY, N_PARAMS, NXA, P_RATE, P_TARGET, P_TERMINAL, P_VDES
 from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
 from skatelib.pipeline.quadruped.system import SkateSystem
 from skatelib.pipeline.quadruped.terms import (
-    I_BOARD_XY,
-    N_PARAMS,
-    NXA,
-    P_RATE,
-    P_TARGET,
-    P_TERMINAL,
-    P_VDES,
     DynamicsDefect,
-    EffortCost,
     FeetOnBoard,
     FinalSpeed,
     FrictionCones,
     Propulsion,
     PushFoot,
     Steering,
-    TerminalSpeedCost,
     TorqueLimits,
-    TrackingCost,
 )
 
 

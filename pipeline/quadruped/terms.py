@@ -1,8 +1,7 @@
-"""Cost (Eq. 16a-d) and constraint terms of the push-off trajectory optimization (Sec. IV-B).
+"""Constraint terms of the push-off trajectory optimization (Sec. IV-B); the costs are in
+:mod:`skatelib.pipeline.quadruped.costs`, the variable bounds in :mod:`~skatelib.pipeline.quadruped.bounds`.
 
-The transcription's state is the 28 channels plus the board position (board_x, board_y) [m],
-integrated from the board velocity, so that feet on the deck can be held to deck points
-(the position form of Eq. 15) without drift.
+The knot vector's layout and the stage parameters are in :mod:`skatelib.pipeline.quadruped.knots`.
 """
 
 from __future__ import annotations
@@ -18,88 +17,18 @@ from skatelib.library.channels import (
     NX,
     S_BOARD_V,
     S_OMEGA,
-    S_POS,
-    S_Q,
     S_RPY,
     S_VEL,
     SWING,
-    U_F,
-    U_QD,
 )
 from skatelib.pipeline.ocp.terms import Stage, fixed
-from skatelib.pipeline.quadruped.config import StanceConfig, WeightsConfig
+from skatelib.pipeline.quadruped.config import StanceConfig
 from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
+from skatelib.pipeline.quadruped.knots import NXA, P_TARGET, board_origin, forward_speed
 from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import SkateSystem
 
-NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
-I_BOARD_XY = slice(NX, NX + 2)
 INF = np.inf
-
-# Stage parameters: desired board speed at knot k, terminal flag, rate flag, target speed.
-P_VDES, P_TERMINAL, P_RATE, P_TARGET = range(4)
-N_PARAMS = 4
-
-
-def board_origin(system: SkateSystem, x: Any) -> Any:
-    return ca.vertcat(x[I_BOARD_XY], system.board.deck_height_m)
-
-
-def forward_speed(x: Any) -> Any:
-    yaw = x[S_RPY][2]
-    return ca.cos(yaw) * x[S_BOARD_V][0] + ca.sin(yaw) * x[S_BOARD_V][1]
-
-
-@dataclass(frozen=True)
-class TrackingCost:
-    """Eq. (16a-b): board speed and roll, trunk pose and velocity relative to the board, joints."""
-
-    system: SkateSystem
-    w: WeightsConfig
-    com_rel0: np.ndarray  # centre of mass relative to the board origin at rest [m]
-    q_nominal: np.ndarray
-    name: str = "tracking"
-
-    def cost(self, s: Stage) -> Any:
-        x, w = s.x, self.w
-        board_v = ca.vertcat(x[S_BOARD_V], 0)
-        e_pos = x[S_POS] - board_origin(self.system, x) - ca.DM(self.com_rel0)
-        terms = (
-            w.board_velocity * (forward_speed(x) - s.p[P_VDES]) ** 2
-            + w.board_roll * x[I_BOARD_ROLL] ** 2
-            + w.base_position * ca.sumsqr(e_pos)
-            + w.base_orientation * ca.sumsqr(x[S_RPY])
-            + w.base_velocity * ca.sumsqr(x[S_VEL] - board_v)
-            + w.base_angular_velocity * ca.sumsqr(x[S_OMEGA])
-            + w.joint_position * ca.sumsqr(x[S_Q] - ca.DM(self.q_nominal))
-        )
-        return s.dt * terms
-
-
-@dataclass(frozen=True)
-class EffortCost:
-    """Eq. (16c-d): forces and joint velocities, and their changes between knots."""
-
-    w: WeightsConfig
-    name: str = "effort"
-
-    def cost(self, s: Stage) -> Any:
-        w = self.w
-        effort = w.force * ca.sumsqr(s.u[U_F]) + w.joint_velocity * ca.sumsqr(s.u[U_QD])
-        rate = w.force_rate * ca.sumsqr(s.u_next[U_F] - s.u[U_F]) + w.joint_velocity_rate * ca.sumsqr(
-            s.u_next[U_QD] - s.u[U_QD])
-        return s.dt * effort + s.p[P_RATE] * rate
-
-
-@dataclass(frozen=True)
-class TerminalSpeedCost:
-    """Final board speed error, added on the last stage."""
-
-    w: WeightsConfig
-    name: str = "terminal_speed"
-
-    def cost(self, s: Stage) -> Any:
-        return s.p[P_TERMINAL] * self.w.terminal_velocity * (forward_speed(s.x_next) - s.p[P_TARGET]) ** 2
 
 
 @dataclass(frozen=True)
@@ -141,9 +70,11 @@ class FeetOnBoard:
 class PushFoot:
     """The pushing foot: put on the ground during stance, lifted and clear of the deck in swing.
 
-    Rows: foot displacement over the interval (3), foot height at k+1 (1), lateral distance of
-    the foot from the deck centre line at k+1 (1).
+    Rows: foot displacement over the interval (``MOVE``), foot height at k+1 (``HEIGHT``), lateral
+    distance of the foot from the deck centre line at k+1 (``LATERAL``).
     """
+
+    MOVE, HEIGHT, LATERAL = slice(0, 3), 3, 4
 
     system: SkateSystem
     schedule: KnotSchedule
@@ -173,14 +104,14 @@ class PushFoot:
             lift[k0:k1 + 1] = np.maximum(lift[k0:k1 + 1], self.stance.swing_height_m * np.sin(np.pi * s))
         for k in range(n):
             if contact[k] == GROUND:
-                lo[k, 0:3] = hi[k, 0:3] = 0.0  # no slip on the ground
+                lo[k, self.MOVE] = hi[k, self.MOVE] = 0.0  # no slip on the ground
             if contact[k + 1] == GROUND and contact[k] != GROUND:
-                lo[k, 3] = hi[k, 3] = r  # touchdown
+                lo[k, self.HEIGHT] = hi[k, self.HEIGHT] = r  # touchdown
             elif contact[k + 1] != GROUND and contact[k] != GROUND:
-                lo[k, 3] = r + lift[k + 1]
-        lo[:, 4] = self.system.board.deck_width_m / 2 + r + self.stance.push_clearance_m
+                lo[k, self.HEIGHT] = r + lift[k + 1]
+        lo[:, self.LATERAL] = self.system.board.deck_width_m / 2 + r + self.stance.push_clearance_m
         if contact[n] != GROUND:
-            lo[n - 1, 3] = max(lo[n - 1, 3], r + self.end_height_m)
+            lo[n - 1, self.HEIGHT] = max(lo[n - 1, self.HEIGHT], r + self.end_height_m)
         return lo, hi
 
 
@@ -290,6 +221,8 @@ class FinalSpeed:
     of the target (stage parameter ``P_TARGET``), and the COM's lateral speed relative to the
     board within ``lateral_tol_mps``: robot and board ride on together at the label speed."""
 
+    SPEEDS, LATERAL = slice(0, 2), 2
+
     rel_tol: float
     lateral_tol_mps: float
     name: str = "final_speed"
@@ -303,6 +236,6 @@ class FinalSpeed:
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = np.full((n, 3), -INF), np.full((n, 3), INF)
-        lo[-1, :2], hi[-1, :2] = -self.rel_tol, self.rel_tol
-        lo[-1, 2], hi[-1, 2] = -self.lateral_tol_mps, self.lateral_tol_mps
+        lo[-1, self.SPEEDS], hi[-1, self.SPEEDS] = -self.rel_tol, self.rel_tol
+        lo[-1, self.LATERAL], hi[-1, self.LATERAL] = -self.lateral_tol_mps, self.lateral_tol_mps
         return lo, hi

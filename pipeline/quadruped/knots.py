@@ -1,0 +1,38 @@
+"""The push-off NLP's knot vector and stage parameters.
+
+A knot holds the transcription state, the 28 channels of :mod:`skatelib.library.channels` plus the
+board position (board_x, board_y) [m] integrated from the board velocity (so that feet on the
+deck can be held to deck points, the position form of Eq. 15, without drift), then the 24 controls.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+from skatelib.library.channels import CONTROL_NAMES, NX, S_BOARD_V, S_RPY, STATE_NAMES
+from skatelib.pipeline.quadruped.system import SkateSystem
+
+NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
+I_BOARD_XY = slice(NX, NX + 2)
+KNOT_NAMES = (*STATE_NAMES, "board_x", "board_y", *CONTROL_NAMES)
+
+# Stage parameters: desired board speed at knot k, terminal flag, rate flag, target speed.
+P_VDES, P_TERMINAL, P_RATE, P_TARGET = range(4)
+N_PARAMS = 4
+
+
+def columns(first: str, last: str | None = None) -> slice:
+    """Knot-vector columns of the channels ``first`` .. ``last`` (inclusive, in channel order)."""
+    return slice(KNOT_NAMES.index(first), KNOT_NAMES.index(last or first) + 1)
+
+
+def board_origin(system: SkateSystem, x: Any) -> Any:
+    """The board frame's origin in the world (on the deck's top) from a transcription state [m]."""
+    return ca.vertcat(x[I_BOARD_XY], system.board.deck_height_m)
+
+
+def forward_speed(x: Any) -> Any:
+    """The board's speed along its heading (the robot's yaw) [m/s], symbolic."""
+    yaw = x[S_RPY][2]
+    return ca.cos(yaw) * x[S_BOARD_V][0] + ca.sin(yaw) * x[S_BOARD_V][1]

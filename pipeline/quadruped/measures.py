@@ -1,0 +1,91 @@
+"""The measures of :mod:`skatelib.pipeline.quadruped.verify`, each on the stored arrays of one
+trajectory: how it ends, the fine re-integration's defect, foot slip on the ground and on the deck,
+the swinging foot's clearance and the joint torques. None uses the transcription."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_RPY, S_VEL, SWING
+from skatelib.library.margins import board_rotations, momentum_speed
+from skatelib.pipeline.quadruped.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
+from skatelib.pipeline.quadruped.system import SkateSystem
+
+
+def riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, float]:
+    """How the entry ends: the speeds robot and board ride on at, by momentum (no model code)."""
+    heading = np.array([np.cos(x[5]), np.sin(x[5])])
+    v_robot, v_board = x[S_VEL][:2], x[S_BOARD_V]
+    v_mom = float(momentum_speed(x, system.srb.mass_kg, system.board.mass_kg))
+    return {
+        "final_board_speed_mps": float(heading @ v_board), "final_robot_speed_mps": float(heading @ v_robot),
+        "momentum_speed_mps": v_mom, "momentum_speed_error": abs(v_mom - label) / label,
+        "final_relative_speed_mps": float(np.linalg.norm(v_robot - v_board)),
+        "final_vertical_speed_mps": float(abs(x[S_VEL][2])),
+        "final_angular_speed_radps": float(np.abs(x[S_OMEGA]).max()),
+    }
+
+
+def defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
+    """Largest mismatch between each knot and a fine RK4 re-integration from the one before."""
+    f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
+    cr = ca.DM(system.stance.cr)
+    x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
+    fine: dict[float, ca.Function] = {}
+    defect = 0.0
+    for k in range(len(t) - 1):
+        h = round(float(t[k + 1] - t[k]), 12)
+        if h not in fine:
+            fine[h] = ca.Function("fine", [x_sym, u_sym], [rk4_step(f, x_sym, u_sym, cr, h, substeps)])
+        nxt = np.asarray(fine[h](state[k], control[k])).reshape(-1)
+        defect = max(defect, float(np.abs(nxt - state[k + 1]).max()))
+    return defect
+
+
+def ground_slip(contact: np.ndarray, foot: np.ndarray) -> float:
+    """Largest distance the push foot moves from where it touched down, per ground run."""
+    slip, k = 0.0, 0
+    while k < len(contact) - 1:
+        if contact[k] == GROUND:
+            k0 = k
+            while k < len(contact) - 1 and contact[k] == GROUND:
+                k += 1
+            run = foot[k0:k + 1]
+            slip = max(slip, float(np.linalg.norm(run - run[0], axis=1).max()))
+        else:
+            k += 1
+    return slip
+
+
+def board_slip(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray,
+                board_pos: np.ndarray) -> float:
+    """Largest distance of a foot on the deck from its deck point (Eq. 8) [m]."""
+    R_B = board_rotations(state[:, S_RPY][:, 2], state[:, I_BOARD_ROLL])
+    cr = np.vstack([system.stance.cr, np.zeros(4)])  # (3, 4) deck points in the board frame
+    points = board_pos[:, None, :3] + np.einsum("kij,jl->kli", R_B, cr)
+    dist = np.linalg.norm(foot_pos - points, axis=-1)
+    return float(dist[contact == BOARD].max(initial=0.0))
+
+
+def swing_clearance(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray,
+                     board_pos: np.ndarray) -> float:
+    """Lowest point of the swinging push foot above the ground, and above the deck top wherever it
+    is over the deck's footprint [m]."""
+    p = system.push_index
+    k = np.flatnonzero(contact[:, p] == SWING)
+    if k.size == 0:
+        return float("inf")
+    bottom = foot_pos[k, p]
+    R_B = board_rotations(state[k, S_RPY][:, 2], state[k, I_BOARD_ROLL])
+    local = np.einsum("kji,kj->ki", R_B, bottom - board_pos[k, :3])
+    b = system.board
+    over = (np.abs(local[:, 0]) <= b.deck_length_m / 2) & (np.abs(local[:, 1]) <= b.deck_width_m / 2)
+    above_deck = np.where(over, local[:, 2], np.inf)
+    return float(np.minimum(bottom[:, 2], above_deck).min())
+
+
+def max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> float:
+    x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
+    tau = ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
+    many = tau.map(len(control))
+    return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())
