@@ -19,15 +19,8 @@ from typing import Any
 
 import numpy as np
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.step import (
-    StepModel,
-    StepResult,
-    StepSpec,
-    Support,
-    convex_hull,
-    rectangle,
-    solve_sequence,
-)
+from skatelib.pipeline.humanoid.geometry import Support, convex_hull, rectangle
+from skatelib.pipeline.humanoid.step import StepModel, StepResult, StepSpec, solve_sequence
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 
 STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")

@@ -27,28 +27,11 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.pipeline.ocp.gpm import GaussPseudospectral, collocation_defects, lagrange_basis, terminal_state
+from skatelib.pipeline.humanoid.constraints import Rows, StepSymbols, node_rows, terminal_rows
+from skatelib.pipeline.humanoid.geometry import MAX_EDGES, Support, edges
+from skatelib.pipeline.ocp.gpm import GaussPseudospectral, collocation_defects, terminal_state
 
-MAX_EDGES = 8
 TERMINALS = ("walk", "skate", "dcm_on_board", "none", "stop", "stop_on_board")
-
-
-@dataclass(frozen=True)
-class Support:
-    """Contact during part of a step.
-
-    Attributes:
-        p0: Representative contact point at the segment's start [m] (world).
-        velocity: Its constant velocity [m/s] (zero on the ground, the board's on a skateboard).
-        polygon: (M, 2) support polygon vertices relative to P0, counter-clockwise [m].
-        mu_x, mu_y: Static friction coefficients along x and y (0 along a skating direction).
-    """
-
-    p0: tuple[float, float, float]
-    velocity: tuple[float, float, float]
-    polygon: tuple[tuple[float, float], ...]
-    mu_x: float
-    mu_y: float
 
 
 @dataclass(frozen=True)
@@ -96,47 +79,6 @@ class StepResult:
     supports: tuple[Support, ...] = field(repr=False, default=())
 
 
-def _edges(polygon: tuple[tuple[float, float], ...]) -> np.ndarray:
-    """Rows (a, b, c) with a x + b y + c >= 0 inside a counter-clockwise polygon; padded with the
-    trivial (0, 0, 1) so every node has MAX_EDGES rows."""
-    v = np.asarray(polygon, dtype=float)
-    rows = []
-    for i in range(len(v)):
-        (x0, y0), (x1, y1) = v[i], v[(i + 1) % len(v)]
-        ex, ey = x1 - x0, y1 - y0
-        rows.append((-ey, ex, ey * x0 - ex * y0))
-    if len(rows) > MAX_EDGES:
-        raise ValueError(f"support polygons have at most {MAX_EDGES} edges")
-    rows += [(0.0, 0.0, 1.0)] * (MAX_EDGES - len(rows))
-    return np.asarray(rows)
-
-
-def rectangle(cx: float, cy: float, length: float, width: float) -> tuple[tuple[float, float], ...]:
-    """Counter-clockwise rectangle centred at (cx, cy)."""
-    hx, hy = length / 2, width / 2
-    return ((cx - hx, cy - hy), (cx + hx, cy - hy), (cx + hx, cy + hy), (cx - hx, cy + hy))
-
-
-def convex_hull(points: np.ndarray) -> tuple[tuple[float, float], ...]:
-    """Counter-clockwise convex hull (monotone chain)."""
-    pts = sorted({(round(float(x), 12), round(float(y), 12)) for x, y in points})
-
-    def cross(o: Any, a: Any, b: Any) -> float:
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower: list[Any] = []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    upper: list[Any] = []
-    for p in reversed(pts):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return tuple(lower[:-1] + upper[:-1])
-
-
 _SOLVERS: dict[str, tuple[str, dict[str, Any]]] = {
     "ipopt": ("ipopt", {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-9,
                         "ipopt.max_iter": 200}),
@@ -145,95 +87,6 @@ _SOLVERS: dict[str, tuple[str, dict[str, Any]]] = {
                           "qpsol_options": {"print_iter": False, "print_header": False, "error_on_fail": False},
                           "tol_pr": 1e-9, "tol_du": 1e-9, "max_iter": 100, "error_on_fail": False}),
 }
-
-
-@dataclass(frozen=True)
-class _Symbols:
-    """The step NLP's variables (X, U, Xf) and parameters, in the order of ``params()``."""
-
-    X: Any
-    U: Any
-    Xf: Any
-    x0: Any
-    T: Any
-    P0: Any
-    E: Any
-    MU: Any
-    p_step: Any
-    v_step: Any
-    b: Any
-    mu_next: Any
-    rmin: Any
-    rmax: Any
-    g: Any
-
-    @classmethod
-    def make(cls, N: int) -> _Symbols:
-        b, mu_next, rmin, rmax, g = (ca.SX.sym(n) for n in ("b", "mu_next", "rmin", "rmax", "g"))
-        return cls(ca.SX.sym("X", N + 1, 6), ca.SX.sym("U", N, 3), ca.SX.sym("Xf", 1, 6), ca.SX.sym("x0", 1, 6),
-                   ca.SX.sym("T"), ca.SX.sym("P0", N, 3), ca.SX.sym("E", N, 3 * MAX_EDGES), ca.SX.sym("MU", N, 2),
-                   ca.SX.sym("p_step", 1, 3), ca.SX.sym("v_step", 1, 3), b, mu_next, rmin, rmax, g)
-
-    def params(self) -> list[Any]:
-        return [ca.vec(self.x0), self.T, ca.vec(self.P0), ca.vec(self.E), ca.vec(self.MU), ca.vec(self.p_step),
-                ca.vec(self.v_step), self.b, self.mu_next, self.rmin, self.rmax, self.g]
-
-
-class _Rows:
-    """Inequality rows with their bounds, in the order added."""
-
-    def __init__(self) -> None:
-        self.exprs: list[Any] = []
-        self.lo: list[np.ndarray] = []
-        self.hi: list[np.ndarray] = []
-
-    def add(self, expr: Any, lb: float, ub: float) -> None:
-        self.exprs.append(expr)
-        self.lo.append(np.full(expr.numel(), lb))
-        self.hi.append(np.full(expr.numel(), ub))
-
-
-def _node_rows(s: _Symbols, k: int, rows: _Rows) -> None:
-    """Eq. (15)-(21) at LG node k: unilateral, ZMP in the support polygon, friction, leg reach."""
-    r = s.X[k + 1, 0:3].T - s.P0[k, :].T
-    F = s.U[k, :].T + ca.vertcat(0, 0, s.g)  # Eq. (15)
-    Nm = ca.cross(r, F)  # Eq. (16)
-    rows.add(F[2], 0.0, ca.inf)  # Eq. (17)
-    for e in range(MAX_EDGES):
-        a_, b_, c_ = s.E[k, 3 * e], s.E[k, 3 * e + 1], s.E[k, 3 * e + 2]
-        rows.add(-a_ * Nm[1] + b_ * Nm[0] + c_ * F[2], 0.0, ca.inf)  # Eq. (18)
-    for j in range(2):  # Eq. (19), (20): |F_j| <= mu_j F_z
-        rows.add(s.MU[k, j] * F[2] - F[j], 0.0, ca.inf)
-        rows.add(s.MU[k, j] * F[2] + F[j], 0.0, ca.inf)
-    rows.add(ca.sumsqr(r) - s.rmin**2, 0.0, ca.inf)  # Eq. (21)
-    rows.add(s.rmax**2 - ca.sumsqr(r), 0.0, ca.inf)
-
-
-def _terminal_rows(s: _Symbols, terminal: str, gpm: GaussPseudospectral, rows: _Rows) -> list[Any]:
-    """The terminal conditions of the step's kind: equality rows returned, inequalities added."""
-    Pf, Vf = s.Xf[0, 0:3], s.Xf[0, 3:6]
-    dcm_error = Pf + s.b * (Vf - s.v_step) - s.p_step - ca.horzcat(0, 0, s.b**2 * s.g)  # Eq. (25)-(27)
-    eq: list[Any] = []
-    if terminal in ("walk", "skate"):
-        eq.append(ca.vec(dcm_error))
-    if terminal == "dcm_on_board":
-        # Along a frictionless board x follows from the dynamics: the DCM is placed across it only.
-        eq.append(ca.vec(dcm_error[1:3]))
-    if terminal == "walk":  # Eq. (30) along the walking direction x, relative to the next support
-        rows.add(s.mu_next * Pf[2] - (Pf[0] - s.p_step[0]), 0.0, ca.inf)
-        rows.add(s.mu_next * Pf[2] + (Pf[0] - s.p_step[0]), 0.0, ca.inf)
-    if terminal == "skate":
-        eq.append(Pf[0] - s.p_step[0])  # Eq. (31), sliding direction x
-        eq.append(Vf[2])  # the paper sets the COM's vertical velocity to 0 at the transition
-        u_end = ca.DM(lagrange_basis(gpm.tau, 1.0)) @ s.U  # control interpolant at tau = 1
-        eq.append(u_end[0])  # Eq. (32), see the module docstring
-    if terminal == "stop":
-        eq += [ca.vec(Pf - s.p_step), ca.vec(Vf - s.v_step)]  # Eq. (23), (24)
-    if terminal == "stop_on_board":
-        # On a rolling board nothing pushes along x (no friction there), so x of P_f and V_f
-        # follows from the dynamics; Eq. (23)-(24) are imposed across the board only.
-        eq += [ca.vec(Pf[1:3] - s.p_step[1:3]), ca.vec(Vf[1:3] - s.v_step[1:3])]
-    return eq
 
 
 class StepProblem:
@@ -250,17 +103,17 @@ class StepProblem:
             raise ValueError(f"solver {solver!r}; use 'ipopt' or 'sqp'")
         self.gpm = gpm = GaussPseudospectral(n_nodes)
         N = n_nodes
-        s = _Symbols.make(N)
+        s = StepSymbols.make(N)
         params = s.params()
         self.param_sizes = [int(p.numel()) for p in params]
         F_dyn = ca.horzcat(s.X[1:, 3:6], s.U)  # [V, A] at the nodes
         eq: list[Any] = [ca.vec(collocation_defects(gpm, s.X, F_dyn, 0.0, s.T)),  # Eq. (12)
                          ca.vec(s.Xf - terminal_state(gpm, s.X[0, :], F_dyn, 0.0, s.T)),  # Eq. (6)
                          ca.vec(s.X[0, :] - s.x0)]  # Eq. (22)
-        rows = _Rows()
+        rows = Rows()
         for k in range(N):
-            _node_rows(s, k, rows)
-        eq += _terminal_rows(s, terminal, gpm, rows)
+            node_rows(s, k, rows)
+        eq += terminal_rows(s, terminal, gpm, rows)
         J = s.T / 2 * ca.dot(ca.DM(gpm.weights), ca.sum2(s.U**2))  # Eq. (14)
         geq = ca.vertcat(*eq)
         gin = ca.vertcat(*rows.exprs)
@@ -286,7 +139,7 @@ class StepProblem:
         for k, t in enumerate(t_nodes):
             start, s = [seg for seg in spec.segments if seg[0] <= t][-1]
             P0[k] = np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
-            E[k] = _edges(s.polygon).reshape(-1)
+            E[k] = edges(s.polygon).reshape(-1)
             MU[k] = (s.mu_x, s.mu_y)
             sup.append(s)
         b = np.sqrt(spec.dz_vrp_m / g)
