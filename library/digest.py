@@ -16,6 +16,10 @@ import hashlib
 import re
 import secrets
 from pathlib import Path
+from typing import Any
+
+from skatelib.library import schema
+from skatelib.library.errors import LibraryFormatError
 
 DIGEST_LEN = 64
 _ZEROS = b"0" * DIGEST_LEN
@@ -23,6 +27,7 @@ _HEX64 = re.compile(rb"[0-9a-f]{64}")
 # The attribute value follows its name in the attribute message (name, datatype and dataspace
 # messages, then the 64 bytes); 256 bytes is generous for every HDF5 attribute-message version.
 _NAME_TO_VALUE_MAX = 256
+_USERBLOCK_MAX = 1 << 16  # HDF5 looks for its signature at 0, 512, 1024, ... (a user block before it)
 
 
 def placeholder() -> bytes:
@@ -76,3 +81,54 @@ def seal(path: Path, marker: bytes) -> str:
     raw[pos : pos + DIGEST_LEN] = d.encode()
     path.write_bytes(bytes(raw))
     return d
+
+
+def refuse_damaged(path: Path, raw: bytes) -> str:
+    """Refuse a damaged file before HDF5 parses any of it (see :mod:`skatelib.library.digest`);
+    returns the verified digest."""
+    found, digest = verify_raw(raw, schema.A_CHECKSUM.encode())
+    if digest is not None:
+        return digest
+    field = f"/@{schema.A_CHECKSUM}"
+    if found:
+        raise LibraryFormatError(path, field, "the file does not match its checksum: it is corrupt; rebuild it")
+    if not raw.startswith(schema.HDF5_SIGNATURE) and schema.HDF5_SIGNATURE not in raw[:_USERBLOCK_MAX]:
+        raise LibraryFormatError(path, "/", "not an HDF5 file (truncated, corrupt or of another type); "
+                                            "give a library written by 'skatelib build'")
+    eof = hdf5_end_of_file(raw)
+    if eof is not None and eof > len(raw):
+        raise LibraryFormatError(path, "/", f"truncated: {len(raw)} of its {eof} bytes are there; "
+                                            "copy it again or rebuild it with 'skatelib build'")
+    if schema.FORMAT_NAME.encode() not in raw:
+        raise LibraryFormatError(path, f"/@{schema.A_FORMAT}",
+                                 "not a skatelib motion library (an HDF5 file without its format name)")
+    raise LibraryFormatError(path, field, "checksum attribute missing or damaged: the file is corrupt; rebuild it")
+
+
+def hdf5_end_of_file(raw: bytes) -> int | None:
+    """The file length HDF5's superblock (at offset 0, 8-byte addresses) records, or None."""
+    if not raw.startswith(schema.HDF5_SIGNATURE) or len(raw) < 64:
+        return None
+    version = raw[8]
+    if version in (0, 1):
+        if raw[13] != 8:  # size of offsets
+            return None
+        at = 24 + (4 if version == 1 else 0) + 16  # fixed fields, base and free-space addresses
+    elif version in (2, 3):
+        if raw[9] != 8:
+            return None
+        at = 12 + 16  # fixed fields, base and superblock-extension addresses
+    else:
+        return None
+    return int.from_bytes(raw[at:at + 8], "little")
+
+
+def check_checksum_attribute(path: Path, stored_sum: Any, digest: str | None) -> None:
+    """The checksum attribute HDF5 reads is the one verified on the raw bytes."""
+    if stored_sum is None:
+        raise LibraryFormatError(path, f"/@{schema.A_CHECKSUM}", "required root attribute missing")
+    field = stored_sum if isinstance(stored_sum, bytes) else str(stored_sum).encode()
+    if field.decode(errors="replace") != digest:
+        raise LibraryFormatError(
+            path, f"/@{schema.A_CHECKSUM}", "the file does not match its checksum: it is corrupt; rebuild it"
+        )

@@ -38,3 +38,8 @@ def jsonable(v: Any) -> Any:
     if isinstance(v, bytes):
         return v.decode()
     return v
+
+
+def text(v: Any) -> str:
+    """An attribute's string (h5py hands out bytes or str)."""
+    return v.decode() if isinstance(v, bytes) else str(v)
