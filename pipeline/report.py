@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from typing import Any
 
@@ -66,4 +67,90 @@ def frontier_table(points: list[Any]) -> None:
     for p in points:
         fail = "-" if p.first_failure_mps is None else f"{p.first_failure_mps:.3f}"
         t.add_row(str(p.n_strides), f"{p.fastest_mps:.3f}", fail, escape(p.limit), str(len(p.probes)))
+    console.print(t)
+
+
+def track_table(results: list[Any], perturb: str) -> int:
+    """Print the closed-loop verdicts; returns how many failed."""
+    t = Table(title=escape(f"closed loop, plant: {perturb}"))
+    for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
+                "min f_n", "fric margin", "slips", "tau max", "MPC ms med/max", "verdict"):
+        t.add_column(escape(col), justify="right")
+    for r in results:
+        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
+                  f"{r.delivered_mps:.3f}", f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
+                  f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
+                  f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
+                  f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
+                  "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+    console.print(t)
+    console.print(escape("p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends [m/s]; "
+                         "delivered: the momentum speed 1 s later plus what rolling friction took meanwhile; "
+                         "fric margin: the smallest mu f_n - |f_t| of a commanded foot force in the plant's cone "
+                         "(< 0: clipped, a slip); tau max: the largest stance-joint torque at the "
+                         "inverse-kinematics angles [N m]"))
+    for r in results:
+        if not r.passed:
+            console.print(escape(f"{r.key}: {r.reasons}"))
+    return sum(not r.passed for r in results)
+
+
+def steer_table(results: list[Any], perturb: str) -> int:
+    """Print the steering verdicts; returns how many failed."""
+    t = Table(title=escape(f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}"))
+    for col in ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
+                "unloaded", "slips", "MPC ms", "verdict"):
+        t.add_column(escape(col), justify="right")
+    for r in results:
+        t.add_row(f"{r.speed_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
+                  f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
+                  f"{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+    console.print(t)
+    failed = [r for r in results if not r.passed]
+    for r in failed:
+        console.print(escape(f"{r.speed_mps:.2f} m/s: {r.reasons}"))
+    return len(failed)
+
+
+def jsonable(v: Any) -> Any:
+    """A ``json.dumps`` default: numpy scalars and arrays as JSON numbers and lists."""
+    return v.tolist() if hasattr(v, "tolist") else str(v)
+
+
+PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_commit", "git_dirty",
+              "casadi_version", "ipopt_version", "pinocchio_version")
+
+
+def library_json(lib: Any, path: Any) -> dict[str, Any]:
+    """``skatelib info --json``: provenance, model and one record per entry."""
+    entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
+                "success": e.success, "status": str(e.attrs["status"]), "iterations": int(e.attrs["iterations"]),
+                "knots": len(e.t), "duration_s": e.duration_s, "solve_time_s": e.attrs.get("solve_time_s"),
+                "physics": json.loads(str(e.attrs.get("physics_json", "{}")))} for e in lib]
+    provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
+    return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
+            "model": dict(lib.model), "entries": entries}
+
+
+def library_summary(lib: Any, path: Any) -> None:
+    """``skatelib info``: provenance, the model's parameters and the entry table."""
+    a = lib.attrs
+    console.print(escape(f"{path}: {a.get('name', '?')} ({lib.kind}), format {a['format_version']}, "
+                         f"skatelib {a['skatelib_version']}, created {a['created_utc']}"))
+    console.print(escape(f"git {a['git_commit'][:12]}{' (dirty)' if a['git_dirty'] else ''}; casadi "
+                         f"{a['casadi_version']}, ipopt {a['ipopt_version']}, pinocchio {a['pinocchio_version']}"))
+    console.print(escape(f"content sha256 {lib.content_sha256}"))
+    parameter_table("model", [(str(k), v) for k, v in sorted(lib.model.items()) if not str(k).endswith("_source")],
+                    number="{:.6g}")
+    t = entry_table(count(len(lib), "entry"), ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots",
+                                                "duration [s]", "solve [s]", "momentum [m/s]", "off label",
+                                                "Coulomb margin [N]", "defect"))
+    for e in lib:
+        ph = json.loads(str(e.attrs.get("physics_json", "{}")))
+        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
+               if "momentum_speed_mps" in ph and e.target_velocity_mps else "-")
+        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
+                  escape(str(e.attrs["status"])), str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}",
+                  fmt(e.attrs, "solve_time_s", "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                  off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)

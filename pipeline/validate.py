@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import datetime
+import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from skatelib.library.reader import read_library
 from skatelib.pipeline.kinds import kind_named
@@ -18,3 +21,23 @@ def validate_library(path: Path | str, report: Report) -> int:
     read_library(path, full=True)  # integrity: checksum, and every attribute and view against the index
     lib = MotionLibrary.open(path)
     return int(kind_named(lib.kind, lib.path).validate_entries(lib, report))
+
+
+def closed_loop_verdicts(path: Path, perturb: str, jobs: int) -> list[Any]:
+    """Track every successful entry in closed loop against the plant ``perturb`` ('none': exact) and
+    store each verdict in the library (entry attribute ``closed_loop_json``); returns the verdicts.
+
+    Raises:
+        ImportError: When the controller's packages are missing (names the extra).
+    """
+    from skatelib.library.amend import amend_library
+
+    try:
+        from skatelib.control.track import track_library
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    results = [r for r, _ in track_library(path, None, "" if perturb == "none" else perturb, jobs=jobs)]
+    amend_library(path, {"closed_loop_plant": perturb,
+                         "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
+                  {r.key: {"closed_loop_json": json.dumps(r.as_dict(), sort_keys=True)} for r in results})
+    return results

@@ -1,0 +1,140 @@
+"""The commands that build: ``model``, ``build``, ``frontier``, ``solve``. Each parses its options,
+calls one library function and prints."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import replace
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from skatelib.pipeline.config import field_range
+from skatelib.pipeline.quadruped.config import SweepConfig
+from skatelib.pipeline.report import console, count, frontier_table
+
+
+class Backend(enum.StrEnum):
+    """Where build workers run."""
+
+    loky = "loky"
+    dask = "dask"
+
+
+VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, defined with the config
+
+ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
+
+
+def model(config: ConfigArg = None) -> None:
+    """Print the robot and board model of a config: SRB mass and inertia from the URDF, board
+    figures; for a humanoid config, its point-mass model and the LIP/DCM time constant."""
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import kind_of
+
+    cfg = load_config(config)
+    kind_of(cfg).print_model(cfg)
+
+
+OutOpt = Annotated[Path | None, typer.Option(
+    "-o", "--out", help="Library file to write (.h5).", show_default="out/<config's meta.name>.h5")]
+
+
+def build(
+    config: ConfigArg = None,
+    out: OutOpt = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
+    backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
+                       ] = Backend.loky,
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, tcp://HOST:PORT.")] = None,
+    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
+    allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
+    cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
+    frontier: Annotated[bool, typer.Option(
+        "--frontier", help="Also search the reachable-speed frontier of every stride count and store it.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite an output file that is not a skatelib library.")
+                     ] = False,
+) -> None:
+    """Build a motion library: sweep target speeds x stride counts through the push-off TO
+    (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
+    from skatelib.pipeline.build import default_output
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import BuildOptions, kind_of
+    from skatelib.pipeline.preflight import check_output
+
+    cfg = load_config(config)
+    target = out or default_output(cfg)
+    check_output(target, [cfg.path], force)
+    run = kind_of(cfg).run_build(cfg, target, BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier))
+    if run.failed and not allow_failures:
+        console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
+                      "rerun with --allow-failures to accept")
+        raise typer.Exit(1)
+
+
+def frontier(
+    config: ConfigArg = None,
+    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", help="Stride counts (repeatable); "
+                                                      "default: the config's sweep.")] = None,
+    start: Annotated[float, typer.Option(min=0.05, max=3.0, help="First speed tried [m/s].")] = 0.5,
+    step: Annotated[float, typer.Option(min=0.01, max=1.0, help="Climbing step [m/s].")] = 0.25,
+    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, help="Bisection resolution [m/s].")] = 0.02,
+    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, help="Highest speed tried [m/s].")] = 3.0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes.")] = 2,
+    out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
+) -> None:
+    """Find, per stride count, the fastest label that converges and passes the physics checks
+    (warm-started climb, then bisection)."""
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
+
+    cfg = load_config(config, QuadrupedConfig)
+    search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
+    points = find_frontier(cfg, strides or cfg.sweep.strides, search, jobs)
+    frontier_table(points)
+    if out is not None:
+        from skatelib.library.atomic import atomic_path
+
+        with atomic_path(out) as tmp:
+            tmp.write_text(frontier_json(points, search))
+        console.print(f"wrote {escape(str(out))}")
+
+
+def solve(
+    velocity: Annotated[float, typer.Option("--velocity", "-V", min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
+                                            help="Target board speed, m/s (the range of sweep.velocities_mps).")],
+    strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
+    out: Annotated[Path | None, typer.Option(
+        "-o", "--out", help="One-entry library to write (.h5).",
+        show_default="out/<config's meta.name>-v<velocity>_s<strides>.h5")] = None,
+    config: ConfigArg = None,
+    config_option: Annotated[Path | None, typer.Option("--config", help="The same, as an option.")] = None,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
+) -> None:
+    """Solve one push-off and write it as a one-entry motion library."""
+    from skatelib.pipeline.build import build_library
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import BuildOptions
+    from skatelib.pipeline.preflight import check_output
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
+
+    if config is not None and config_option is not None and config != config_option:
+        raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
+    cfg = load_config(config or config_option, QuadrupedConfig)
+    from skatelib.library.schema import entry_key
+
+    out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
+    check_output(out, [cfg.path])
+    cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
+    report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
+    from skatelib.pipeline.quadruped.kind import summary
+
+    summary(report.outcomes)
+    console.print(f"wrote {escape(str(report.path))}")
+    if report.failed:
+        raise typer.Exit(1)
+
+
+COMMANDS = (model, build, frontier, solve)

@@ -1,0 +1,207 @@
+"""The commands that read a library: ``info``, ``validate``, ``inspect``, ``plot``, ``track``. Each
+parses its options, calls one library function and prints."""
+
+from __future__ import annotations
+
+import enum
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from skatelib.pipeline.report import (
+    console,
+    count,
+    jsonable,
+    library_json,
+    library_summary,
+    steer_table,
+    track_table,
+)
+
+LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
+
+
+class Maneuver(enum.StrEnum):
+    entries = "entries"
+    steer = "steer"
+
+
+class FigureFormat(enum.StrEnum):
+    png = "png"
+    svg = "svg"
+
+
+class QpSolver(enum.StrEnum):
+    """The MPC's QP solvers (``skatelib.control.mpc.SOLVERS``)."""
+
+    daqp = "daqp"
+    proxqp = "proxqp"
+    osqp = "osqp"
+
+
+def info(
+    library: LibArg,
+    as_json: Annotated[bool, typer.Option("--json", help="Print it as one JSON document instead.")] = False,
+) -> None:
+    """Summarize a motion library: provenance, model and entries."""
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(library)  # verifies the checksum first
+    if as_json:
+        print(json.dumps(library_json(lib, library), indent=1, default=jsonable))
+    else:
+        library_summary(lib, library)
+
+
+PerturbOpt = Annotated[str, typer.Option(
+    help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
+         "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")]
+DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
+
+
+def validate(
+    library: LibArg,
+    closed_loop: Annotated[bool, typer.Option(
+        "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
+                              "verdict in the library (entry attribute closed_loop_json).")] = False,
+    perturb: PerturbOpt = DEFAULT_PERTURB,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries tracked in parallel.")] = 2,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
+) -> None:
+    """Re-check a library's integrity (checksum, fields) and every entry's physics."""
+    from skatelib.pipeline.validate import validate_library
+
+    verdicts: list[dict[str, Any]] = []
+
+    def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
+        verdicts.append({"key": key, "status": status, "message": message, **figures})
+        if not as_json:
+            console.print(escape(f"{key}: {message}"))
+
+    problems = validate_library(library, report)
+    if not as_json:
+        console.print(f"[bold red]{count(problems, 'entry')} failed validation[/]" if problems
+                      else "[green]all entries valid[/]")
+    failed = 0
+    results: list[Any] = []
+    if closed_loop:
+        from skatelib.pipeline.validate import closed_loop_verdicts
+
+        results = closed_loop_verdicts(library, perturb, jobs)
+        failed = sum(not r.passed for r in results) if as_json else track_table(results, perturb)
+        if not as_json:
+            console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    if as_json:
+        doc = {"library": str(library), "valid": not problems, "entries": verdicts}
+        if closed_loop:
+            doc["closed_loop"] = {"plant": perturb, "failed": failed, "entries": [r.as_dict() for r in results]}
+        print(json.dumps(doc, indent=1, default=jsonable))
+    if problems or failed:
+        raise typer.Exit(1)
+
+
+def inspect(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all by default.")] = None,
+    save: Annotated[Path | None, typer.Option(help="Write a Rerun recording (.rrd).")] = None,
+    spawn: Annotated[bool, typer.Option(help="Open a Rerun viewer.")] = False,
+    overlay: Annotated[bool, typer.Option(help="Overlay entries instead of side by side.")] = False,
+    force: Annotated[bool, typer.Option(help="Overwrite --save even if it is not a Rerun recording.")] = False,
+) -> None:
+    """Look at trajectories in Rerun: robot, board, forces and plots, with a default layout."""
+    from skatelib.pipeline.preflight import check_output
+
+    try:
+        from skatelib.pipeline.inspect_rerun import inspect_library
+    except ImportError as e:
+        raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
+    if save is None and not spawn:
+        save = library.with_suffix(".rrd")
+    if save is not None:
+        check_output(save, [library], force, what="recording")
+    roots = inspect_library(library, entry, save, spawn, overlay)
+    where = escape(f" to {save}; open it with: rerun {save}") if save else ""
+    console.print(f"logged {count(len(roots), 'entry')}{where}")
+
+
+def plot(
+    library: LibArg,
+    out: Annotated[Path, typer.Option("-o", "--out", help="Folder for the figures.")] = Path("out/figures"),
+    frontier_file: Annotated[Path | None, typer.Option(
+        "--frontier", help="A `skatelib frontier -o` file to draw (default: the library's stored frontier, if any).")
+                             ] = None,
+    fmt: Annotated[list[FigureFormat] | None, typer.Option(
+        "--format", "-f", help="png and/or svg (repeatable); both by default.")] = None,
+) -> None:
+    """Figures of a quadruped library (matplotlib): board and momentum speed over time (the paper's
+    Fig. 6), deck roll, the push foot's forces against the friction cone, the reachable-speed
+    frontier."""
+    from skatelib.pipeline.plots import FORMATS, write_figures
+
+    formats = tuple(f.value for f in fmt) if fmt else FORMATS
+    written = write_figures(library, out, frontier_file, formats)
+    for p in written:
+        console.print(escape(str(p)))
+    if frontier_file is None and not any(p.stem == "frontier" for p in written):
+        console.print("no frontier in the library (build --frontier, or pass --frontier F.json "
+                      "from skatelib frontier -o)")
+
+
+def track(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
+                     ] = None,
+    perturb: PerturbOpt = DEFAULT_PERTURB,
+    solver: Annotated[QpSolver, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
+                      ] = QpSolver.daqp,
+    mpc_mu: Annotated[float | None, typer.Option(
+        help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
+             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+    save: Annotated[Path | None, typer.Option(
+        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run.")] = None,
+    maneuver: Annotated[Maneuver, typer.Option(
+        help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
+             "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
+) -> None:
+    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a nonlinear plant
+    with model error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails)."""
+    try:
+        from skatelib.control.closed_loop import TrackSettings
+        from skatelib.control.mpc import MpcConfig
+        from skatelib.control.track import steer_library, track_library
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    plant_error = "" if perturb == "none" else perturb
+    mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
+    if maneuver is Maneuver.steer:
+        if steer_table(steer_library(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed), jobs), perturb):
+            raise typer.Exit(1)
+        return
+    if save is not None:
+        from skatelib.pipeline.preflight import check_output
+
+        try:  # before the runs, not after them
+            from skatelib.pipeline.inspect_rerun import save_closed_loop
+        except ImportError as e:
+            raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
+        check_output(save, [library], what="recording")
+    runs = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs, keep_runs=save is not None)
+    results = [r for r, _ in runs]
+    if save is not None:
+        from skatelib.runtime import MotionLibrary
+
+        save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
+        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
+    failed = track_table(results, perturb)
+    if failed:
+        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
+COMMANDS = (info, validate, inspect, plot, track)
