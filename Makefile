@@ -64,6 +64,7 @@ test: venv
 lint: venv
 	$(BIN)/ruff check pipeline library runtime control tests benchmarks
 	$(BIN)/mypy pipeline library runtime control benchmarks
+	$(BIN)/python tools/check_layout.py
 
 bench: venv
 	$(BIN)/python -m benchmarks.run

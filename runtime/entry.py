@@ -10,15 +10,13 @@ from __future__ import annotations
 
 import bisect
 from math import isfinite
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from skatelib.library import schema
 from skatelib.library.errors import SkatelibError
+from skatelib.runtime.blend import BlendCheck
 from skatelib.runtime.references import Channels, Sample, Window
-
-if TYPE_CHECKING:
-    from skatelib.runtime.blend import BlendCheck
 
 
 class EntryNotFound(SkatelibError):

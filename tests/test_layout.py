@@ -1,0 +1,39 @@
+"""The layout rules (tools/check_layout.py, run by make lint) hold, and the checker finds a breach."""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _checker():
+    spec = importlib.util.spec_from_file_location("check_layout", ROOT / "tools" / "check_layout.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_repository_keeps_its_layout():
+    assert _checker().problems(ROOT) == []
+
+
+def test_checker_reports_long_modules_long_functions_and_wrong_imports(tmp_path):
+    """A doctored tree: a 300-line runtime module with a 70-line function, the runtime importing
+    the pipeline, the engine importing a robot; each is named with its file."""
+    check = _checker()
+    for top in ("pipeline", "library", "runtime", "control"):
+        shutil.copytree(ROOT / top, tmp_path / top, ignore=shutil.ignore_patterns("__pycache__", "cpp"))
+    body = "\n".join(f"    x{i} = {i}" for i in range(70))
+    (tmp_path / "runtime" / "long.py").write_text(
+        "import skatelib.pipeline.build\n\n\ndef f():\n" + body + "\n" + "# pad\n" * 230)
+    (tmp_path / "pipeline" / "ocp" / "bad.py").write_text("from skatelib.pipeline.quadruped import robot\n")
+    found = check.problems(tmp_path)
+    assert any(f.startswith("runtime/long.py: 304 lines (at most 250)") for f in found)
+    assert any(f.startswith("runtime/long.py:4: function f has 71 lines") for f in found)
+    assert any(f.startswith("runtime/long.py:1: imports skatelib.pipeline.build") for f in found)
+    assert any(f.startswith("pipeline/ocp/bad.py:1: imports skatelib.pipeline.quadruped") for f in found)
+    assert len(found) == 4, found

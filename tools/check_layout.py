@@ -1,0 +1,79 @@
+"""Hold the repository to its layout rules (README "Layout"); run by ``make lint``.
+
+* Modules of ``pipeline/``, ``library/`` and ``runtime/`` at most 250 lines, functions at most 60.
+* Imports follow the data path: ``library/`` imports neither ``pipeline`` nor ``runtime`` nor
+  ``control``; ``runtime/`` not ``pipeline`` or ``control``; ``control/`` not ``pipeline``;
+  ``pipeline/ocp/`` (the engine) no robot subpackage.
+
+Usage: ``python tools/check_layout.py [ROOT]``; exit 1 listing every breach.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+MAX_MODULE_LINES = 250
+MAX_FUNCTION_LINES = 60
+SIZED = ("pipeline", "library", "runtime")
+FORBIDDEN = {  # folder -> imported packages it must not use
+    "library": ("skatelib.pipeline", "skatelib.runtime", "skatelib.control"),
+    "runtime": ("skatelib.pipeline", "skatelib.control"),
+    "control": ("skatelib.pipeline",),
+    "pipeline/ocp": ("skatelib.pipeline.quadruped", "skatelib.pipeline.humanoid"),
+}
+
+
+def _imports(tree: ast.AST) -> list[tuple[int, str]]:
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            out.append((node.lineno, node.module))
+    return out
+
+
+def _sizes(path: Path, rel: str, tree: ast.AST, n_lines: int) -> list[str]:
+    found = []
+    if n_lines > MAX_MODULE_LINES:
+        found.append(f"{rel}: {n_lines} lines (at most {MAX_MODULE_LINES}); split it by concept")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            length = (node.end_lineno or node.lineno) - node.lineno + 1
+            if length > MAX_FUNCTION_LINES:
+                found.append(f"{rel}:{node.lineno}: function {node.name} has {length} lines "
+                             f"(at most {MAX_FUNCTION_LINES})")
+    return found
+
+
+def problems(root: Path) -> list[str]:
+    """Every breach of the layout rules under ``root`` (a checkout), one line each."""
+    found: list[str] = []
+    paths = [p for top in ("pipeline", "library", "runtime", "control") for p in sorted((root / top).rglob("*.py"))]
+    for path in paths:
+        rel = path.relative_to(root).as_posix()
+        text = path.read_text()
+        tree = ast.parse(text, filename=rel)
+        if rel.split("/")[0] in SIZED:
+            found += _sizes(path, rel, tree, len(text.splitlines()))
+        for folder, banned in FORBIDDEN.items():
+            if rel.startswith(folder + "/"):
+                found += [f"{rel}:{line}: imports {name} ({folder}/ must not)"
+                          for line, name in _imports(tree) if name.startswith(banned)]
+    return found
+
+
+def main() -> None:
+    root = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[1]
+    found = problems(root)
+    for line in found:
+        print(line)
+    if found:
+        sys.exit(1)
+    print(f"layout ok: modules <= {MAX_MODULE_LINES} lines, functions <= {MAX_FUNCTION_LINES}, imports follow the data path")
+
+
+if __name__ == "__main__":
+    main()
