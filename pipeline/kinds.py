@@ -1,8 +1,8 @@
 """The robot kinds: one row per kind, naming the robot's subpackage.
 
 Every command goes through this table (``load_config``, ``kind_of(config)``,
-``kind_named(lib.kind)``, ``inspect``), so a third robot is a new subpackage with ``config``,
-``kind`` and ``rerun`` modules and one row here; the command line does not change. The ``config``
+``kind_named(lib.kind)``, ``inspect``, ``plot``), so a third robot is a new subpackage with
+``config``, ``kind``, ``rerun`` and ``plots`` modules and one row here; the command line does not change. The ``config``
 module gives ``CONFIG_CLASS``, ``from_toml`` and ``from_json`` (read by ``pipeline/config.py``);
 the ``kind`` module:
 
@@ -12,8 +12,9 @@ the ``kind`` module:
   a summary;
 * ``validate_entries(lib, report) -> int``: the independent checks of every entry (failures);
 
-and a ``rerun`` module beside it (imported by ``inspect`` only): ``PANELS`` (the plots of an
-entry's tab) and ``logger(lib)`` (draws one entry).
+a ``rerun`` module beside it (imported by ``inspect`` only): ``PANELS`` (the plots of an
+entry's tab) and ``logger(lib)`` (draws one entry); and a ``plots`` module (imported by ``plot``
+only): ``figures(lib, plt, frontier_file) -> {stem: figure}``.
 
 The modules are imported when a command needs them: ``skatelib --help`` imports no solver.
 """
@@ -36,7 +37,7 @@ KINDS: dict[str, str] = {
 
 
 def part(name: str, module: str) -> ModuleType:
-    """A module of a known kind's subpackage (``config``, ``kind``, ``rerun``), imported when asked."""
+    """A module of a known kind's subpackage (``config``, ``kind``, ``rerun``, ``plots``), imported when asked."""
     return importlib.import_module(f"{KINDS[name]}.{module}")
 
 

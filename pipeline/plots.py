@@ -1,27 +1,16 @@
-"""Figures of a quadruped motion library with matplotlib (``skatelib plot``): what a paper or a
-review shows, from the file alone.
-
-* ``speeds``: board speed and the momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) over time, one
-  panel per stride count, one colour per label (the paper's Fig. 6);
-* ``deck_roll``: the deck roll over time, the same panels, with the wheel-collision limit;
-* ``push_forces``: per entry, the ground foot's tangential force |f_t| against Coulomb's limit
-  mu f_n (and the planning limit mu_plan f_n) while it pushes;
-* ``frontier``: per stride count, the labels tried by the frontier search (converged and passing
-  the physics checks, or not) and the fastest that passes; from the library's ``frontier_json``
-  (``build --frontier``) or a ``skatelib frontier -o`` file.
+"""Figures of a motion library with matplotlib (``skatelib plot``): what a paper or a review shows,
+from the file alone. Each robot kind draws its own (the ``plots`` module of its subpackage, through
+the kind table: ``figures(lib, plt, frontier_file) -> {stem: figure}``); here the shared parts and
+the writer.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from skatelib.library.atomic import atomic_path
-from skatelib.library.channels import GROUND
-from skatelib.library.errors import SkatelibError
-from skatelib.library.margins import forward_speed, momentum_speed
+from skatelib.pipeline.kinds import kind_named, part
 from skatelib.runtime import Entry, MotionLibrary
 
 FORMATS = ("png", "svg")
@@ -38,120 +27,21 @@ def _pyplot() -> Any:
     return plt
 
 
-def _name(lib: MotionLibrary) -> str:
+def library_name(lib: MotionLibrary) -> str:
     return str(lib.attrs.get("name", lib.path.stem))
 
 
-def _by_strides(lib: MotionLibrary) -> dict[int, list[Entry]]:
+def by_strides(lib: MotionLibrary) -> dict[int, list[Entry]]:
     groups: dict[int, list[Entry]] = {}
     for e in lib:
         groups.setdefault(e.n_strides, []).append(e)
     return dict(sorted(groups.items()))
 
 
-def _panels(plt: Any, n: int, title: str) -> tuple[Any, list[Any]]:
+def panels(plt: Any, n: int, title: str) -> tuple[Any, list[Any]]:
     fig, axes = plt.subplots(n, 1, figsize=(8, 2.6 * n), sharex=True, squeeze=False, layout="constrained")
     fig.suptitle(title)
     return fig, list(axes[:, 0])
-
-
-def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
-    """Board speed (solid) and momentum speed (dashed) against time, per stride count."""
-    m = lib.model
-    groups = _by_strides(lib)
-    fig, axes = _panels(plt, len(groups), f"{_name(lib)}: board speed (solid) and momentum speed (dashed)")
-    cmap = plt.get_cmap("viridis")
-    speeds = sorted({e.target_velocity_mps for e in lib})
-    for ax, (n, entries) in zip(axes, groups.items(), strict=True):
-        for e in entries:
-            c = cmap(speeds.index(e.target_velocity_mps) / max(1, len(speeds) - 1))
-            ax.plot(e.t, forward_speed(e.state), color=c, label=f"{e.target_velocity_mps:.2f} m/s")
-            ax.plot(e.t, momentum_speed(e.state, m["robot_mass_kg"], m["board_mass_kg"]), "--", color=c, lw=1)
-            ax.axhline(e.target_velocity_mps, color=c, lw=0.5, alpha=0.5)
-        ax.set_title(f"{n} stride{'s' if n != 1 else ''}", fontsize=10)
-        ax.set_ylabel("speed [m/s]")
-        ax.grid(alpha=0.3)
-    axes[0].legend(title="label", fontsize=8, ncols=2)
-    axes[-1].set_xlabel("time [s]")
-    return fig
-
-
-def plot_deck_roll(lib: MotionLibrary, plt: Any) -> Any:
-    """Deck roll against time, per stride count, with the wheel-collision limit."""
-    limit = float(lib.model.get("board_roll_limit_rad", np.nan))
-    groups = _by_strides(lib)
-    fig, axes = _panels(plt, len(groups), f"{_name(lib)}: deck roll")
-    for ax, (n, entries) in zip(axes, groups.items(), strict=True):
-        for e in entries:
-            ax.plot(e.t, e.channel("board_roll"), label=f"{e.target_velocity_mps:.2f} m/s")
-        for sign in (-1, 1):
-            ax.axhline(sign * limit, color="red", lw=0.8, ls=":")
-        ax.set_title(f"{n} stride{'s' if n != 1 else ''} (dotted: wheel-collision limit)", fontsize=10)
-        ax.set_ylabel("roll [rad]")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8, ncols=3)
-    axes[-1].set_xlabel("time [s]")
-    return fig
-
-
-def push_foot_forces(e: Entry, mu: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Knot times, |f_t| and mu f_n [N] of the feet on the ground (NaN where no foot is)."""
-    assert e.contact is not None
-    f = e.control[:, :12].reshape(-1, 4, 3)
-    on_ground = e.contact[:-1] == GROUND
-    tangential = np.where(on_ground, np.hypot(f[..., 0], f[..., 1]), -np.inf).max(axis=1)
-    limit = np.where(on_ground, mu * f[..., 2], np.inf).min(axis=1)
-    pushing = on_ground.any(axis=1)
-    return e.t[:-1], np.where(pushing, tangential, np.nan), np.where(pushing, limit, np.nan)
-
-
-def plot_push_forces(lib: MotionLibrary, plt: Any) -> Any:
-    """Per entry, the pushing foot's |f_t| against Coulomb's mu f_n and the plan's mu_plan f_n."""
-    mu = float(lib.model["friction_mu"])
-    mu_plan = float(lib.model.get("friction_mu_plan", mu))
-    entries = list(lib)
-    cols = 3
-    rows = -(-len(entries) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(11, 2.2 * rows), squeeze=False, layout="constrained")
-    fig.suptitle(f"{_name(lib)}: push foot on the ground, |f_t| (solid) against mu f_n = {mu} f_n (red) "
-                 f"and the plan's {mu_plan:.2f} f_n (orange dotted)")
-    for ax, e in zip(axes.flat, entries, strict=False):
-        t, ft, limit = push_foot_forces(e, mu)
-        ax.plot(t, ft, color="C0", lw=1.2)
-        ax.plot(t, limit, color="red", lw=1)
-        ax.plot(t, limit * mu_plan / mu, color="orange", lw=1.2, ls=":")
-        ax.set_title(e.key, fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.tick_params(labelsize=7)
-    for ax in axes.flat[len(entries):]:
-        ax.set_visible(False)
-    for ax in axes[:, 0]:
-        ax.set_ylabel("force [N]", fontsize=8)
-    for ax in axes[-1]:
-        ax.set_xlabel("time [s]", fontsize=8)
-    return fig
-
-
-def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
-    """Tried labels per stride count (dot: passes, cross: fails) and the fastest that passes."""
-    fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
-    for p in frontier["points"]:
-        n = p["n_strides"]
-        ok = [q["velocity_mps"] for q in p["probes"] if q["ok"]]
-        bad = [q["velocity_mps"] for q in p["probes"] if not q["ok"]]
-        ax.scatter(ok, [n] * len(ok), marker="o", color="C2", s=18, zorder=3)
-        ax.scatter(bad, [n] * len(bad), marker="x", color="C3", s=22, zorder=3)
-        if p["fastest_mps"] is not None:
-            ax.barh(n, p["fastest_mps"], height=0.5, color="C0", alpha=0.35)
-            ax.annotate(f"{p['fastest_mps']:.3f} m/s", (p["fastest_mps"], n), xytext=(4, 6),
-                        textcoords="offset points", fontsize=8)
-    ax.set_xlabel("label [m/s]")
-    ax.set_ylabel("strides")
-    ax.set_yticks([p["n_strides"] for p in frontier["points"]])
-    ax.set_title(f"{name}: reachable-speed frontier (bar: fastest label that passes; o passes, x fails)",
-                 fontsize=10)
-    ax.grid(axis="x", alpha=0.3)
-    return fig
 
 
 def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
@@ -159,17 +49,12 @@ def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
     """Write the figures of the library at ``path`` into ``out_dir`` (each file atomically).
 
     Raises:
-        SkatelibError: A humanoid library, or a frontier file that is not one.
+        SkatelibError: A frontier file that is not one, or one given for a kind without a frontier.
     """
     lib = MotionLibrary.open(path)
-    if lib.kind != "quadruped":
-        raise SkatelibError(f"{path}: skatelib plot draws quadruped libraries; this one is {lib.kind}")
+    kind_named(lib.kind, lib.path)  # an unknown kind is refused, naming the known ones
     plt = _pyplot()
-    figures = {"speeds": plot_speeds(lib, plt), "deck_roll": plot_deck_roll(lib, plt),
-               "push_forces": plot_push_forces(lib, plt)}
-    frontier = _frontier(lib, frontier_file)
-    if frontier is not None:
-        figures["frontier"] = plot_frontier(frontier, _name(lib), plt)
+    figures = part(lib.kind, "plots").figures(lib, plt, frontier_file)
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
     for stem, fig in figures.items():
@@ -182,13 +67,3 @@ def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
     return written
 
 
-def _frontier(lib: MotionLibrary, frontier_file: Path | None) -> dict[str, Any] | None:
-    if frontier_file is not None:
-        try:
-            data = json.loads(frontier_file.read_text())
-            _ = data["points"][0]["probes"]  # the shape of a frontier file
-        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
-            raise SkatelibError(f"{frontier_file}: not a frontier file of `skatelib frontier -o` ({e})") from e
-        return dict(data)
-    stored = lib.attrs.get("frontier_json")
-    return json.loads(str(stored)) if stored else None

@@ -15,7 +15,8 @@ from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.plots import push_foot_forces, write_figures
+from skatelib.pipeline.plots import write_figures
+from skatelib.pipeline.quadruped.plots import push_foot_forces
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY
@@ -74,3 +75,29 @@ def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path):
     bad.write_text("{}")
     with pytest.raises(SkatelibError, match=r"nope\.json"):
         write_figures(lib_path, tmp_path / "figs", bad)
+
+
+def test_humanoid_figures_draw_the_library(tmp_path):
+    """A humanoid library gets its own figures (through the kind table): COM speed and height, and
+    the top view whose COM line is the stored com_x, com_y and whose polygons are the stored plan's."""
+    import matplotlib.pyplot as plt
+    from skatelib.pipeline.humanoid.entries import build_humanoid_library
+    from skatelib.pipeline.humanoid.motion import stored_plan
+    from skatelib.pipeline.humanoid.plots import plot_footprints
+
+    from tests.test_humanoid import WALK
+
+    path = build_humanoid_library(load_config(WALK), tmp_path / "w.h5").path
+    written = write_figures(path, tmp_path / "figs", None, ("png",))
+    assert sorted(p.name for p in written) == ["com.png", "footprints.png"]
+    assert all(p.read_bytes().startswith(b"\x89PNG") for p in written)
+    lib = MotionLibrary.open(path)
+    e = next(iter(lib))
+    lines = plot_footprints(lib, plt).axes[0].get_lines()
+    n_polygons = sum(len(spec.segments) for spec in stored_plan(lib, e))
+    assert len(lines) == n_polygons + 2  # polygons, COM, ZMP
+    com = lines[n_polygons]
+    assert np.array_equal(com.get_xdata(), e.channel("com_x")) and np.array_equal(com.get_ydata(), e.channel("com_y"))
+    with pytest.raises(SkatelibError, match="no reachable-speed frontier"):
+        write_figures(path, tmp_path / "f2", tmp_path / "any.json")
+    plt.close("all")

@@ -136,18 +136,14 @@ def plot(
     fmt: Annotated[list[FigureFormat] | None, typer.Option(
         "--format", "-f", help="png and/or svg (repeatable); both by default.")] = None,
 ) -> None:
-    """Figures of a quadruped library (matplotlib): board and momentum speed over time (the paper's
+    """Figures of a library (matplotlib). Quadruped: board and momentum speed over time (the paper's
     Fig. 6), deck roll, the push foot's forces against the friction cone, the reachable-speed
-    frontier."""
+    frontier. Humanoid: COM speed and height, COM and ZMP paths over the support polygons."""
     from skatelib.pipeline.plots import FORMATS, write_figures
 
     formats = tuple(f.value for f in fmt) if fmt else FORMATS
-    written = write_figures(library, out, frontier_file, formats)
-    for p in written:
+    for p in write_figures(library, out, frontier_file, formats):
         console.print(escape(str(p)))
-    if frontier_file is None and not any(p.stem == "frontier" for p in written):
-        console.print("no frontier in the library (build --frontier, or pass --frontier F.json "
-                      "from skatelib frontier -o)")
 
 
 def track(

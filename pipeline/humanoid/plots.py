@@ -1,0 +1,72 @@
+"""Figures of a humanoid motion library (``skatelib plot``), from the file alone.
+
+* ``com``: the centre of mass's forward speed (with each entry's label) and height over time;
+* ``footprints``: per entry, the top view the paper draws: COM path, ZMP path and the support
+  polygons of the entry's stored plan (each where its segment starts).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.humanoid.motion import STATE_NAMES, STATE_UNITS, stored_plan
+from skatelib.pipeline.plots import library_name, panels
+from skatelib.runtime import MotionLibrary
+
+
+def figures(lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
+    """The figures by file stem.
+
+    Raises:
+        SkatelibError: When a frontier file is given (humanoid libraries have none).
+    """
+    if frontier_file is not None:
+        raise SkatelibError(f"{lib.path}: a humanoid library has no reachable-speed frontier; drop --frontier")
+    return {"com": plot_com(lib, plt), "footprints": plot_footprints(lib, plt)}
+
+
+def plot_com(lib: MotionLibrary, plt: Any) -> Any:
+    """COM forward speed (label dotted) and height against time, every entry."""
+    fig, (speed, height) = panels(plt, 2, f"{library_name(lib)}: centre of mass")
+    for i, e in enumerate(lib):
+        c = f"C{i % 10}"
+        speed.plot(e.t, e.channel("com_vx"), color=c, label=e.key)
+        speed.axhline(e.target_velocity_mps, color=c, lw=0.8, ls=":")
+        height.plot(e.t, e.channel("com_z"), color=c)
+    unit = dict(zip(STATE_NAMES, STATE_UNITS, strict=True))
+    speed.set_ylabel(f"forward speed [{unit['com_vx']}]")
+    height.set_ylabel(f"height [{unit['com_z']}]")
+    height.set_xlabel("time [s]")
+    speed.legend(fontsize=8)
+    for ax in (speed, height):
+        ax.grid(alpha=0.3)
+    height.ticklabel_format(axis="y", useOffset=False)
+    z = np.concatenate([e.channel("com_z") for e in lib])
+    height.set_ylim(z.min() - 0.02, z.max() + 0.02)  # a constant height stays a flat line in the middle
+    return fig
+
+
+def plot_footprints(lib: MotionLibrary, plt: Any) -> Any:
+    """Top view per entry: COM path (red), ZMP (green), support polygons of the stored plan (blue)."""
+    entries = list(lib)
+    fig, axes = plt.subplots(len(entries), 1, figsize=(10, 2.8 * len(entries)), squeeze=False,
+                             layout="constrained")
+    fig.suptitle(f"{library_name(lib)}: COM (red), ZMP (green) and support polygons (blue), from above")
+    for ax, e in zip(axes[:, 0], entries, strict=True):
+        for spec in stored_plan(lib, e):
+            for _, sup in spec.segments:
+                ring = np.asarray(sup.polygon) + np.asarray(sup.p0)[:2]
+                ring = np.vstack([ring, ring[:1]])
+                ax.plot(ring[:, 0], ring[:, 1], color="C0", lw=0.8)
+        ax.plot(e.channel("com_x"), e.channel("com_y"), color="C3", lw=1.5)
+        zmp = e.arrays["zmp"]
+        ax.plot(zmp[:, 0], zmp[:, 1], ".", color="C2", ms=2)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(e.key, fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.grid(alpha=0.3)
+    return fig
