@@ -1,4 +1,13 @@
-"""``skatelib build``: config -> parallel sweep -> verified, atomically written motion library."""
+"""``skatelib build`` for every robot kind: config -> the kind's tasks -> parallel sweep (cache,
+progress) -> verified, atomically written motion library.
+
+The kind's ``builder`` module (through the kind table) supplies what differs: ``check(cfg, opts)``
+refuses its own options before anything runs, ``announce(cfg)``, ``tasks(cfg, ipopt)`` cuts the build into
+picklable tasks (:class:`skatelib.pipeline.sweep.Task`), ``prepare(cfg, opts)`` readies what the
+workers share, ``write(cfg, out, outcomes, opts)`` writes the library and ``summary(outcomes,
+extra)`` prints its table. The sweep, the entry
+cache, the progress bar, interruption and the exit code are the same for every kind.
+"""
 
 from __future__ import annotations
 
@@ -7,51 +16,123 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
-from skatelib.pipeline.quadruped.frontier import FrontierPoint, FrontierSearch, find_frontier, frontier_json
-from skatelib.pipeline.quadruped.pushoff import problem_for
-from skatelib.pipeline.quadruped.system import SkateSystem
-from skatelib.pipeline.sweep import EntryOutcome, ProgressFn, ordered, run_sweep
+from rich.markup import escape
+from skatelib.library.errors import Interrupted, SkatelibError
+from skatelib.pipeline.kinds import BuildOptions, BuildRun, part
+from skatelib.pipeline.report import console, count
+from skatelib.pipeline.sweep import EntryEvent, ProgressFn, run_sweep
 
 
 @dataclass(frozen=True)
 class BuildReport:
-    """What a build produced: the file, its entries' outcomes and the wall time."""
+    """What a build produced: the file, its entries' outcomes (in the library's order), the wall
+    time and what else the kind found (the quadruped's frontier, when asked)."""
 
     path: Path
-    outcomes: list[EntryOutcome]
+    outcomes: list[Any]
     wall_time_s: float
-    frontier: list[FrontierPoint] | None = None
+    frontier: Any = None
 
     @property
-    def failed(self) -> list[EntryOutcome]:
-        return [o for o in self.outcomes if not o.result.success]
+    def failed(self) -> list[Any]:
+        return [o for o in self.outcomes if not o.success]
 
 
-def default_output(config: QuadrupedConfig | HumanoidConfig) -> Path:
+def default_output(config: Any) -> Path:
     return Path("out") / f"{config.meta.name}.h5"
 
 
-def build_library(config: QuadrupedConfig, out: Path | None = None, options: BuildOptions | None = None,
+def builder(config: Any) -> Any:
+    """The ``builder`` module of the config's kind."""
+    from skatelib.pipeline.kinds import kind_of
+
+    kind_of(config)  # an unknown kind is refused, naming the known ones
+    return part(config.meta.kind, "builder")
+
+
+def build_library(config: Any, out: Path | None = None, options: BuildOptions | None = None,
                   on_entry: ProgressFn | None = None, ipopt: tuple[tuple[str, Any], ...] = ()) -> BuildReport:
     """Solve every entry of ``config.sweep`` and write the library (failed entries included,
-    marked ``success = false`` with their IPOPT status); with ``frontier``, also search the
-    reachable-speed frontier of every stride count and store it in the file."""
+    marked ``success = false`` with their status). ``ipopt``: extra IPOPT options of every solve
+    (the quadruped's; ``(("print_level", 5),)`` shows its log)."""
     t0 = time.perf_counter()
     out = out or default_output(config)
     options = options or BuildOptions()
-    if config.optimization.compile and options.backend == "loky":
-        # Compile the stage functions once here, so parallel workers load them instead of all compiling.
-        problem_for(config, min(config.sweep.strides))
-    outcomes = ordered(run_sweep(config, options, on_entry, ipopt))
-    system = SkateSystem.from_config(config)
-    entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
-    solver_options = outcomes[0].result.ipopt_options if outcomes else {}
-    search = FrontierSearch() if options.frontier else None
-    points = find_frontier(config, config.sweep.strides, search, options.jobs) if search is not None else None
-    stored = frontier_json(points, search) if points is not None and search is not None else None
-    path = write_quadruped_library(out, config, system, entries, solver_options, stored)
-    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0, frontier=points)
+    kind = builder(config)
+    kind.prepare(config, options)
+    outcomes = run_sweep(kind.tasks(config, ipopt), options, on_entry)
+    path, outcomes, extra = kind.write(config, out, outcomes, options)
+    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0, frontier=extra)
+
+
+class _Progress:
+    """The progress bar's text: the entries being solved and the last one finished."""
+
+    def __init__(self, bar: Any, task: Any):
+        self.bar, self.task = bar, task
+        self.done: list[str] = []
+        self.flying: list[str] = []  # oldest first
+
+    def __call__(self, event: EntryEvent) -> None:
+        if not event.done:
+            self.flying.append(event.key)
+        else:
+            self.done.append(event.key)
+            if event.key in self.flying:
+                self.flying.remove(event.key)
+        text = f"solving {', '.join(self.flying)}" if self.flying else "solving"
+        if event.done:
+            status = "ok" if event.success else event.status.split(":")[0]
+            text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
+        self.bar.update(self.task, advance=1 if event.done else 0, description=escape(text))
+
+
+def check_options(cfg: Any, opts: BuildOptions) -> None:
+    """Refuse options that cannot work before anything runs: a dask backend without a reachable
+    scheduler, an unwritable cache folder, and what the kind's ``check`` refuses."""
+    from skatelib.pipeline.preflight import check_cache_dir, check_scheduler
+
+    if opts.backend == "dask":
+        if opts.scheduler is None:
+            raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
+        check_scheduler(opts.scheduler)
+    if opts.cache:
+        check_cache_dir()
+    builder(cfg).check(cfg, opts)
+
+
+def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
+    """``skatelib build``: check the options, sweep with a progress bar, print the kind's table.
+
+    Raises:
+        Interrupted: On Ctrl-C or SIGTERM (what is cached is kept; no library is written).
+    """
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    kind = builder(cfg)
+    check_options(cfg, opts)
+    total = sum(t.n_entries for t in kind.tasks(cfg))
+    console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
+    kind.announce(cfg)
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  TextColumn("eta"), TimeRemainingColumn(), console=console, disable=not opts.progress) as bar:
+        progress = _Progress(bar, bar.add_task("solving", total=total))
+        try:
+            report = build_library(cfg, out, opts, on_entry=progress)
+        except KeyboardInterrupt:
+            kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
+                    else "nothing is cached (--no-cache)")
+            raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
+    kind.summary(report.outcomes, report.frontier)
+    for o in report.outcomes:
+        if o.note:
+            console.print(f"[yellow]note:[/] {escape(o.note)}")
+    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
+    return BuildRun(report.path, len(report.failed))

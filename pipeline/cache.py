@@ -1,6 +1,7 @@
-"""The entry cache of a build: each solved entry under a key of what determines it, checksummed,
-so that an interrupted build resumes and a changed problem (code, config, URDF, options) never
-gets an old trajectory. The folder is the compiled-code cache's (``SKATELIB_CACHE_DIR``)."""
+"""The entry cache of a build, for every robot kind: each solved entry under a key of what
+determines it (each kind says what that is), checksummed, so that an interrupted build resumes and
+a changed problem (code, config, URDF, options) never gets an old trajectory. The folder is the
+compiled-code cache's (``SKATELIB_CACHE_DIR``)."""
 
 from __future__ import annotations
 
@@ -8,27 +9,22 @@ import hashlib
 import json
 import pickle
 from pathlib import Path
+from typing import Any
 
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
 from skatelib.pipeline.ocp.stagewise import cache_dir
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, problem_for, solver_options
 
+# Bump when a kind's retry ladder, the solve's post-processing or the cached payload changes: the
+# keys cover the problems themselves (stage functions, bounds, guesses, plans, options), not that code.
 CACHE_VERSION = "2"
 _MAGIC = b"skatelib-entry-cache 2\n"
 
 
-def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
-    """Cache key of an entry: what determines its solution.
-
-    The problem's fingerprint (stage function, problem config with the URDF by content, parameters,
-    bounds, cold guess), the IPOPT options, target and strides, the key of the entry whose solution
-    warm-starts it (``None`` when cold), the library format and :data:`CACHE_VERSION`.
-    """
-    prob = problem_for(spec.config, spec.n_strides)
-    v = spec.target_velocity_mps
-    src = json.dumps([CACHE_VERSION, schema.FORMAT_VERSION_STR, prob.fingerprint(v, spec.guess),
-                      solver_options(spec), round(v, 9), spec.n_strides, predecessor], sort_keys=True, default=str)
+def cache_key(*parts: Any) -> str:
+    """The key of an entry determined by ``parts`` (JSON-serializable), the library format and
+    :data:`CACHE_VERSION`; 32 hex digits."""
+    src = json.dumps([CACHE_VERSION, schema.FORMAT_VERSION_STR, *parts], sort_keys=True, default=str)
     return hashlib.sha256(src.encode()).hexdigest()[:32]
 
 
@@ -37,8 +33,9 @@ def cache_file(key: str) -> Path:
     return cache_dir() / "entries" / f"{key}.pkl"
 
 
-def load_cached(path: Path) -> tuple[SolveResult, int] | str | None:
-    """The cached (result, attempts), ``None`` when absent, or a message when the file is damaged."""
+def load_cached(path: Path, fields: tuple[str, ...]) -> dict[str, Any] | str | None:
+    """The cached payload (a dict with ``fields``), ``None`` when absent, or a message when the
+    file is damaged or not such a payload."""
     try:
         blob = path.read_bytes()
     except FileNotFoundError:
@@ -51,14 +48,16 @@ def load_cached(path: Path) -> tuple[SolveResult, int] | str | None:
         return f"cache entry {path} is damaged (checksum mismatch)"
     try:
         obj = pickle.loads(payload)
-        return obj["result"], obj["attempts"]
-    except (pickle.UnpicklingError, EOFError, KeyError, AttributeError, ImportError, TypeError) as e:
+        if not isinstance(obj, dict) or not set(fields) <= set(obj):
+            raise TypeError(type(obj).__name__)
+        return obj
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, TypeError) as e:
         return f"cache entry {path} cannot be loaded ({type(e).__name__})"
 
 
-def store(path: Path, result: SolveResult, attempts: int) -> None:
-    """Cache a result (checksummed; written atomically)."""
-    payload = pickle.dumps({"result": result, "attempts": attempts})
+def store(path: Path, payload_obj: dict[str, Any]) -> None:
+    """Cache an entry's payload (checksummed; written atomically)."""
+    payload = pickle.dumps(payload_obj)
     blob = _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + b"-" * 8 + b"\n" + payload
     with atomic_path(path) as tmp:  # parallel workers never read a half-written entry
         tmp.write_bytes(blob)

@@ -1,20 +1,17 @@
 """The robot kinds: one row per kind, naming the robot's subpackage.
 
 Every command goes through this table (``load_config``, ``kind_of(config)``,
-``kind_named(lib.kind)``, ``inspect``, ``plot``), so a third robot is a new subpackage with
-``config``, ``kind``, ``rerun`` and ``plots`` modules and one row here; the command line does not change. The ``config``
-module gives ``CONFIG_CLASS``, ``from_toml`` and ``from_json`` (read by ``pipeline/config.py``);
-the ``kind`` module:
+``kind_named(lib.kind)``, ``build``, ``inspect``, ``plot``), so a third robot is a new subpackage
+with the modules below and one row here; the command line does not change. Its modules:
 
-* ``CONFIG_CLASS``: its config dataclass;
-* ``print_model(cfg)``: what ``skatelib model`` shows;
-* ``run_build(cfg, out, options) -> BuildRun``: build and write a library, printing progress and
-  a summary;
-* ``validate_entries(lib, report) -> int``: the independent checks of every entry (failures);
-
-a ``rerun`` module beside it (imported by ``inspect`` only): ``PANELS`` (the plots of an
-entry's tab) and ``logger(lib)`` (draws one entry); and a ``plots`` module (imported by ``plot``
-only): ``figures(lib, plt, frontier_file) -> {stem: figure}``.
+* ``config``: ``CONFIG_CLASS``, ``from_toml`` and ``from_json`` (read by ``pipeline/config.py``);
+* ``kind``: ``CONFIG_CLASS``, ``print_model(cfg)`` (what ``skatelib model`` shows) and
+  ``validate_entries(lib, report) -> int`` (the independent checks of every entry; failures);
+* ``builder``: its part of the one build path (``pipeline/build.py``): ``check``, ``announce``,
+  ``tasks``, ``prepare``, ``write``, ``summary``;
+* ``rerun`` (imported by ``inspect`` only): ``PANELS`` (the plots of an entry's tab) and
+  ``logger(lib)`` (draws one entry);
+* ``plots`` (imported by ``plot`` only): ``figures(lib, plt, frontier_file) -> {stem: figure}``.
 
 The modules are imported when a command needs them: ``skatelib --help`` imports no solver.
 """
@@ -37,7 +34,8 @@ KINDS: dict[str, str] = {
 
 
 def part(name: str, module: str) -> ModuleType:
-    """A module of a known kind's subpackage (``config``, ``kind``, ``rerun``, ``plots``), imported when asked."""
+    """A module of a known kind's subpackage (``config``, ``kind``, ``builder``, ``rerun``, ``plots``),
+    imported when asked."""
     return importlib.import_module(f"{KINDS[name]}.{module}")
 
 

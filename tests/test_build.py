@@ -212,10 +212,10 @@ def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     """`build --frontier` (BuildOptions.frontier) searches each stride count's fastest passing label
     and stores it: the fastest is a probe that passed, the first failure one that did not, and they
     bracket within the resolution (a coarse search here, to keep the test short)."""
-    from skatelib.pipeline import build as build_module
+    from skatelib.pipeline.quadruped import frontier as frontier_module
     from skatelib.pipeline.quadruped.frontier import FrontierSearch
 
-    monkeypatch.setattr(build_module, "FrontierSearch",
+    monkeypatch.setattr(frontier_module, "FrontierSearch",
                         lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.2, max_mps=1.75))
     report = build_library(load_config(TINY), tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
     stored = json.loads(MotionLibrary.open(report.path).attrs["frontier_json"])

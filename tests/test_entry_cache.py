@@ -7,8 +7,8 @@ import dataclasses
 import pytest
 from skatelib.pipeline import sweep
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped import chains, pushoff
 from skatelib.pipeline.quadruped import costs as pushoff_costs
-from skatelib.pipeline.quadruped import pushoff
 
 from tests.helpers import TINY
 
@@ -20,8 +20,8 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache"
 
 
-def _chain() -> sweep.Chain:
-    return sweep.Chain(load_config(TINY), 1, (0.3,))
+def _chain() -> chains.Chain:
+    return chains.Chain(load_config(TINY), 1, (0.3,))
 
 
 def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
@@ -43,15 +43,15 @@ def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
 
 def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
     """A second run is served from the cache; after a cost weight changes in code it is solved again."""
-    first = sweep.run_chain(_chain())
-    again = sweep.run_chain(_chain())
+    first = sweep.run_task(_chain())
+    again = sweep.run_task(_chain())
     assert not first[0].cached and again[0].cached
     assert again[0].cache_key == first[0].cache_key
 
     original = pushoff_costs.EffortCost.cost
     monkeypatch.setattr(pushoff_costs.EffortCost, "cost", lambda self, s: 2.0 * original(self, s))
     monkeypatch.setattr(pushoff, "_PROBLEMS", {})
-    changed = sweep.run_chain(_chain())
+    changed = sweep.run_task(_chain())
     assert not changed[0].cached
     assert changed[0].cache_key != first[0].cache_key
 
@@ -59,12 +59,12 @@ def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
 def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
     """One flipped bit in a cached entry's payload is caught by its checksum: the entry is solved
     again, the user is told, and the cache is repaired."""
-    first = sweep.run_chain(_chain())
+    first = sweep.run_task(_chain())
     path = cache / "entries" / f"{first[0].cache_key}.pkl"
     blob = bytearray(path.read_bytes())
     blob[len(blob) // 2] ^= 0x04
     path.write_bytes(bytes(blob))
-    again = sweep.run_chain(_chain())
+    again = sweep.run_task(_chain())
     assert not again[0].cached
     assert "damaged" in again[0].note and str(path) in again[0].note
-    assert sweep.run_chain(_chain())[0].cached
+    assert sweep.run_task(_chain())[0].cached

@@ -12,10 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from skatelib.library.errors import ConfigError
+from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import CONFIG_DIR, load_config
-from skatelib.pipeline.humanoid.entries import build_humanoid_library
 from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, step_model, walking_steps
 from skatelib.pipeline.humanoid.verify import check_steps, failures
+from skatelib.pipeline.kinds import BuildOptions
 from skatelib.runtime import MotionLibrary
 
 WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"
@@ -115,7 +116,7 @@ def test_library_round_trip_and_cli(tmp_path):
 def test_build_report_marks_all_entries(tmp_path):
     """The walking build writes one successful entry: six walking steps between start and stop
     (eight GPM phases), named for what it is."""
-    rep = build_humanoid_library(load_config(WALK), tmp_path / "w.h5")
+    rep = build_library(load_config(WALK), tmp_path / "w.h5", BuildOptions(jobs=1, cache=False))
     e = MotionLibrary.open(rep.path).select(0.375)
     assert not rep.failed and e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
 
@@ -129,19 +130,64 @@ def test_unknown_motion_is_a_config_error(tmp_path):
     assert Path(WALK).exists()
 
 
-def test_humanoid_build_says_which_flags_do_not_apply(tmp_path):
-    """A humanoid build refuses the quadruped-only flags (exit 2, naming them) and notes the moot
-    ones instead of ignoring them silently."""
-    env = {**os.environ, "COLUMNS": "200"}
+def test_humanoid_build_goes_the_one_build_path(tmp_path):
+    """`skatelib build` of a humanoid config runs through the same sweep as a quadruped's: its motions
+    solve as tasks in worker processes (-j 2), a second build is served from the entry cache
+    (every step marked c) with the same arrays, and --frontier is refused (exit 2, nothing written)."""
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
     cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
-    r = subprocess.run([*cli, "build", str(WALK), "-o", str(tmp_path / "w.h5"), "--frontier"],
-                       capture_output=True, text=True, env=env)
-    assert r.returncode == 2 and "--frontier" in r.stderr and "humanoid" in r.stderr
-    assert not (tmp_path / "w.h5").exists()
-    r = subprocess.run([*cli, "build", str(WALK), "-o", str(tmp_path / "w.h5"), "--no-cache", "-j", "1"],
-                       capture_output=True, text=True, env=env)
-    assert r.returncode == 0 and "--jobs, --no-cache do not apply" in r.stderr
-    assert MotionLibrary.open(tmp_path / "w.h5").keys() == ["walk_v0.375_n6"]
+    out = tmp_path / "s.h5"
+    r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "--frontier"], capture_output=True, text=True,
+                       env=env)
+    assert r.returncode == 2 and "--frontier" in r.stderr and "humanoid" in r.stderr and not out.exists()
+    runs = [subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "-j", "2", "--no-progress"],
+                           capture_output=True, text=True, env=env) for _ in range(2)]
+    assert all(r.returncode == 0 for r in runs), runs[0].stderr + runs[1].stderr
+    cached = [sum(" c " in line for line in r.stdout.splitlines() if line.startswith("│ skate_")) for r in runs]
+    assert cached == [0, 9]  # three motions of three steps each
+    lib = MotionLibrary.open(out)
+    assert lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"] and all(e.success for e in lib)
+    assert all(len(e.attrs["cache_key"]) == 32 for e in lib)
+
+
+def test_motion_cache_key_follows_the_problem(monkeypatch):
+    """The key ignores the library's name and velocity list, and changes with the velocity and with
+    the step NLP's code (a constraint row added in code)."""
+    from skatelib.pipeline.humanoid import step, tasks
+    from skatelib.pipeline.humanoid.motion import plan_for
+
+    cfg = load_config(SKATE)
+    plan = plan_for(cfg, 1.0)[1]
+    key = tasks.motion_key(cfg, 1.0, plan)
+    renamed = dataclasses.replace(cfg, meta=dataclasses.replace(cfg.meta, name="other"),
+                                  sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.2,)))
+    assert tasks.motion_key(renamed, 1.0, plan) == key
+    assert tasks.motion_key(cfg, 0.9, plan_for(cfg, 0.9)[1]) != key
+    original = step.node_rows
+
+    def with_extra_row(s, k, rows):
+        original(s, k, rows)
+        rows.add(s.U[k, 0], -10.0, 10.0)
+
+    monkeypatch.setattr(step, "node_rows", with_extra_row)
+    monkeypatch.setattr(step, "_PROBLEMS", {})
+    assert tasks.motion_key(cfg, 1.0, plan) != key
+
+
+def test_build_judges_each_motion_with_the_independent_checks(walk):
+    """A solved walk passes the step checks; the same walk with one step's accelerations scaled by
+    1.5 (its states left as they were) fails them, and its entry is stored as failed with the check."""
+    from skatelib.pipeline.humanoid.entries import entry_from_motion
+    from skatelib.pipeline.humanoid.tasks import MotionOutcome, judge
+
+    c, m = walk
+    assert judge(c, m) == ()
+    bad = dataclasses.replace(m.steps[2], U=m.steps[2].U * 1.5)
+    doctored = dataclasses.replace(m, steps=[*m.steps[:2], bad, *m.steps[3:]])
+    found = judge(c, doctored)
+    assert found and any("dynamics" in f for f in found), found
+    record = entry_from_motion(MotionOutcome("walk_v0.375_n6", doctored, found, False), c)
+    assert record.attrs["success"] is False and record.attrs["status"].startswith("Physics_Check_Failed")
 
 
 def test_each_entry_stores_its_plan_and_validate_checks_against_it(tmp_path):
@@ -155,7 +201,7 @@ def test_each_entry_stores_its_plan_and_validate_checks_against_it(tmp_path):
     from skatelib.pipeline.validate import validate_library
 
     cfg = load_config(WALK)
-    path = build_humanoid_library(cfg, tmp_path / "w.h5").path
+    path = build_library(cfg, tmp_path / "w.h5", BuildOptions(jobs=1, cache=False)).path
     e = MotionLibrary.open(path)["walk_v0.375_n6"]
     assert plan_from_json(e.attrs["plan_json"]) == walking_steps(cfg, 0.375)[1]
     verdicts: list[str] = []

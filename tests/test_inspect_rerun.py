@@ -15,7 +15,6 @@ rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
 from skatelib.pipeline.build import build_library  # noqa: E402
 from skatelib.pipeline.config import CONFIG_DIR, load_config  # noqa: E402
-from skatelib.pipeline.humanoid.entries import build_humanoid_library  # noqa: E402
 from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
 from skatelib.pipeline.kinds import BuildOptions  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
@@ -83,7 +82,8 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
 
 def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
     """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
-    lib_path = build_humanoid_library(load_config(CONFIG_DIR / "hrp2_skate.toml"), tmp_path / "s.h5").path
+    cfg = load_config(CONFIG_DIR / "hrp2_skate.toml")
+    lib_path = build_library(cfg, tmp_path / "s.h5", BuildOptions(jobs=1, cache=False)).path
     out = tmp_path / "h.rrd"
     inspect_library(lib_path, ["skate_v1.00"], out, spawn=False, overlay=False)
     cols = _columns(out)

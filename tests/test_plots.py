@@ -81,13 +81,12 @@ def test_humanoid_figures_draw_the_library(tmp_path):
     """A humanoid library gets its own figures (through the kind table): COM speed and height, and
     the top view whose COM line is the stored com_x, com_y and whose polygons are the stored plan's."""
     import matplotlib.pyplot as plt
-    from skatelib.pipeline.humanoid.entries import build_humanoid_library
     from skatelib.pipeline.humanoid.motion import stored_plan
     from skatelib.pipeline.humanoid.plots import plot_footprints
 
     from tests.test_humanoid import WALK
 
-    path = build_humanoid_library(load_config(WALK), tmp_path / "w.h5").path
+    path = build_library(load_config(WALK), tmp_path / "w.h5", BuildOptions(jobs=1, cache=False)).path
     written = write_figures(path, tmp_path / "figs", None, ("png",))
     assert sorted(p.name for p in written) == ["com.png", "footprints.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in written)

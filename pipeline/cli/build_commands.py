@@ -58,15 +58,15 @@ def build(
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
-    from skatelib.pipeline.build import default_output
+    from skatelib.pipeline.build import default_output, run_build
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.kinds import BuildOptions, kind_of
+    from skatelib.pipeline.kinds import BuildOptions
     from skatelib.pipeline.preflight import check_output
 
     cfg = load_config(config)
     target = out or default_output(cfg)
     check_output(target, [cfg.path], force)
-    run = kind_of(cfg).run_build(cfg, target, BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier))
+    run = run_build(cfg, target, BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier))
     if run.failed and not allow_failures:
         console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
@@ -129,7 +129,7 @@ def solve(
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
-    from skatelib.pipeline.quadruped.kind import summary
+    from skatelib.pipeline.quadruped.builder import summary
 
     summary(report.outcomes)
     console.print(f"wrote {escape(str(report.path))}")

@@ -1,24 +1,20 @@
-"""The humanoid's row of the kind table (``pipeline/kinds.py``): its model summary, its build and
-summary table, and the independent checks of a stored library."""
+"""The humanoid's row of the kind table (``pipeline/kinds.py``): its model summary and the
+independent checks of a stored library (its build is in :mod:`.builder`)."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 from typing import Any
 
 from rich.markup import escape
-from rich.table import Table
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.kinds import BuildOptions, BuildRun
-from skatelib.pipeline.report import console, err_console, parameter_table
+from skatelib.pipeline.report import console, parameter_table
 from skatelib.runtime import MotionLibrary
 
 CONFIG_CLASS = HumanoidConfig
-DEFAULTS = BuildOptions()
 
 
 def print_model(cfg: HumanoidConfig) -> None:
@@ -31,32 +27,6 @@ def print_model(cfg: HumanoidConfig) -> None:
     parameter_table(f"{cfg.meta.name}: humanoid point-mass model (Takasugi et al.)", rows, head="quantity")
     if h.source:
         console.print(escape(f"source: {h.source}"))
-
-
-def run_build(cfg: HumanoidConfig, out: Path, opts: BuildOptions) -> BuildRun:
-    """Solve every motion in this process (milliseconds per step) and print one row per step.
-    Refuses the options for a cluster or the frontier, and says which options are moot."""
-    from skatelib.pipeline.humanoid.entries import build_humanoid_library, motion_key
-
-    if opts.backend != "loky" or opts.scheduler is not None or opts.frontier:
-        raise SkatelibError(f"{cfg.path} is a humanoid config: its steps solve in milliseconds in this process; "
-                            "--backend dask, --scheduler and --frontier are for quadruped configs")
-    moot = [flag for flag, given in (("--jobs", opts.jobs != DEFAULTS.jobs), ("--no-cache", not opts.cache),
-                                     ("--no-progress", not opts.progress)) if given]
-    if moot:
-        err_console.print(f"note: {', '.join(moot)} do{'es' if len(moot) == 1 else ''} not apply to a humanoid "
-                          "build (solved in this process, milliseconds per step, no cache)")
-    report = build_humanoid_library(cfg, out)
-    t = Table(title=f"{cfg.meta.name}: {cfg.sweep.motion} ({cfg.gpm.nodes} LG nodes, {cfg.gpm.solver})")
-    for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
-        t.add_column(escape(col))
-    for m in report.motions:
-        for r in m.steps:
-            t.add_row(motion_key(cfg, m)[0], r.spec.name, r.status, str(r.iterations),
-                      f"{1e3 * r.solve_time_s:.1f}", f"{r.objective:.4f}")
-    console.print(t)
-    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.2f} s")
-    return BuildRun(report.path, len(report.failed))
 
 
 def validate_entries(lib: MotionLibrary, report: Any) -> int:

@@ -118,9 +118,14 @@ def step_model(c: HumanoidConfig) -> StepModel:
     return StepModel(c.gpm.nodes, h.gravity_mps2, h.leg_min_m, h.leg_max_m, c.gpm.solver)
 
 
+def plan_for(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[StepSpec]]:
+    """The initial state and the steps of the config's motion (walk or skate) at ``velocity``."""
+    return (walking_steps if c.sweep.motion == "walk" else skating_steps)(c, velocity)
+
+
 def solve_motion(c: HumanoidConfig, velocity: float) -> Motion:
     """Plan and solve a walk or a skate at ``velocity``, step by step, then sample it."""
-    x0, specs = (walking_steps if c.sweep.motion == "walk" else skating_steps)(c, velocity)
+    x0, specs = plan_for(c, velocity)
     h = c.humanoid
     results = solve_sequence(specs, x0, step_model(c))
     t, X, U, Z, P, S = sample(results, c.gpm.sample_dt_s, h.gravity_mps2)
@@ -153,7 +158,7 @@ def stored_plan(lib: Any, e: Any) -> list[StepSpec]:
     from skatelib.pipeline.humanoid.config import HumanoidConfig
 
     cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
-    return (walking_steps if cfg.sweep.motion == "walk" else skating_steps)(cfg, e.target_velocity_mps)[1]
+    return plan_for(cfg, e.target_velocity_mps)[1]
 
 
 def sample(results: list[StepResult], dt: float, g: float) -> tuple[np.ndarray, ...]:

@@ -79,7 +79,7 @@ class StepResult:
     supports: tuple[Support, ...] = field(repr=False, default=())
 
 
-_SOLVERS: dict[str, tuple[str, dict[str, Any]]] = {
+SOLVER_OPTIONS: dict[str, tuple[str, dict[str, Any]]] = {
     "ipopt": ("ipopt", {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-9,
                         "ipopt.max_iter": 200}),
     "sqp": ("sqpmethod", {"print_time": False, "print_header": False, "print_iteration": False,
@@ -99,7 +99,7 @@ class StepProblem:
     def __init__(self, n_nodes: int, terminal: str, solver: str = "ipopt"):
         if terminal not in TERMINALS:
             raise ValueError(f"terminal {terminal!r}; use one of {TERMINALS}")
-        if solver not in _SOLVERS:
+        if solver not in SOLVER_OPTIONS:
             raise ValueError(f"solver {solver!r}; use 'ipopt' or 'sqp'")
         self.gpm = gpm = GaussPseudospectral(n_nodes)
         N = n_nodes
@@ -123,7 +123,7 @@ class StepProblem:
         w = ca.vertcat(ca.vec(s.X), ca.vec(s.U), ca.vec(s.Xf))
         self.n_w = w.numel()
         nlp = {"x": w, "p": ca.vertcat(*params), "f": J, "g": ca.vertcat(geq, gin)}
-        plugin, opts = _SOLVERS[solver]
+        plugin, opts = SOLVER_OPTIONS[solver]
         self.solver = ca.nlpsol(f"com_step_{terminal}", plugin, nlp, opts)
         self.nlp = nlp
         self.N = N

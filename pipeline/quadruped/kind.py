@@ -1,5 +1,5 @@
-"""The quadruped's row of the kind table (``pipeline/kinds.py``): its model summary, its build
-with progress and summary table, and the independent checks of a stored library."""
+"""The quadruped's row of the kind table (``pipeline/kinds.py``): its model summary and the
+independent checks of a stored library (its build is in :mod:`.builder`)."""
 
 from __future__ import annotations
 
@@ -10,18 +10,11 @@ from typing import Any
 import numpy as np
 from rich.markup import escape
 from rich.table import Table
-from skatelib.library.errors import Interrupted, LibraryFormatError, SkatelibError
-from skatelib.library.schema import entry_key
+from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
-from skatelib.pipeline.kinds import BuildOptions, BuildRun
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.report import (
     console,
-    count,
-    entry_table,
-    err_console,
-    fmt,
-    frontier_table,
     parameter_table,
 )
 from skatelib.runtime import MotionLibrary
@@ -56,100 +49,6 @@ def print_model(cfg: QuadrupedConfig) -> None:
         ("l_f, l_r [m]", f"{b.l_front_m:.3f}, {b.l_rear_m:.3f}"), ("deck height [m]", b.deck_height_m)], "{:.5g}")
     q = np.round(s.stance.q_board, 3)
     console.print(escape(f"nominal stance q [rad] (FL FR RL RR x abad hip knee): {q.tolist()}"))
-
-
-def _announce(cfg: QuadrupedConfig, total: int, out: Path) -> None:
-    console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
-    if cfg.optimization.compile:
-        from skatelib.pipeline.ocp.stagewise import c_compiler, cache_dir
-
-        cc = c_compiler()
-        if cc is None:
-            err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
-                              "3-4x slower; install gcc to compile them")
-        else:
-            console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
-                                 f"once; cached in {cache_dir()})"))
-
-
-class _Progress:
-    """The progress bar's text: the entries being solved and the last one finished."""
-
-    def __init__(self, bar: Any, task: Any):
-        self.bar, self.task = bar, task
-        self.done: list[str] = []
-        self.flying: list[str] = []  # oldest first
-
-    def __call__(self, event: Any) -> None:
-        if not event.done:
-            self.flying.append(event.key)
-        else:
-            self.done.append(event.key)
-            if event.key in self.flying:
-                self.flying.remove(event.key)
-        text = f"solving {', '.join(self.flying)}" if self.flying else "solving"
-        if event.done:
-            status = "ok" if event.success else event.status.split(":")[0]
-            text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
-        self.bar.update(self.task, advance=1 if event.done else 0, description=escape(text))
-
-
-def run_build(cfg: QuadrupedConfig, out: Path, opts: BuildOptions) -> BuildRun:
-    """Sweep the config's speeds x strides (``pipeline/build.py``) with a progress bar, then print
-    the entries' table (and the frontier)."""
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-    from skatelib.pipeline.build import build_library
-    from skatelib.pipeline.preflight import check_cache_dir, check_scheduler
-    from skatelib.pipeline.sweep import chains_for
-
-    if opts.backend == "dask":
-        if opts.scheduler is None:
-            raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
-        check_scheduler(opts.scheduler)
-    if opts.cache or cfg.optimization.compile:
-        check_cache_dir()
-    total = sum(len(c.velocities) for c in chains_for(cfg))
-    _announce(cfg, total, out)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("eta"), TimeRemainingColumn(), console=console, disable=not opts.progress) as bar:
-        progress = _Progress(bar, bar.add_task("solving", total=total))
-        try:
-            report = build_library(cfg, out, opts, on_entry=progress)
-        except KeyboardInterrupt:
-            kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
-                    else "nothing is cached (--no-cache)")
-            raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
-    summary(report.outcomes)
-    if report.frontier is not None:
-        frontier_table(report.frontier)
-    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
-    return BuildRun(report.path, len(report.failed))
-
-
-def summary(outcomes: list[Any]) -> None:
-    """One row per entry: status, iterations, tries, time and the independent checks' figures."""
-    t = entry_table("entries (time: c = from the cache; momentum: the speed robot and board ride at together)",
-                    ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
-                     "Coulomb margin [N]", "torque [N m]", "defect"))
-    for o in outcomes:
-        r, ph = o.result, o.physics
-        status = r.status.replace("Solve_Succeeded", "ok")
-        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
-                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
-                  fmt(ph, "momentum_speed_mps", "{:.4f}"), fmt(ph, "momentum_speed_error", "{:.2%}"),
-                  fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
-                  fmt(ph, "max_defect", "{:.1e}"))
-    console.print(t)
-    for o in outcomes:
-        if o.note:
-            console.print(f"[yellow]note:[/] {escape(o.note)}")
 
 
 def system_from_library(lib: MotionLibrary) -> Any:

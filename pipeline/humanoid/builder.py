@@ -1,0 +1,59 @@
+"""The humanoid's part of a build (``pipeline/build.py``): its options check, its tasks (one motion
+per velocity), the library it writes and the table it prints."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rich.markup import escape
+from rich.table import Table
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.humanoid.config import HumanoidConfig
+from skatelib.pipeline.humanoid.tasks import MotionOutcome, MotionTask
+from skatelib.pipeline.kinds import BuildOptions
+from skatelib.pipeline.report import console
+
+
+def check(cfg: HumanoidConfig, opts: BuildOptions) -> None:
+    """Refuse what a humanoid build has not: the reachable-speed frontier (a quadruped search)."""
+    if opts.frontier:
+        raise SkatelibError(f"{cfg.path} is a humanoid config: --frontier searches the quadruped's "
+                            "reachable-speed frontier; drop it")
+
+
+def announce(cfg: HumanoidConfig) -> None:
+    console.print(escape(f"{cfg.sweep.motion}: {cfg.gpm.nodes} LG nodes per step, {cfg.gpm.solver}"))
+
+
+def tasks(cfg: HumanoidConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[MotionTask]:
+    """One task per velocity (a motion's steps chain through their states, so they stay together)."""
+    return [MotionTask(cfg, v) for v in sorted(cfg.sweep.velocities_mps)]
+
+
+def prepare(cfg: HumanoidConfig, opts: BuildOptions) -> None:
+    """Nothing to share: a step NLP builds in milliseconds in each worker."""
+
+
+def write(cfg: HumanoidConfig, out: Path, outcomes: list[MotionOutcome],
+          opts: BuildOptions) -> tuple[Path, list[MotionOutcome], None]:
+    """Write the library in velocity order; returns the file and the ordered outcomes."""
+    from skatelib.pipeline.humanoid.entries import write_humanoid_library
+
+    outcomes = sorted(outcomes, key=lambda o: o.motion.velocity_mps)
+    return write_humanoid_library(out, cfg, outcomes), outcomes, None
+
+
+def summary(outcomes: list[MotionOutcome], extra: Any = None) -> None:
+    """One row per step of every motion: status, iterations, time and cost; then the checks' failures."""
+    t = Table(title="entries (time: c = from the cache)")
+    for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
+        t.add_column(escape(col))
+    for o in outcomes:
+        for r in o.motion.steps:
+            t.add_row(o.key, r.spec.name, r.status, str(r.iterations),
+                      f"{1e3 * r.solve_time_s:.1f}" + (" c" if o.cached else ""), f"{r.objective:.4f}")
+    console.print(t)
+    for o in outcomes:
+        if o.failures:
+            console.print(escape(f"{o.key}: {o.status}"))

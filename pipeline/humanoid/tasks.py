@@ -1,0 +1,115 @@
+"""The humanoid's build tasks: one motion (a walk or a skate at one velocity) per task, solved step
+by step, cached under a key of what determines it and judged by the independent step checks."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from skatelib.library import schema
+from skatelib.pipeline.cache import cache_file, cache_key, load_cached, store
+from skatelib.pipeline.humanoid.config import HumanoidConfig
+from skatelib.pipeline.humanoid.motion import Motion, plan_for, plan_json, solve_motion, step_model
+from skatelib.pipeline.humanoid.step import SOLVER_OPTIONS, StepSpec, step_problem
+from skatelib.pipeline.sweep import EntryEvent
+
+
+def entry_name(config: HumanoidConfig, velocity_mps: float) -> tuple[str, int]:
+    """The entry key of a motion and its strides: walking steps between start and stop, or one
+    skating push (``n_phases`` keeps the number of GPM phases)."""
+    strides = config.walk.steps if config.sweep.motion == "walk" else 1
+    return schema.humanoid_key(config.sweep.motion, velocity_mps, strides), strides
+
+
+def problem_json(config: HumanoidConfig) -> str:
+    """The part of the config that determines a motion: no name, no velocity list."""
+    d = json.loads(config.resolved_json())
+    d.pop("meta")
+    d["sweep"].pop("velocities_mps")
+    return json.dumps(d, sort_keys=True)
+
+
+def motion_key(config: HumanoidConfig, velocity_mps: float, plan: list[StepSpec]) -> str:
+    """Cache key of a motion: the problem config, the plan (every step's segments, supports and
+    terminal targets), each step NLP's expressions and its solver's options, and the velocity."""
+    model = step_model(config)
+    nlp = hashlib.sha256()
+    for terminal in sorted({spec.terminal for spec in plan}):
+        prob = step_problem(model.n_nodes, terminal, model.solver)
+        nlp.update(f"{terminal}\n{prob.nlp['f']}\n{prob.nlp['g']}\n".encode())
+    return cache_key("humanoid", problem_json(config), plan_json(plan), nlp.hexdigest(),
+                     SOLVER_OPTIONS[model.solver], round(velocity_mps, 9))
+
+
+@dataclass(frozen=True)
+class MotionOutcome:
+    """A finished motion: the solved motion, the independent checks' failures (none: it holds),
+    cache origin and key, and any note for the user."""
+
+    key: str
+    motion: Motion
+    failures: tuple[str, ...]
+    cached: bool
+    cache_key: str = ""
+    note: str = ""
+
+    @property
+    def success(self) -> bool:
+        return self.motion.success and not self.failures
+
+    @property
+    def status(self) -> str:
+        if self.failures:
+            return "Physics_Check_Failed: " + "; ".join(self.failures)
+        steps = self.motion.steps
+        return "Solve_Succeeded" if self.motion.success else "; ".join(f"{r.spec.name}: {r.status}" for r in steps)
+
+    def event(self) -> EntryEvent:
+        return EntryEvent(self.key, True, self.status, self.success, self.cached)
+
+
+@dataclass(frozen=True)
+class MotionTask:
+    """One velocity of a humanoid sweep."""
+
+    config: HumanoidConfig
+    velocity_mps: float
+
+    @property
+    def n_entries(self) -> int:
+        return 1
+
+    def run(self, use_cache: bool, events: Any) -> list[MotionOutcome]:
+        """Solve (or read from the cache) and judge the motion (a task of
+        :func:`skatelib.pipeline.sweep.run_sweep`)."""
+        cfg, v = self.config, self.velocity_mps
+        name = entry_name(cfg, v)[0]
+        if events is not None:
+            events.put(EntryEvent(name, done=False))
+        key = motion_key(cfg, v, plan_for(cfg, v)[1])
+        path = cache_file(key)
+        hit = load_cached(path, ("motion",)) if use_cache else None
+        if isinstance(hit, dict):
+            motion = hit["motion"]
+        else:
+            motion = solve_motion(cfg, v)
+            if use_cache:
+                store(path, {"motion": motion})
+        note = f"{hit}; solved again" if isinstance(hit, str) else ""
+        outcome = MotionOutcome(name, motion, judge(cfg, motion), isinstance(hit, dict), key, note)
+        if events is not None:
+            events.put(outcome.event())
+        return [outcome]
+
+
+def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
+    """The independent step checks (``skatelib validate``'s) on a solved motion's node values."""
+    from skatelib.pipeline.humanoid.entries import node_arrays
+    from skatelib.pipeline.humanoid.verify import check_steps, failures
+
+    if not motion.success:
+        return ()
+    nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)
+    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, step_model(config))))

@@ -1,0 +1,90 @@
+"""The quadruped's part of a build (``pipeline/build.py``): its options check, its tasks (one
+warm-start chain per stride count), the library it writes (with the frontier when asked) and the
+table it prints."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rich.markup import escape
+from skatelib.library.schema import entry_key
+from skatelib.pipeline.kinds import BuildOptions
+from skatelib.pipeline.quadruped.chains import Chain, EntryOutcome, chains_for, ordered
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.report import console, entry_table, err_console, fmt, frontier_table
+
+
+def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
+    """Compiled stage functions are cached in the cache folder too: it must be writable."""
+    from skatelib.pipeline.preflight import check_cache_dir
+
+    if cfg.optimization.compile:
+        check_cache_dir()
+
+
+def announce(cfg: QuadrupedConfig) -> None:
+    """What the user should know before the solves start: how the stage functions run."""
+    if not cfg.optimization.compile:
+        return
+    from skatelib.pipeline.ocp.stagewise import c_compiler, cache_dir
+
+    cc = c_compiler()
+    if cc is None:
+        err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
+                          "3-4x slower; install gcc to compile them")
+    else:
+        console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
+                             f"once; cached in {cache_dir()})"))
+
+
+def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
+    """One warm-start chain per stride count (most strides first, for load balance)."""
+    return chains_for(cfg, ipopt)
+
+
+def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
+    """Compile the stage functions in this process first (loky), so that parallel workers load them
+    instead of all compiling."""
+    if cfg.optimization.compile and opts.backend == "loky":
+        from skatelib.pipeline.quadruped.pushoff import problem_for
+
+        problem_for(cfg, min(cfg.sweep.strides))
+
+
+def write(cfg: QuadrupedConfig, out: Path, outcomes: list[EntryOutcome],
+          opts: BuildOptions) -> tuple[Path, list[EntryOutcome], Any]:
+    """Write the library (failed entries included, ``success = false`` with their status); with
+    ``opts.frontier`` search the reachable-speed frontier of every stride count and store it.
+    Returns the file, the outcomes in the library's order and the frontier (or None)."""
+    from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.system import SkateSystem
+
+    outcomes = ordered(outcomes)
+    entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
+    solver_options = outcomes[0].result.ipopt_options if outcomes else {}
+    search = FrontierSearch() if opts.frontier else None
+    points = find_frontier(cfg, cfg.sweep.strides, search, opts.jobs) if search is not None else None
+    stored = frontier_json(points, search) if points is not None and search is not None else None
+    path = write_quadruped_library(out, cfg, SkateSystem.from_config(cfg), entries, solver_options, stored)
+    return path, outcomes, points
+
+
+def summary(outcomes: list[EntryOutcome], frontier: Any = None) -> None:
+    """One row per entry: status, iterations, tries, time and the independent checks' figures;
+    then the frontier, when searched."""
+    t = entry_table("entries (time: c = from the cache; momentum: the speed robot and board ride at together)",
+                    ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
+                     "Coulomb margin [N]", "torque [N m]", "defect"))
+    for o in outcomes:
+        r, ph = o.result, o.physics
+        status = r.status.replace("Solve_Succeeded", "ok")
+        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
+                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
+                  fmt(ph, "momentum_speed_mps", "{:.4f}"), fmt(ph, "momentum_speed_error", "{:.2%}"),
+                  fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
+                  fmt(ph, "max_defect", "{:.1e}"))
+    console.print(t)
+    if frontier is not None:
+        frontier_table(frontier)

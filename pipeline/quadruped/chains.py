@@ -1,0 +1,107 @@
+"""The quadruped's build tasks: entries of one stride count form a warm-start chain along velocity,
+solved in order in one worker; each finished entry is cached under a key of what determines it
+and judged by the independent physics checks."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
+from typing import Any
+
+from skatelib.library import schema
+from skatelib.pipeline.cache import cache_file, cache_key, load_cached, store
+from skatelib.pipeline.quadruped.attempts import judge, solve_with_retries
+from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solver_options
+from skatelib.pipeline.sweep import EntryEvent
+
+
+def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
+    """Cache key of an entry: what determines its solution.
+
+    The problem's fingerprint (stage function, problem config with the URDF by content, parameters,
+    bounds, cold guess), the IPOPT options, target and strides, the key of the entry whose solution
+    warm-starts it (``None`` when cold), the library format and the cache version.
+    """
+    prob = problem_for(spec.config, spec.n_strides)
+    v = spec.target_velocity_mps
+    return cache_key(prob.fingerprint(v, spec.guess), solver_options(spec), round(v, 9), spec.n_strides, predecessor)
+
+
+@dataclass(frozen=True)
+class EntryOutcome:
+    """A finished sweep entry: the result (without warm-start data), attempts, cache origin, the
+    independent physics measurements, the cache key it is stored under and any note for the user."""
+
+    result: SolveResult
+    attempts: int
+    cached: bool
+    physics: dict[str, float]
+    cache_key: str = ""
+    note: str = ""
+
+    @property
+    def success(self) -> bool:
+        return self.result.success
+
+    def event(self) -> EntryEvent:
+        """The finished event of this entry (what the progress display hears)."""
+        r = self.result
+        return EntryEvent(schema.entry_key(r.target_velocity_mps, r.n_strides), True, r.status, r.success, self.cached)
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Entries of one stride count, solved in order of increasing velocity."""
+
+    config: QuadrupedConfig
+    n_strides: int
+    velocities: tuple[float, ...]
+    ipopt: tuple[tuple[str, Any], ...] = ()  # extra IPOPT options of every solve (e.g. its log level)
+
+    @property
+    def n_entries(self) -> int:
+        return len(self.velocities)
+
+    def run(self, use_cache: bool, events: Any) -> list[EntryOutcome]:
+        """Solve the chain in order, each entry warm-started from the last success (a task of
+        :func:`skatelib.pipeline.sweep.run_sweep`); cached entries are read instead of solved."""
+        out: list[EntryOutcome] = []
+        warm: WarmStart | None = None
+        warm_key: str | None = None
+        for v in self.velocities:
+            use_warm = warm if self.config.sweep.warm_start else None
+            spec = PushoffSpec(self.config, v, self.n_strides, warm=use_warm, ipopt=self.ipopt)
+            key = entry_key(spec, warm_key if use_warm is not None else None)
+            if events is not None:
+                events.put(EntryEvent(schema.entry_key(v, self.n_strides), done=False))
+            path = cache_file(key)
+            hit = load_cached(path, ("result", "attempts")) if use_cache else None
+            note = hit if isinstance(hit, str) else ""
+            if isinstance(hit, dict):
+                result, attempts = hit["result"], hit["attempts"]
+            else:
+                result, attempts = solve_with_retries(spec)
+                if use_cache:
+                    store(path, {"result": result, "attempts": attempts})
+            if note:
+                note += "; solved again"
+            if result.success:
+                warm, warm_key = result.warm, key
+            judged, physics = judge(self.config, result)
+            outcome = EntryOutcome(replace(judged, warm=None), attempts, isinstance(hit, dict), physics, key, note)
+            out.append(outcome)
+            if events is not None:
+                events.put(outcome.event())
+        return out
+
+
+def chains_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
+    """One chain per stride count, longest-running (most strides) first for load balance."""
+    v = tuple(sorted(config.sweep.velocities_mps))
+    return [Chain(config, s, v, ipopt) for s in sorted(config.sweep.strides, reverse=True)]
+
+
+def ordered(outcomes: Iterable[EntryOutcome]) -> list[EntryOutcome]:
+    """Outcomes sorted by strides, then velocity (the library's entry order)."""
+    return sorted(outcomes, key=lambda o: (o.result.n_strides, o.result.target_velocity_mps))
