@@ -553,7 +553,7 @@ def track_entry(lib: MotionLibrary, key: str, model: SkateParams, plant_params: 
     x_init[NX:NX + 3] = ref.board_pos[0, 0:3]
     kin = LegKinematics.from_library(lib)
     run = simulate(ref, x_init, model, plant_params, dist, cfg, settings, keep_trace, kin)
-    label = float(entry.attrs["target_velocity_mps"])
+    label = float(entry.attrs[schema.A_TARGET_VELOCITY])
     delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
     err = (delivered - label) / label if label else float("nan")
     reasons = []

@@ -76,3 +76,11 @@ U_F: Final = slice(0, 12)
 U_QD: Final = slice(12, 24)
 
 assert NX == 28 and NU == 24
+
+# The humanoid (HRP-2, Takasugi et al.): a point mass at the centre of mass, in the world frame.
+HUMANOID_STATE_NAMES: Final = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
+HUMANOID_STATE_UNITS: Final = ("m", "m", "m", "m/s", "m/s", "m/s")
+HUMANOID_CONTROL_NAMES: Final = ("com_ax", "com_ay", "com_az")
+HUMANOID_CONTROL_UNITS: Final = ("m/s^2",) * 3
+ZMP_NAMES: Final = ("zmp_x", "zmp_y")  # zero-moment point on the ground [m]
+POINT_NAMES: Final = ("x", "y", "z")  # a contact point [m]

@@ -77,18 +77,30 @@ D_CONTROL: Final = "control"
 D_CONTACT: Final = "contact"
 D_FOOT_POS: Final = "foot_pos"
 D_BOARD_POS: Final = "board_pos"
+D_ZMP: Final = "zmp"  # humanoid: the zero-moment point (K, 2)
+D_CONTACT_POINT: Final = "contact_point"  # humanoid: the representative contact point (K, 3)
+D_STEP_INDEX: Final = "step_index"  # humanoid: which step each sample belongs to (K,)
+D_NODES_T: Final = "nodes_t"  # humanoid: per step, the GPM node times (S, N+2)
+D_NODES_STATE: Final = "nodes_state"  # humanoid: per step, the states at tau_0..tau_N and the end (S, N+2, 6)
+D_NODES_CONTROL: Final = "nodes_control"  # humanoid: per step, the controls at the LG nodes (S, N, 3)
+D_NODES_CONTACT_POINT: Final = "nodes_contact_point"  # humanoid: per step, the contact point at the nodes
+A_PHYSICS: Final = "physics_json"  # an entry's independent physics figures
+A_CLOSED_LOOP: Final = "closed_loop_json"  # an entry's closed-loop verdict (validate --closed-loop)
+A_CACHE_KEY: Final = "cache_key"  # the build cache's key of the entry
+A_PLAN: Final = "plan_json"  # humanoid: the steps the entry was solved for
+A_STEPS: Final = "steps_json"  # humanoid: each step's status, iterations and time
 A_COLUMNS: Final = "columns"
 A_UNITS: Final = "units"
-ENTRY_ATTRS: Final = (
-    "target_velocity_mps",
-    "n_strides",
-    "success",
-    "status",
-    "iterations",
-    "solve_time_s",
-    "objective",
-    "max_constraint_violation",
-)
+A_TARGET_VELOCITY: Final = "target_velocity_mps"  # the entry's label [m/s]
+A_N_STRIDES: Final = "n_strides"
+A_SUCCESS: Final = "success"
+A_STATUS: Final = "status"  # the solver's status, or the failed check
+A_ITERATIONS: Final = "iterations"
+A_SOLVE_TIME: Final = "solve_time_s"
+A_OBJECTIVE: Final = "objective"
+A_MAX_VIOLATION: Final = "max_constraint_violation"
+ENTRY_ATTRS: Final = (A_TARGET_VELOCITY, A_N_STRIDES, A_SUCCESS, A_STATUS, A_ITERATIONS, A_SOLVE_TIME, A_OBJECTIVE,
+                      A_MAX_VIOLATION)
 ENTRY_DATASETS: Final = {
     "quadruped": (D_T, D_STATE, D_CONTROL, D_CONTACT, D_FOOT_POS, D_BOARD_POS),
     "humanoid": (D_T, D_STATE, D_CONTROL),

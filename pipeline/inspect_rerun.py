@@ -18,6 +18,7 @@ from types import ModuleType
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
 from skatelib.pipeline.kinds import check_library_kind, part
@@ -60,14 +61,14 @@ def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
     parts = [f"{e.target_velocity_mps:.2f} m/s x {e.n_strides}", f"{a['status']}" + ("" if e.success else " (failed)")]
     if "iterations" in a:
         parts[-1] += f", {a['iterations']} iterations"
-    ph = json.loads(str(a.get("physics_json", "{}")))
+    ph = json.loads(str(a.get(schema.A_PHYSICS, "{}")))
     for key, fmt in (("momentum_speed_mps", "rides at {:.3f} m/s"),
                      ("min_friction_margin_N", "Coulomb margin {:.2f} N"),
                      ("max_torque_rigid_legs_Nm", "torque {:.1f} N m"), ("max_defect", "defect {:.0e}")):
         if key in ph:
             parts.append(fmt.format(ph[key]))
-    if "closed_loop_json" in a:
-        cl = json.loads(str(a["closed_loop_json"]))
+    if schema.A_CLOSED_LOOP in a:
+        cl = json.loads(str(a[schema.A_CLOSED_LOOP]))
         parts.append(f"closed loop {'pass' if cl['passed'] else 'FAIL'} ({cl['delivered_mps']:.3f} m/s)")
     text = f"**{e.key}**: " + "; ".join(parts)
     rec.log(f"{root}/summary", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)

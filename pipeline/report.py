@@ -9,6 +9,7 @@ from typing import Any
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+from skatelib.library import schema
 
 PIPE_WIDTH = 260
 
@@ -124,9 +125,10 @@ PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
     """``skatelib info --json``: provenance, model and one record per entry."""
     entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
-                "success": e.success, "status": str(e.attrs["status"]), "iterations": int(e.attrs["iterations"]),
-                "knots": len(e.t), "duration_s": e.duration_s, "solve_time_s": e.attrs.get("solve_time_s"),
-                "physics": json.loads(str(e.attrs.get("physics_json", "{}")))} for e in lib]
+                "success": e.success, "status": str(e.attrs[schema.A_STATUS]),
+                "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
+                "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
+                "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))} for e in lib]
     provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
     return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
             "model": dict(lib.model), "entries": entries}
@@ -146,11 +148,12 @@ def library_summary(lib: Any, path: Any) -> None:
                                                 "duration [s]", "solve [s]", "momentum [m/s]", "off label",
                                                 "Coulomb margin [N]", "defect"))
     for e in lib:
-        ph = json.loads(str(e.attrs.get("physics_json", "{}")))
+        ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
         off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
                if "momentum_speed_mps" in ph and e.target_velocity_mps else "-")
         t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
-                  escape(str(e.attrs["status"])), str(e.attrs["iterations"]), str(len(e.t)), f"{e.duration_s:.2f}",
-                  fmt(e.attrs, "solve_time_s", "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                  escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
+                  f"{e.duration_s:.2f}",
+                  fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
                   off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)

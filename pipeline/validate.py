@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from skatelib.library import schema
 from skatelib.library.reader import read_library
 from skatelib.pipeline.kinds import kind_named
 from skatelib.runtime import MotionLibrary
@@ -39,5 +40,5 @@ def closed_loop_verdicts(path: Path, perturb: str, jobs: int) -> list[Any]:
     results = [r for r, _ in track_library(path, None, "" if perturb == "none" else perturb, jobs=jobs)]
     amend_library(path, {"closed_loop_plant": perturb,
                          "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
-                  {r.key: {"closed_loop_json": json.dumps(r.as_dict(), sort_keys=True)} for r in results})
+                  {r.key: {schema.A_CLOSED_LOOP: json.dumps(r.as_dict(), sort_keys=True)} for r in results})
     return results

@@ -72,15 +72,15 @@ class Entry:
 
     @property
     def target_velocity_mps(self) -> float:
-        return float(self.attrs["target_velocity_mps"])
+        return float(self.attrs[schema.A_TARGET_VELOCITY])
 
     @property
     def n_strides(self) -> int:
-        return int(self.attrs["n_strides"])
+        return int(self.attrs[schema.A_N_STRIDES])
 
     @property
     def success(self) -> bool:
-        return bool(self.attrs["success"])
+        return bool(self.attrs[schema.A_SUCCESS])
 
     @property
     def duration_s(self) -> float:

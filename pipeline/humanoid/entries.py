@@ -7,18 +7,18 @@ from pathlib import Path
 
 import numpy as np
 from skatelib.library import schema
+from skatelib.library.channels import (
+    HUMANOID_CONTROL_NAMES,
+    HUMANOID_CONTROL_UNITS,
+    HUMANOID_STATE_NAMES,
+    HUMANOID_STATE_UNITS,
+    POINT_NAMES,
+    ZMP_NAMES,
+)
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.motion import (
-    CONTROL_NAMES,
-    CONTROL_UNITS,
-    STATE_NAMES,
-    STATE_UNITS,
-    ZMP_NAMES,
-    Motion,
-    plan_json,
-)
+from skatelib.pipeline.humanoid.motion import Motion, plan_json
 from skatelib.pipeline.humanoid.tasks import MotionOutcome, entry_name
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 from skatelib.pipeline.provenance import root_attributes
@@ -41,27 +41,27 @@ def entry_from_motion(o: MotionOutcome, config: HumanoidConfig) -> EntryRecord:
     strides = entry_name(config, m.velocity_mps)[1]
     nodes_t, nodes_state, nodes_control = node_arrays(m, config.gpm.nodes)
     attrs = {
-        "target_velocity_mps": m.velocity_mps, "n_strides": strides, "n_phases": len(steps),
-        "motion": config.sweep.motion, "success": o.success,
-        "status": o.status, "iterations": sum(r.iterations for r in steps),
-        "solve_time_s": sum(r.solve_time_s for r in steps), "objective": sum(r.objective for r in steps),
-        "max_constraint_violation": max(r.max_violation for r in steps),
-        "plan_json": plan_json(m.plan), "cache_key": o.cache_key,
-        "steps_json": json.dumps([{"name": r.spec.name, "status": r.status, "iterations": r.iterations,
+        schema.A_TARGET_VELOCITY: m.velocity_mps, schema.A_N_STRIDES: strides, "n_phases": len(steps),
+        "motion": config.sweep.motion, schema.A_SUCCESS: o.success,
+        schema.A_STATUS: o.status, schema.A_ITERATIONS: sum(r.iterations for r in steps),
+        schema.A_SOLVE_TIME: sum(r.solve_time_s for r in steps), schema.A_OBJECTIVE: sum(r.objective for r in steps),
+        schema.A_MAX_VIOLATION: max(r.max_violation for r in steps),
+        schema.A_PLAN: plan_json(m.plan), schema.A_CACHE_KEY: o.cache_key,
+        schema.A_STEPS: json.dumps([{"name": r.spec.name, "status": r.status, "iterations": r.iterations,
                                    "solve_time_s": r.solve_time_s, "duration_s": r.spec.duration_s,
                                    "terminal": r.spec.terminal} for r in steps]),
     }
     arrays = {
-        schema.D_T: m.t, schema.D_STATE: m.state, schema.D_CONTROL: m.control, "zmp": m.zmp,
-        "contact_point": m.contact_point, "step_index": m.step_index, "nodes_t": nodes_t, "nodes_state": nodes_state,
-        "nodes_control": nodes_control, "nodes_contact_point": np.stack([r.P0 for r in steps]),
+        schema.D_T: m.t, schema.D_STATE: m.state, schema.D_CONTROL: m.control, schema.D_ZMP: m.zmp,
+        schema.D_CONTACT_POINT: m.contact_point, schema.D_STEP_INDEX: m.step_index, schema.D_NODES_T: nodes_t,
+        schema.D_NODES_STATE: nodes_state, schema.D_NODES_CONTROL: nodes_control,
+        schema.D_NODES_CONTACT_POINT: np.stack([r.P0 for r in steps]),
     }
-    columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, "zmp": ZMP_NAMES,
-               "contact_point": ("x", "y", "z")}
-    units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS, "zmp": ("m", "m"),
-             "contact_point": ("m", "m", "m")}
-    return EntryRecord(key=o.key, attrs=attrs, arrays=arrays, columns=columns,
-                     units=units)
+    columns = {schema.D_STATE: HUMANOID_STATE_NAMES, schema.D_CONTROL: HUMANOID_CONTROL_NAMES,
+               schema.D_ZMP: ZMP_NAMES, schema.D_CONTACT_POINT: POINT_NAMES}
+    units = {schema.D_STATE: HUMANOID_STATE_UNITS, schema.D_CONTROL: HUMANOID_CONTROL_UNITS,
+             schema.D_ZMP: ("m", "m"), schema.D_CONTACT_POINT: ("m", "m", "m")}
+    return EntryRecord(key=o.key, attrs=attrs, arrays=arrays, columns=columns, units=units)
 
 
 def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[MotionOutcome]) -> Path:

@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 from rich.markup import escape
+from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.humanoid.config import HumanoidConfig
@@ -44,8 +45,8 @@ def validate_entries(lib: MotionLibrary, report: Any) -> int:
             report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
         plan = stored_plan(lib, e)  # as solved, not as today's code would plan it
-        rep = check_steps(plan, e.arrays["nodes_t"], e.arrays["nodes_state"], e.arrays["nodes_control"],
-                          step_model(cfg))
+        nodes = (e.arrays[schema.D_NODES_T], e.arrays[schema.D_NODES_STATE], e.arrays[schema.D_NODES_CONTROL])
+        rep = check_steps(plan, *nodes, step_model(cfg))
         fails = failures(rep)
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})

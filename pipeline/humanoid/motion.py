@@ -18,16 +18,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from skatelib.library import schema
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.geometry import Support, convex_hull, rectangle
 from skatelib.pipeline.humanoid.step import StepModel, StepResult, StepSpec, solve_sequence
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 
-STATE_NAMES = ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
-STATE_UNITS = ("m", "m", "m", "m/s", "m/s", "m/s")
-CONTROL_NAMES = ("com_ax", "com_ay", "com_az")
-CONTROL_UNITS = ("m/s^2",) * 3
-ZMP_NAMES = ("zmp_x", "zmp_y")
 PUSH_SEGMENTS = 10
 
 
@@ -152,8 +148,8 @@ def plan_from_json(text: str) -> list[StepSpec]:
 def stored_plan(lib: Any, e: Any) -> list[StepSpec]:
     """The entry's stored plan; a library from before plans were stored (no ``plan_json``) gets
     it rebuilt from its stored config with today's code."""
-    if "plan_json" in e.attrs:
-        return plan_from_json(str(e.attrs["plan_json"]))
+    if schema.A_PLAN in e.attrs:
+        return plan_from_json(str(e.attrs[schema.A_PLAN]))
     from skatelib.pipeline.config import config_from_json
     from skatelib.pipeline.humanoid.config import HumanoidConfig
 
@@ -193,5 +189,5 @@ def _contact_at(r: StepResult, t: float) -> np.ndarray:
     return np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
 
 
-__all__ = ["CONTROL_NAMES", "STATE_NAMES", "Motion", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
+__all__ = ["Motion", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
            "stored_plan", "walking_steps"]

@@ -11,8 +11,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library import schema
+from skatelib.library.channels import HUMANOID_STATE_NAMES, HUMANOID_STATE_UNITS
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.humanoid.motion import STATE_NAMES, STATE_UNITS, stored_plan
+from skatelib.pipeline.humanoid.motion import stored_plan
 from skatelib.pipeline.plots import library_name, panels
 from skatelib.runtime import MotionLibrary
 
@@ -36,7 +38,7 @@ def plot_com(lib: MotionLibrary, plt: Any) -> Any:
         speed.plot(e.t, e.channel("com_vx"), color=c, label=e.key)
         speed.axhline(e.target_velocity_mps, color=c, lw=0.8, ls=":")
         height.plot(e.t, e.channel("com_z"), color=c)
-    unit = dict(zip(STATE_NAMES, STATE_UNITS, strict=True))
+    unit = dict(zip(HUMANOID_STATE_NAMES, HUMANOID_STATE_UNITS, strict=True))
     speed.set_ylabel(f"forward speed [{unit['com_vx']}]")
     height.set_ylabel(f"height [{unit['com_z']}]")
     height.set_xlabel("time [s]")
@@ -62,7 +64,7 @@ def plot_footprints(lib: MotionLibrary, plt: Any) -> Any:
                 ring = np.vstack([ring, ring[:1]])
                 ax.plot(ring[:, 0], ring[:, 1], color="C0", lw=0.8)
         ax.plot(e.channel("com_x"), e.channel("com_y"), color="C3", lw=1.5)
-        zmp = e.arrays["zmp"]
+        zmp = e.arrays[schema.D_ZMP]
         ax.plot(zmp[:, 0], zmp[:, 1], ".", color="C2", ms=2)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title(e.key, fontsize=9)

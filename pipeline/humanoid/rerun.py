@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 import rerun as rr
+from skatelib.library import schema
 from skatelib.pipeline.rerun_parts import ground, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -15,8 +16,8 @@ PANELS = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), 
 
 def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
     t, x = e.t, e.state
-    zmp = e.arrays["zmp"]
-    cp = e.arrays["contact_point"]
+    zmp = e.arrays[schema.D_ZMP]
+    cp = e.arrays[schema.D_CONTACT_POINT]
     m = lib.model
     rec.send_columns(f"{root}/com", indexes=time_index(t),
                      columns=rr.Points3D.columns(positions=x[:, 0:3] + offset, radii=np.full(len(t), 0.03)))

@@ -58,13 +58,13 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
 def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None,
                       cache_key: str = "") -> EntryRecord:
     attrs = {
-        "target_velocity_mps": r.target_velocity_mps, "n_strides": r.n_strides, "success": r.success,
-        "status": r.status, "iterations": r.iterations, "solve_time_s": r.solve_time_s,
-        "build_time_s": r.build_time_s, "objective": r.objective,
-        "max_constraint_violation": r.max_constraint_violation, "final_velocity_mps": r.final_velocity_mps,
+        schema.A_TARGET_VELOCITY: r.target_velocity_mps, schema.A_N_STRIDES: r.n_strides,
+        schema.A_SUCCESS: r.success, schema.A_STATUS: r.status, schema.A_ITERATIONS: r.iterations,
+        schema.A_SOLVE_TIME: r.solve_time_s, "build_time_s": r.build_time_s, schema.A_OBJECTIVE: r.objective,
+        schema.A_MAX_VIOLATION: r.max_constraint_violation, "final_velocity_mps": r.final_velocity_mps,
         "final_velocity_error": r.final_velocity_error, "attempts": attempts,
         "ipopt_options_json": json.dumps(r.ipopt_options, sort_keys=True, default=str),
-        "physics_json": json.dumps(physics or {}, sort_keys=True), "cache_key": cache_key,
+        schema.A_PHYSICS: json.dumps(physics or {}, sort_keys=True), schema.A_CACHE_KEY: cache_key,
     }
     arrays = {schema.D_T: r.t, schema.D_STATE: r.state, schema.D_CONTROL: r.control,
               schema.D_CONTACT: r.contact.astype(np.int8), schema.D_FOOT_POS: r.foot_pos,
