@@ -12,7 +12,10 @@ workers over warm-start chains; runtime open, sample and window against naive ba
 Closed loop (issue #10): one MPC update (build + solve) along an entry for each QP solver, the
 sparse OSQP form as the baseline; ``skatelib track`` over the default library on two workers.
 
-``python -m benchmarks.run [pushoff|library|runtime|mpc ...]`` runs a subset.
+fatrop (issue #9): CasADi's structure-exploiting interior point against IPOPT + MUMPS on the
+push-off NLP lifted to its stage structure (``benchmarks/fatrop.py``).
+
+``python -m benchmarks.run [pushoff|library|runtime|humanoid|rerun|mpc|fatrop ...]`` runs a subset.
 """
 
 from __future__ import annotations
@@ -316,7 +319,7 @@ def bench_mpc(path: Path | None = None) -> None:
 if __name__ == "__main__":
     import sys
 
-    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid", "rerun", "mpc"]
+    parts = sys.argv[1:] or ["pushoff", "library", "runtime", "humanoid", "rerun", "mpc", "fatrop"]
     lib_path = None
     if "pushoff" in parts:
         bench_pushoff()
@@ -328,6 +331,10 @@ if __name__ == "__main__":
         bench_rerun(lib_path)
     if "mpc" in parts:
         bench_mpc(lib_path)
+    if "fatrop" in parts:
+        from benchmarks.fatrop import bench_fatrop
+
+        bench_fatrop()
     if "runtime" in parts:
         # Measured in a fresh process: the build's idle worker processes would disturb it.
         import subprocess

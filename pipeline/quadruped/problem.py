@@ -60,7 +60,8 @@ class PushoffProblem:
         q_nom = system.stance.q_board.copy()
         q_nom[3 * p: 3 * p + 3] = system.stance.q_push[3 * p: 3 * p + 3]
         w = opt.weights
-        costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
+        self.costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
+        costs = self.costs
         mu_plan = opt.friction_margin * system.friction_mu
         term = config.terminal
         self.constraints: list[ConstraintTerm] = [
