@@ -22,7 +22,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU
-from skatelib.pipeline.ocp.terms import Stage
+from skatelib.pipeline.ocp.shooting import window_stage
 from skatelib.pipeline.quadruped.knots import N_PARAMS, NXA
 from skatelib.pipeline.quadruped.problem import PushoffProblem
 from skatelib.pipeline.quadruped.terms import DynamicsDefect
@@ -56,8 +56,7 @@ class Lifted:
 def lift(prob: PushoffProblem, v: float) -> Lifted:
     """The push-off NLP for target ``v`` in fatrop's stage structure (module docstring)."""
     N, nx, nu, n = prob.schedule.n_intervals, NXA, NU, NXA + NU
-    z, p = ca.SX.sym("z", 2 * n), ca.SX.sym("p", N_PARAMS)
-    st = Stage(x=z[:nx], u=z[nx:n], x_next=z[n:n + nx], u_next=z[n + nx:], p=p, dt=prob.config.optimization.dt_s)
+    z, p, st = window_stage((nx, nu, N_PARAMS), prob.config.optimization.dt_s)
     dynamics, *path = prob.constraints
     assert isinstance(dynamics, DynamicsDefect)
     lo, hi = (np.concatenate(b, axis=1) for b in zip(*(t.bounds(N) for t in path), strict=True))

@@ -32,45 +32,31 @@ class MultipleShooting:
 
 @dataclass(frozen=True)
 class Transcribed:
-    """A transcribed problem: the NLP, constraint bounds and the row layout of each term."""
+    """A transcribed problem: the NLP, its constraint bounds and the stage function's fingerprint."""
 
     nlp: StagewiseNLP
     lbg: np.ndarray
     ubg: np.ndarray
-    row_slices: dict[str, slice]
-    rows_per_stage: int
     fingerprint: str  # SHA-256 of the serialized stage function: changes with any cost or constraint term
 
-    def row(self, stage: int, term: str, offset: int = 0) -> int:
-        """Index into g (and lbg/ubg) of one row of a term at a stage.
 
-        Raises:
-            KeyError: When that row was left out as free.
-        """
-        full = stage * self.rows_per_stage + self.row_slices[term].start + offset
-        pos = int(np.searchsorted(self.nlp.kept_rows, full))
-        if pos >= len(self.nlp.kept_rows) or self.nlp.kept_rows[pos] != full:
-            raise KeyError(f"row {term}[{offset}] of stage {stage} is free and not in the NLP")
-        return pos
+def window_stage(sizes: tuple[int, int, int], dt: float) -> tuple[ca.SX, ca.SX, Stage]:
+    """The symbols of one stage's window ``z = [x_k, u_k, x_{k+1}, u_{k+1}]`` and parameters ``p``,
+    and the :class:`Stage` the terms see; ``sizes`` is (state, control, stage parameters)."""
+    nx, nu, n_params = sizes
+    n = nx + nu
+    z = ca.SX.sym("z", 2 * n)
+    p = ca.SX.sym("p", n_params)
+    return z, p, Stage(x=z[:nx], u=z[nx:n], x_next=z[n:n + nx], u_next=z[n + nx:], p=p, dt=dt)
 
 
 def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Sequence[CostTerm],
                constraints: Sequence[ConstraintTerm], compile_c: bool = False) -> Transcribed:
     """Build the stage function from the terms and assemble the NLP over all intervals; ``sizes``
     is (state, control, stage parameters)."""
-    nx, nu, n_params = sizes
-    n = nx + nu
-    z = ca.SX.sym("z", 2 * n)
-    p = ca.SX.sym("p", n_params)
-    stage = Stage(x=z[:nx], u=z[nx:n], x_next=z[n:n + nx], u_next=z[n + nx:], p=p, dt=method.dt)
+    z, p, stage = window_stage(sizes, method.dt)
     cost = sum((c.cost(stage) for c in costs), ca.SX(0))
-    rows, slices, at = [], {}, 0
-    for term in constraints:
-        r = term.rows(stage)
-        rows.append(r)
-        slices[term.name] = slice(at, at + r.shape[0])
-        at += r.shape[0]
-    cons = ca.vertcat(*rows)
+    cons = ca.vertcat(*[term.rows(stage) for term in constraints])
     fns = compiled_stage_functions(z, p, cost, cons) if compile_c else stage_functions(z, p, cost, cons)
     N = method.n_intervals
     lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
@@ -80,6 +66,5 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     oracle = ca.Function("stage_value", [z, p], [cost, cons])
     nlp = build_stagewise_nlp(fns, N, oracle_value=oracle, keep=keep)
     fingerprint = hashlib.sha256(oracle.serialize().encode()).hexdigest()
-    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], row_slices=slices,
-                       rows_per_stage=cons.shape[0], fingerprint=fingerprint)
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=fingerprint)
 
