@@ -77,6 +77,14 @@ class HumanoidConfig:
         d.pop("text")
         return json.dumps(d, sort_keys=True, default=str)
 
+    def problem_json(self) -> str:
+        """The part of the config that determines a motion, as JSON: no name, no velocity list
+        (as the quadruped's ``problem_json``, the config part of an entry's cache key)."""
+        d = json.loads(self.resolved_json())
+        d.pop("meta")
+        d["sweep"].pop("velocities_mps")
+        return json.dumps(d, sort_keys=True)
+
 _HUMANOID_SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "humanoid": HumanoidModelConfig, "gpm": GpmConfig, "walk": WalkConfig,
     "skate": SkateConfig, "sweep": HumanoidSweepConfig,

@@ -4,7 +4,6 @@ by step, cached under a key of what determines it and judged by the independent 
 from __future__ import annotations
 
 import hashlib
-import json
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,14 +22,6 @@ def entry_name(config: HumanoidConfig, velocity_mps: float) -> tuple[str, int]:
     return schema.humanoid_key(config.sweep.motion, velocity_mps, strides), strides
 
 
-def problem_json(config: HumanoidConfig) -> str:
-    """The part of the config that determines a motion: no name, no velocity list."""
-    d = json.loads(config.resolved_json())
-    d.pop("meta")
-    d["sweep"].pop("velocities_mps")
-    return json.dumps(d, sort_keys=True)
-
-
 def motion_key(config: HumanoidConfig, velocity_mps: float, plan: list[StepSpec]) -> str:
     """Cache key of a motion: the problem config, the plan (every step's segments, supports and
     terminal targets), each step NLP's expressions and its solver's options, and the velocity."""
@@ -39,7 +30,7 @@ def motion_key(config: HumanoidConfig, velocity_mps: float, plan: list[StepSpec]
     for terminal in sorted({spec.terminal for spec in plan}):
         prob = step_problem(model.n_nodes, terminal, model.solver)
         nlp.update(f"{terminal}\n{prob.nlp['f']}\n{prob.nlp['g']}\n".encode())
-    return cache_key("humanoid", problem_json(config), plan_json(plan), nlp.hexdigest(),
+    return cache_key("humanoid", config.problem_json(), plan_json(plan), nlp.hexdigest(),
                      SOLVER_OPTIONS[model.solver], round(velocity_mps, 9))
 
 

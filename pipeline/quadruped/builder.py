@@ -16,10 +16,11 @@ from skatelib.pipeline.report import console, entry_table, err_console, fmt, fro
 
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
-    """Compiled stage functions are cached in the cache folder too: it must be writable."""
+    """Compiled stage functions are cached in the cache folder too: it must be writable even with
+    ``--no-cache`` (with the cache on, ``build.check_options`` has checked it already)."""
     from skatelib.pipeline.preflight import check_cache_dir
 
-    if cfg.optimization.compile:
+    if cfg.optimization.compile and not opts.cache:
         check_cache_dir()
 
 
