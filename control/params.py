@@ -97,6 +97,7 @@ PERTURB_KEYS: dict[str, str] = {
     "bb": "bb_Nms_per_rad",
     "rolling": "rolling_N",
     "mu": "mu",
+    "tanh": "tanh_scale_s_per_m",
 }
 EXTRA_KEYS = ("com", "noise", "impulse", "impulse_t", "init")
 
@@ -126,6 +127,7 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
     number absolute (``mu=0.5``; for ``inertia`` a factor; ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
     ``impulse_t`` [s], ``init=0.01`` [m]). ``rolling`` changes the rolling-resistance coefficient
     (the force at the nominal weight); the force follows the plant's weight (``mass``, ``board_mass``).
+    ``tanh`` is the plant's k of Eq. (10) [s/m] (``tanh=500``: rolling resistance close to Coulomb's).
 
     Raises:
         PerturbationError: Naming the item and the valid keys.

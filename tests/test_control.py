@@ -228,6 +228,14 @@ def test_perturbations_parse_and_refuse():
     assert q.rolling_N == pytest.approx(2.2 * (9.79 + 2.2) / (8.9 + 2.2)) and q.mu == 0.5 and d.com_offset_m == 0.01
     light, _ = parse_perturbation("mass=-10%", p)
     assert light.rolling_N == pytest.approx(1.1 * (8.01 + 2.2) / (8.9 + 2.2))
+    # tanh: the plant's rolling resistance near rest (Eq. 10's k); at 5 mm/s the board's deceleration
+    # with nothing on the deck is tanh(k v) f_fri / m_B: a quarter of f_fri at k 50, all of it at k 500
+    stiff, _ = parse_perturbation("tanh=500", p)
+    s, contact = np.zeros(NB), np.array([SWING] * 4)
+    s[24] = 0.005
+    for params, share in ((p, np.tanh(0.25)), (stiff, np.tanh(2.5))):
+        decel = -Plant(params).derivative(s, np.zeros((3, 4)), np.zeros(12), contact, np.zeros((3, 4)))[24]
+        assert decel == pytest.approx(share * 1.1 / 2.2)
     for bad in ("weight=+10%", "mass", "mass=abc", "mu=nan", "mass=-100%"):
         with pytest.raises(PerturbationError):
             parse_perturbation(bad, p)

@@ -57,7 +57,7 @@ def info(
 
 PerturbOpt = Annotated[str, typer.Option(
     help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
-         "kb bb rolling mu com noise impulse impulse_t init). 'none' for the exact model.")]
+         "kb bb rolling mu tanh com noise impulse impulse_t init). 'none' for the exact model.")]
 DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 
 
