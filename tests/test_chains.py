@@ -1,0 +1,58 @@
+"""The quadruped's warm-start chains: solved from the middle speed outwards, and a failed entry
+passes its turn to the nearest success towards the middle."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped import chains
+
+from tests.helpers import TINY
+
+
+def test_solve_order_starts_cold_in_the_middle_and_walks_outwards():
+    assert chains.solve_order([1.0, 0.2, 0.85, 0.5, 0.3, 0.7]) == [
+        (0.5, None), (0.3, 0.5), (0.2, 0.3), (0.7, 0.5), (0.85, 0.7), (1.0, 0.85)]
+    assert chains.solve_order([0.4]) == [(0.4, None)]
+    assert chains.solve_order([0.7, 0.4]) == [(0.4, None), (0.7, 0.4)]
+    assert chains.solve_order([]) == []
+
+
+@dataclasses.dataclass(frozen=True)
+class _Result:
+    target_velocity_mps: float
+    n_strides: int
+    success: bool
+    status: str
+    warm: Any
+
+
+def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_middle(monkeypatch):
+    """0.3 and 0.7 fail: 0.2 starts from 0.5's solution, 0.85 too, 1.0 from 0.85's; every solve
+    is keyed on the entry that really warm-started it."""
+    failing = {0.3, 0.7}
+    started_from: dict[float, Any] = {}
+    keyed_on: dict[float, Any] = {}
+
+    def solve(spec):
+        v = spec.target_velocity_mps
+        started_from[v] = spec.warm
+        return _Result(v, spec.n_strides, v not in failing, "fake", f"solution {v}"), 1
+
+    def key(spec, predecessor):
+        keyed_on[spec.target_velocity_mps] = predecessor
+        return f"key {spec.target_velocity_mps}"
+
+    monkeypatch.setattr(chains, "solve_with_retries", solve)
+    monkeypatch.setattr(chains, "entry_key", key)
+    monkeypatch.setattr(chains, "judge", lambda config, result: (result, {}))
+    chain = chains.Chain(load_config(TINY), 1, (0.2, 0.3, 0.5, 0.7, 0.85, 1.0))
+    out = chain.run(use_cache=False, events=None)
+
+    assert [o.result.target_velocity_mps for o in out] == [0.5, 0.3, 0.2, 0.7, 0.85, 1.0]
+    assert started_from == {0.5: None, 0.3: "solution 0.5", 0.2: "solution 0.5", 0.7: "solution 0.5",
+                            0.85: "solution 0.5", 1.0: "solution 0.85"}
+    assert keyed_on == {0.5: None, 0.3: "key 0.5", 0.2: "key 0.5", 0.7: "key 0.5", 0.85: "key 0.5",
+                        1.0: "key 0.85"}
