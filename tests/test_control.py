@@ -229,7 +229,7 @@ def test_perturbations_parse_and_refuse():
     light, _ = parse_perturbation("mass=-10%", p)
     assert light.rolling_N == pytest.approx(1.1 * (8.01 + 2.2) / (8.9 + 2.2))
     # tanh: the plant's rolling resistance near rest (Eq. 10's k); at 5 mm/s the board's deceleration
-    # with nothing on the deck is tanh(k v) f_fri / m_B: a quarter of f_fri at k 50, all of it at k 500
+    # with nothing on the deck is tanh(k v) f_fri / m_B: a quarter of f_fri at k 50, 99 % of it at k 500
     stiff, _ = parse_perturbation("tanh=500", p)
     s, contact = np.zeros(NB), np.array([SWING] * 4)
     s[24] = 0.005
