@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import pickle
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -61,3 +62,18 @@ def store(path: Path, payload_obj: dict[str, Any]) -> None:
     blob = _MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + b"-" * 8 + b"\n" + payload
     with atomic_path(path) as tmp:  # parallel workers never read a half-written entry
         tmp.write_bytes(blob)
+
+
+def cached_or_solved(key: str, fields: tuple[str, ...], solve: Callable[[], dict[str, Any]],
+                     use_cache: bool) -> tuple[dict[str, Any], bool, str]:
+    """The payload cached under ``key`` (a dict with ``fields``), or ``solve()``'s, which is then
+    cached. Returns it, whether it came from the cache, and a note for the user when a damaged or
+    unreadable cache entry was solved again (and so repaired)."""
+    path = cache_file(key)
+    hit = load_cached(path, fields) if use_cache else None
+    if isinstance(hit, dict):
+        return hit, True, ""
+    payload = solve()
+    if use_cache:
+        store(path, payload)
+    return payload, False, f"{hit}; solved again" if isinstance(hit, str) else ""

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from skatelib.library import schema
-from skatelib.pipeline.cache import cache_file, cache_key, load_cached, store
+from skatelib.pipeline.cache import cache_key, cached_or_solved
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import Motion, plan_for, plan_json, solve_motion, step_model
 from skatelib.pipeline.humanoid.step import SOLVER_OPTIONS, StepSpec, step_problem
@@ -80,16 +80,9 @@ class MotionTask:
         if events is not None:
             events.put(EntryEvent(name, done=False))
         key = motion_key(cfg, v, plan_for(cfg, v)[1])
-        path = cache_file(key)
-        hit = load_cached(path, ("motion",)) if use_cache else None
-        if isinstance(hit, dict):
-            motion = hit["motion"]
-        else:
-            motion = solve_motion(cfg, v)
-            if use_cache:
-                store(path, {"motion": motion})
-        note = f"{hit}; solved again" if isinstance(hit, str) else ""
-        outcome = MotionOutcome(name, motion, judge(cfg, motion), isinstance(hit, dict), key, note)
+        payload, cached, note = cached_or_solved(key, ("motion",), lambda: {"motion": solve_motion(cfg, v)}, use_cache)
+        motion = payload["motion"]
+        outcome = MotionOutcome(name, motion, judge(cfg, motion), cached, key, note)
         if events is not None:
             events.put(outcome.event())
         return [outcome]

@@ -6,10 +6,11 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 from skatelib.library import schema
-from skatelib.pipeline.cache import cache_file, cache_key, load_cached, store
+from skatelib.pipeline.cache import cache_key, cached_or_solved
 from skatelib.pipeline.quadruped.attempts import judge, solve_with_retries
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solver_options
@@ -94,25 +95,21 @@ class Chain:
             key = entry_key(spec, warm_key if use_warm is not None else None)
             if events is not None:
                 events.put(EntryEvent(schema.entry_key(v, self.n_strides), done=False))
-            path = cache_file(key)
-            hit = load_cached(path, ("result", "attempts")) if use_cache else None
-            note = hit if isinstance(hit, str) else ""
-            if isinstance(hit, dict):
-                result, attempts = hit["result"], hit["attempts"]
-            else:
-                result, attempts = solve_with_retries(spec)
-                if use_cache:
-                    store(path, {"result": result, "attempts": attempts})
-            if note:
-                note += "; solved again"
+            payload, cached, note = cached_or_solved(key, ("result", "attempts"), partial(_solve, spec), use_cache)
+            result, attempts = payload["result"], payload["attempts"]
             if result.success:
                 solved[v] = (result.warm, key)
             judged, physics = judge(self.config, result)
-            outcome = EntryOutcome(replace(judged, warm=None), attempts, isinstance(hit, dict), physics, key, note)
+            outcome = EntryOutcome(replace(judged, warm=None), attempts, cached, physics, key, note)
             out.append(outcome)
             if events is not None:
                 events.put(outcome.event())
         return out
+
+
+def _solve(spec: PushoffSpec) -> dict[str, Any]:
+    result, attempts = solve_with_retries(spec)
+    return {"result": result, "attempts": attempts}
 
 
 def chains_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
