@@ -63,8 +63,7 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
-    oracle = ca.Function("stage_value", [z, p], [cost, cons])
-    nlp = build_stagewise_nlp(fns, N, oracle_value=oracle, keep=keep)
-    fingerprint = hashlib.sha256(oracle.serialize().encode()).hexdigest()
+    nlp = build_stagewise_nlp(fns, N, keep=keep)
+    fingerprint = hashlib.sha256(ca.Function("stage_value", [z, p], [cost, cons]).serialize().encode()).hexdigest()
     return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=fingerprint)
 

@@ -137,7 +137,7 @@ class StagewiseNLP:
 
     Attributes:
         nlp: ``{"x": w, "p": P, "f": f, "g": g}`` as MX (g holds the kept rows only).
-        options: nlpsol options carrying the assembled ``grad_f``, ``jac_g`` and ``hess_lag``.
+        options: nlpsol options: the assembled ``grad_f``, ``jac_g``, ``hess_lag``; ``no_nlp_grad``, no ``lam_p``.
         kept_rows: Indices of the stage rows (stage-major) that are in g.
     """
 
@@ -148,15 +148,17 @@ class StagewiseNLP:
     kept_rows: np.ndarray
 
 
-def build_stagewise_nlp(fns: StageFunctions, n_stages: int, oracle_value: ca.Function | None = None,
-                        keep: np.ndarray | None = None) -> StagewiseNLP:
+def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | None = None) -> StagewiseNLP:
     """Assemble the NLP over ``w = [v_0, ..., v_N]`` and stage windows ``z_k = [v_k, v_{k+1}]``;
     the parameter is the (n_p x N) matrix of per-stage parameters. The sizes (n of each v, n_p,
     the rows per stage) are those of ``fns.value(z, p) -> (l, g)``.
 
+    f and g evaluate ``fns.value`` itself (compiled, when the stage functions are): IPOPT gets every
+    derivative from the assembled functions in ``options``, and ``no_nlp_grad`` keeps CasADi from
+    differentiating f and g at set-up (a compiled function has no derivatives; the interpreted SX
+    version it needed before took 0.3 s of a 2.3 s push-off solve). So there is no ``lam_p``.
+
     Args:
-        oracle_value: A differentiable (SX) version of ``fns.value`` for the NLP's f and g: the
-            solver interface differentiates those once at set-up, which compiled functions cannot be.
         keep: Boolean mask over all stage rows (stage-major); rows left out (free rows with
             infinite bounds on both sides) never reach the solver.
     """
@@ -175,7 +177,7 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, oracle_value: ca.Fun
     window = (np.arange(2 * n)[:, None] + n * np.arange(n_stages)[None, :]).flatten(order="F")
     Z = ca.reshape(w[window.tolist()], 2 * n, n_stages)
     mode = "serial"
-    L, G = (oracle_value or fns.value).map(n_stages, mode)(Z, P)
+    L, G = fns.value.map(n_stages, mode)(Z, P)
     f = ca.sum2(L)
     g = ca.vec(G)[kept_rows.tolist()]
 
@@ -203,7 +205,8 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, oracle_value: ca.Fun
     hess_lag = ca.Function("nlp_hess_l", [w, p, sigma, lam], [H],
                            ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
     return StagewiseNLP(nlp={"x": w, "p": p, "f": f, "g": g},
-                        options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag},
+                        options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag,
+                                 "no_nlp_grad": True, "calc_lam_p": False},
                         n_w=n_w, n_g=n_g, kept_rows=kept_rows)
 
 

@@ -95,7 +95,7 @@ class PushoffProblem:
     def solver(self, options: dict[str, Any]) -> ca.Function:
         key = tuple(sorted(options.items()))
         if key not in self._solvers:
-            opts = {"print_time": False, "calc_lam_p": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+            opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
                     **{f"ipopt.{k}": v for k, v in options.items()}, **self.tr.nlp.options}
             self._solvers[key] = ca.nlpsol("pushoff", "ipopt", self.tr.nlp.nlp, opts)
         return self._solvers[key]
