@@ -105,6 +105,9 @@ class OptimizationConfig:
     final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
     mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="monotone")
     mu_init: float = _f(1e-9, 1e3, "IPOPT initial barrier parameter [-].", default=0.01)
+    warm_mu_strategy: str = _f(doc="IPOPT barrier strategy of a warm-started solve: 'monotone' or 'adaptive'.",
+                               default="adaptive")
+    warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started solve [-].", default=1e-4)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
     friction_model: str = _f(
         doc="Friction constraint of every contact: 'cone' (exact Coulomb cone, mu^2 f_n^2 >= |f_t|^2, f_n >= 0) "
@@ -213,6 +216,7 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
         ("optimization.integrator", cfg.optimization.integrator, ("etdrk4", "rk4")),
         ("optimization.friction_model", cfg.optimization.friction_model, FRICTION_MODELS),
         ("optimization.mu_strategy", cfg.optimization.mu_strategy, ("monotone", "adaptive")),
+        ("optimization.warm_mu_strategy", cfg.optimization.warm_mu_strategy, ("monotone", "adaptive")),
     ):
         if value not in allowed:
             raise ConfigError(p, key, f"{value!r}: use one of {', '.join(map(repr, allowed))}")

@@ -95,7 +95,8 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
                                "mu_init": opt.mu_init}
     if spec.warm is not None:
-        options.update({"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
+        options.update({"warm_start_init_point": "yes", "mu_strategy": opt.warm_mu_strategy,
+                        "mu_init": opt.warm_mu_init, "warm_start_bound_push": 1e-6,
                         "warm_start_mult_bound_push": 1e-6})
     options.update(dict(spec.ipopt))
     return options
