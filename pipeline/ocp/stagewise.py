@@ -114,8 +114,14 @@ def _scatter(block_sp: ca.Sparsity, n_stages: int, row_step: int, col_step: int,
         kept = R >= 0
     keys = C[kept] * shape[0] + R[kept]  # column-major order, as CasADi stores nonzeros
     uniq, index = np.unique(keys, return_inverse=True)
-    sp = ca.Sparsity.triplet(shape[0], shape[1], (uniq % shape[0]).tolist(), (uniq // shape[0]).tolist())
-    return sp, kept, index
+    return _compressed(shape, uniq // shape[0], uniq % shape[0]), kept, index
+
+
+def _compressed(shape: tuple[int, int], cols: np.ndarray, rows: np.ndarray) -> ca.Sparsity:
+    """The sparsity of nonzeros already in storage order (by column, then row), built from its
+    compressed columns (no sort, unlike ``Sparsity.triplet``)."""
+    colind = np.searchsorted(cols, np.arange(shape[1] + 1))
+    return ca.Sparsity(shape[0], shape[1], colind.tolist(), rows.tolist())
 
 
 def _assemble(sp: ca.Sparsity, nz: ca.MX, kept: np.ndarray, index: np.ndarray) -> ca.MX:
@@ -123,11 +129,12 @@ def _assemble(sp: ca.Sparsity, nz: ca.MX, kept: np.ndarray, index: np.ndarray) -
     entries (shared knots of neighbouring windows) summed."""
     if not kept.all():
         nz = nz[np.flatnonzero(kept).tolist()]
-    if len(np.unique(index)) == len(index):
+    if sp.nnz() == len(index):  # no overlaps: a permutation
         perm = np.empty(len(index), dtype=np.int64)
         perm[index] = np.arange(len(index))
         return ca.MX(sp, nz[perm.tolist()])
-    A = ca.DM(ca.Sparsity.triplet(sp.nnz(), len(index), index.tolist(), list(range(len(index)))), 1.0)
+    # Summing matrix: block nonzero j adds into global nonzero index[j] (one entry per column).
+    A = ca.DM(_compressed((sp.nnz(), len(index)), np.arange(len(index)), index), 1.0)
     return ca.MX(sp, ca.mtimes(A, nz))
 
 
