@@ -17,6 +17,7 @@ from skatelib.pipeline.ocp.stagewise import (
     StagewiseNLP,
     build_stagewise_nlp,
     compiled_stage_functions,
+    serialized_stage,
     stage_functions,
 )
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, Stage
@@ -57,13 +58,16 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     z, p, stage = window_stage(sizes, method.dt)
     cost = sum((c.cost(stage) for c in costs), ca.SX(0))
     cons = ca.vertcat(*[term.rows(stage) for term in constraints])
-    fns = compiled_stage_functions(z, p, cost, cons) if compile_c else stage_functions(z, p, cost, cons)
+    text = serialized_stage(z, p, cost, cons)  # the fingerprint, and the compiled functions' cache key
+    if compile_c:
+        fns = compiled_stage_functions(z, p, cost, cons, serialized=text)
+    else:
+        fns = stage_functions(z, p, cost, cons)
     N = method.n_intervals
     lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     nlp = build_stagewise_nlp(fns, N, keep=keep)
-    fingerprint = hashlib.sha256(ca.Function("stage_value", [z, p], [cost, cons]).serialize().encode()).hexdigest()
-    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=fingerprint)
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=hashlib.sha256(text.encode()).hexdigest())
 

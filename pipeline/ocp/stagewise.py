@@ -67,18 +67,25 @@ def c_compiler() -> str | None:
     return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
 
 
-def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: str = "-O1") -> StageFunctions:
+def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
+    """The stage value function ``(z, p) -> (cost, cons)`` serialized: what determines every
+    stage function (derivatives follow from it)."""
+    return ca.Function("stage_value", [z, p], [cost, cons]).serialize()
+
+
+def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: str = "-O1",
+                             serialized: str | None = None) -> StageFunctions:
     """The four stage functions compiled to C in one shared library, cached by content hash.
 
-    The key is the serialized stage value function (derivatives follow from it), so a cache hit
-    costs neither differentiation nor code generation. Without a C compiler, returns the
+    The key is :func:`serialized_stage` (``serialized``, when the caller has it already), so a
+    cache hit costs neither differentiation nor code generation. Without a C compiler, returns the
     symbolic functions.
     """
     cc = c_compiler()
     if cc is None:
         return stage_functions(z, p, cost, cons)
-    value = ca.Function("stage_value", [z, p], [cost, cons])
-    key_src = value.serialize() + flags + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
+    text = serialized if serialized is not None else serialized_stage(z, p, cost, cons)
+    key_src = text + flags + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = cache_dir() / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
     if not lib.exists():
         fns = stage_functions(z, p, cost, cons)
