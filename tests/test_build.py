@@ -15,7 +15,7 @@ from skatelib.pipeline.build import build_library
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped.attempts import retry_ladder
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart, solver_options
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY
@@ -175,13 +175,16 @@ def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
 
 
 def test_retry_ladder_goes_cold_then_other_guesses():
-    """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run."""
+    """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run from IPOPT's
+    own bound multipliers (the config's are for a first try)."""
     cfg = load_config(TINY)
     spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1)))
     ladder = retry_ladder(spec)
     assert [s.warm is not None for s in ladder] == [True, False, False, False]
     assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]
     assert ("mu_strategy", "adaptive") in ladder[-1].ipopt
+    assert solver_options(ladder[-1])["bound_mult_init_val"] == 1.0
+    assert solver_options(ladder[1])["bound_mult_init_val"] == cfg.optimization.bound_mult_init
 
 
 def test_solve_command_writes_a_one_entry_library(cache, tmp_path):

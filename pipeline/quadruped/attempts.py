@@ -25,11 +25,11 @@ def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[st
 
 def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
     """The specs tried in order when a solve fails: as given, cold ramp, cold hold, then a longer
-    adaptive-barrier run."""
+    adaptive-barrier run from IPOPT's own initial bound multipliers."""
     cold = replace(spec, warm=None)
     ladder = [spec] if spec.warm is None else [spec, cold]
     ladder.append(replace(cold, guess="hold"))
-    ladder.append(replace(cold, ipopt=(*spec.ipopt, ("mu_strategy", "adaptive"),
+    ladder.append(replace(cold, ipopt=(*spec.ipopt, ("mu_strategy", "adaptive"), ("bound_mult_init_val", 1.0),
                                        ("max_iter", 2 * spec.config.optimization.max_iter))))
     return ladder
 

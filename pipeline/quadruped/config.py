@@ -105,6 +105,9 @@ class OptimizationConfig:
     final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
     mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="monotone")
     mu_init: float = _f(1e-9, 1e3, "IPOPT initial barrier parameter [-].", default=0.01)
+    bound_mult_init: float = _f(
+        1e-9, 1e3, "IPOPT's initial bound multipliers of a cold solve (bound_mult_init_val; IPOPT's own is 1) [-].",
+        default=1.0)
     warm_mu_strategy: str = _f(doc="IPOPT barrier strategy of a warm-started solve: 'monotone' or 'adaptive'.",
                                default="adaptive")
     warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started solve [-].", default=1e-4)

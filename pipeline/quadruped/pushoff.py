@@ -94,7 +94,9 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     opt = spec.config.optimization
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
                                "mu_init": opt.mu_init}
-    if spec.warm is not None:
+    if spec.warm is None:
+        options["bound_mult_init_val"] = opt.bound_mult_init
+    else:
         options.update({"warm_start_init_point": "yes", "mu_strategy": opt.warm_mu_strategy,
                         "mu_init": opt.warm_mu_init, "warm_start_bound_push": 1e-6,
                         "warm_start_mult_bound_push": 1e-6})
