@@ -105,12 +105,12 @@ class OptimizationConfig:
     final_velocity_tol: float = _f(0.0, 0.5, "Allowed relative error of the final board speed [-].")
     mu_strategy: str = _f(doc="IPOPT barrier strategy: 'monotone' or 'adaptive'.", default="monotone")
     mu_init: float = _f(1e-9, 1e3, "IPOPT initial barrier parameter [-].", default=0.01)
-    bound_mult_init: float = _f(
-        1e-9, 1e3, "IPOPT's initial bound multipliers of a cold solve (bound_mult_init_val; IPOPT's own is 1) [-].",
-        default=1.0)
+    bound_mult_init: float = _f(1e-9, 1e3, "IPOPT bound_mult_init_val of a cold solve (IPOPT's: 1) [-].", default=1.0)
     warm_mu_strategy: str = _f(doc="IPOPT barrier strategy of a warm-started solve: 'monotone' or 'adaptive'.",
                                default="adaptive")
     warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started solve [-].", default=1e-4)
+    warm_bound_push: float = _f(1e-12, 0.1, "IPOPT warm_start_(mult_)bound_push of a warm-started solve [-].",
+                                default=1e-6)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
     friction_model: str = _f(
         doc="Friction constraint of every contact: 'cone' (exact Coulomb cone, mu^2 f_n^2 >= |f_t|^2, f_n >= 0) "

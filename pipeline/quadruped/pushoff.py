@@ -98,8 +98,8 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
         options["bound_mult_init_val"] = opt.bound_mult_init
     else:
         options.update({"warm_start_init_point": "yes", "mu_strategy": opt.warm_mu_strategy,
-                        "mu_init": opt.warm_mu_init, "warm_start_bound_push": 1e-6,
-                        "warm_start_mult_bound_push": 1e-6})
+                        "mu_init": opt.warm_mu_init, "warm_start_bound_push": opt.warm_bound_push,
+                        "warm_start_mult_bound_push": opt.warm_bound_push})
     options.update(dict(spec.ipopt))
     return options
 
