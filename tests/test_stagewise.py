@@ -6,7 +6,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from skatelib.pipeline.ocp.stagewise import build_stagewise_nlp, stage_functions
+from hypothesis import given
+from hypothesis import strategies as st
+from skatelib.pipeline.ocp.stagewise import _unique_inverse, build_stagewise_nlp, stage_functions
 
 N_V, N_STAGES = 3, 12  # window v = [position, velocity, acceleration]
 
@@ -87,3 +89,13 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     mtime = libs[0].stat().st_mtime_ns
     stagewise.compiled_stage_functions(z, p, cost, cons)
     assert libs[0].stat().st_mtime_ns == mtime
+
+
+@given(st.lists(st.integers(0, 50), max_size=200))
+def test_unique_inverse_equals_numpy(values):
+    """The stable-sort unique used for the global sparsities gives np.unique's values and inverse,
+    with and without repeats, empty included."""
+    keys = np.asarray(values, dtype=np.int64)
+    uniq, index = _unique_inverse(keys)
+    want, want_index = np.unique(keys, return_inverse=True)
+    assert np.array_equal(uniq, want) and np.array_equal(index, want_index.reshape(-1))
