@@ -6,9 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
-from skatelib.pipeline.ocp.stagewise import _unique_inverse, build_stagewise_nlp, stage_functions
+from skatelib.pipeline.ocp.stagewise import build_stagewise_nlp, stage_functions
 
 N_V, N_STAGES = 3, 12  # window v = [position, velocity, acceleration]
 
@@ -64,6 +62,11 @@ def test_solution_equals_plain_nlpsol():
     assert np.allclose(np.asarray(r1["x"]), np.asarray(r2["x"]), atol=1e-6)
 
 
+def _toy_stage():
+    z, p = ca.SX.sym("z", 4), ca.SX.sym("p", 1)
+    return z, p, p[0] * ca.sumsqr(z) + ca.sin(z[0]) * z[3], ca.vertcat(z[0] * z[1] - z[2], ca.exp(z[3]) - z[1] ** 2)
+
+
 def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     """The C-compiled stage functions (cached by hash) give the symbolic ones' values; a second
     call loads the cached library instead of compiling."""
@@ -74,8 +77,7 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     if shutil.which("gcc") is None and shutil.which("cc") is None:
         pytest.skip("no C compiler")
     monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path))
-    z, p = ca.SX.sym("z", 4), ca.SX.sym("p", 1)
-    cost, cons = p[0] * ca.sumsqr(z) + ca.sin(z[0]) * z[3], ca.vertcat(z[0] * z[1] - z[2], ca.exp(z[3]) - z[1] ** 2)
+    z, p, cost, cons = _toy_stage()
     sym = stagewise.stage_functions(z, p, cost, cons)
     comp = stagewise.compiled_stage_functions(z, p, cost, cons)
     libs = list(tmp_path.glob("stage_*.so"))
@@ -89,13 +91,3 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     mtime = libs[0].stat().st_mtime_ns
     stagewise.compiled_stage_functions(z, p, cost, cons)
     assert libs[0].stat().st_mtime_ns == mtime
-
-
-@given(st.lists(st.integers(0, 50), max_size=200))
-def test_unique_inverse_equals_numpy(values):
-    """The stable-sort unique used for the global sparsities gives np.unique's values and inverse,
-    with and without repeats, empty included."""
-    keys = np.asarray(values, dtype=np.int64)
-    uniq, index = _unique_inverse(keys)
-    want, want_index = np.unique(keys, return_inverse=True)
-    assert np.array_equal(uniq, want) and np.array_equal(index, want_index.reshape(-1))

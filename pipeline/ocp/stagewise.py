@@ -4,9 +4,11 @@ Direct multiple shooting produces an NLP in which stage k's cost and constraints
 the window ``z_k = w[k n : k n + 2 n]`` (state and control of knots k and k+1). Building one flat
 expression graph and letting CasADi differentiate it costs tens of seconds; instead one SX
 function per stage is differentiated once (gradient, constraint Jacobian, Lagrangian Hessian),
-mapped over the stages, and the results are scattered into the global sparse matrices by
-constant index maps (SOLVER_NOTES: 0.5 s build instead of 29 s). The stage functions can be
-compiled to C once and cached on disk by content hash.
+mapped over the stages, and the results are put together by sparse products with a constant
+0/1 window matrix W (``w -> [z_0; ...; z_{N-1}]``): the gradient is ``W' g``, the Jacobian
+``blockdiag(J_k) W`` and the Hessian ``W' blockdiag(H_k) W`` (SOLVER_NOTES: 0.5 s build instead of
+29 s; these products build in about 13 ms for 80 stages). The stage functions can be compiled to
+C once and cached on disk by content hash.
 """
 
 from __future__ import annotations
@@ -104,58 +106,17 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags
     return StageFunctions(*(ca.external(name, str(lib)) for name in _NAMES))
 
 
-def _scatter(block_sp: ca.Sparsity, n_stages: int, row_step: int, col_step: int, shape: tuple[int, int],
-             row_map: np.ndarray | None = None) -> tuple[ca.Sparsity, np.ndarray, np.ndarray]:
-    """Global sparsity of stacked stage blocks and where each block nonzero goes.
-
-    ``row_map`` maps full rows to kept rows (-1: dropped). Returns (sparsity, kept, index):
-    ``kept`` marks block nonzeros that survive, ``index`` their global nonzero positions.
-    """
-    rows, cols = (np.asarray(a, dtype=np.int64) for a in block_sp.get_triplet())
-    k = np.repeat(np.arange(n_stages), len(rows))
-    R = np.tile(rows, n_stages) + k * row_step
-    C = np.tile(cols, n_stages) + k * col_step
-    kept = np.ones(len(R), dtype=bool)
-    if row_map is not None:
-        R = row_map[R]
-        kept = R >= 0
-    keys = C[kept] * shape[0] + R[kept]  # column-major order, as CasADi stores nonzeros
-    uniq, index = _unique_inverse(keys)
-    return _compressed(shape, uniq // shape[0], uniq % shape[0]), kept, index
+def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:
+    """The block-diagonal matrix of the blocks a mapped function returns side by side
+    (``[B_0, ..., B_{N-1}]``, each of sparsity ``block``): in column-major storage both hold the
+    same nonzeros in the same order, so this only reinterprets them."""
+    return ca.MX(ca.diagcat(*[block] * n_blocks), _nonzeros(stacked))
 
 
-def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(keys, return_inverse=True)`` by a stable sort: the stage blocks arrive almost in
-    order (sorted runs), which a stable sort merges about 5x faster than np.unique's quicksort."""
-    order = np.argsort(keys, kind="stable")
-    ordered = keys[order]
-    first = np.empty(len(keys), dtype=bool)
-    first[:1] = True
-    np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
-    index = np.empty(len(keys), dtype=np.int64)
-    index[order] = np.cumsum(first) - 1
-    return ordered[first], index
-
-
-def _compressed(shape: tuple[int, int], cols: np.ndarray, rows: np.ndarray) -> ca.Sparsity:
-    """The sparsity of nonzeros already in storage order (by column, then row), built from its
-    compressed columns (no sort, unlike ``Sparsity.triplet``)."""
-    colind = np.searchsorted(cols, np.arange(shape[1] + 1))
-    return ca.Sparsity(shape[0], shape[1], colind.tolist(), rows.tolist())
-
-
-def _assemble(sp: ca.Sparsity, nz: ca.MX, kept: np.ndarray, index: np.ndarray) -> ca.MX:
-    """A global sparse matrix from stacked stage nonzeros: dropped entries removed, overlapping
-    entries (shared knots of neighbouring windows) summed."""
-    if not kept.all():
-        nz = nz[np.flatnonzero(kept).tolist()]
-    if sp.nnz() == len(index):  # no overlaps: a permutation
-        perm = np.empty(len(index), dtype=np.int64)
-        perm[index] = np.arange(len(index))
-        return ca.MX(sp, nz[perm.tolist()])
-    # Summing matrix: block nonzero j adds into global nonzero index[j] (one entry per column).
-    A = ca.DM(_compressed((sp.nnz(), len(index)), np.arange(len(index)), index), 1.0)
-    return ca.MX(sp, ca.mtimes(A, nz))
+def _selection(n_rows: int, n_cols: int, cols: np.ndarray) -> ca.DM:
+    """The 0/1 matrix whose row i picks column ``cols[i]``: ``S @ v == v[cols]``, and ``S.T @ y``
+    adds every y_i into position ``cols[i]``."""
+    return ca.DM(ca.Sparsity.triplet(n_rows, n_cols, list(range(n_rows)), np.asarray(cols).tolist()), 1.0)
 
 
 @dataclass(frozen=True)
@@ -195,37 +156,32 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
     keep = np.ones(n_full, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
     kept_rows = np.flatnonzero(keep)
     n_g = len(kept_rows)
-    row_map = np.full(n_full, -1, dtype=np.int64)
-    row_map[kept_rows] = np.arange(n_g)
 
     w = ca.MX.sym("w", n_w)
     p = ca.MX.sym("p", n_p * n_stages)
     P = ca.reshape(p, n_p, n_stages)
     window = (np.arange(2 * n)[:, None] + n * np.arange(n_stages)[None, :]).flatten(order="F")
     Z = ca.reshape(w[window.tolist()], 2 * n, n_stages)
+    # The stacked windows are W @ w; W.T adds stage contributions back onto the knots, summing
+    # where neighbouring windows share a knot.
+    W = _selection(2 * n * n_stages, n_w, window)
     mode = "serial"
     L, G = fns.value.map(n_stages, mode)(Z, P)
     f = ca.sum2(L)
     g = ca.vec(G)[kept_rows.tolist()]
 
-    # Gradient: windows overlap, so contributions to shared knots add up.
-    GR = fns.grad.map(n_stages, mode)(Z, P)
-    g_sp, g_kept, g_idx = _scatter(ca.Sparsity.dense(2 * n, 1), n_stages, n, 0, (n_w, 1))
-    grad = _assemble(g_sp, ca.vec(GR), g_kept, g_idx)
+    grad = ca.mtimes(W.T, ca.vec(fns.grad.map(n_stages, mode)(Z, P)))
 
-    # Constraint Jacobian: stage k's rows touch only its window; dropped rows are left out.
+    # Constraint Jacobian: the stage blocks on the diagonal, the kept rows, the columns moved onto the knots.
     J_blocks = fns.jac.map(n_stages, mode)(Z, P)
-    j_sp, j_kept, j_idx = _scatter(fns.jac.sparsity_out(0), n_stages, n_g_stage, n, (n_g, n_w), row_map)
-    J = _assemble(j_sp, _nonzeros(J_blocks), j_kept, j_idx)
+    J = ca.mtimes(_block_diagonal(J_blocks, fns.jac.sparsity_out(0), n_stages)[kept_rows.tolist(), :], W)
 
-    # Hessian of the Lagrangian (upper triangle): dropped rows get zero multipliers.
+    # Hessian of the Lagrangian (upper triangle, which W.T (.) W keeps): dropped rows get zero multipliers.
     sigma = ca.MX.sym("lam_f")
     lam = ca.MX.sym("lam_g", n_g)
-    S = ca.DM(ca.Sparsity.triplet(n_full, n_g, kept_rows.tolist(), list(range(n_g))), 1.0)
-    lam_full = ca.reshape(ca.mtimes(S, lam), n_g_stage, n_stages)
+    lam_full = ca.reshape(ca.mtimes(_selection(n_g, n_full, kept_rows).T, lam), n_g_stage, n_stages)
     H_blocks = fns.hess.map(n_stages, mode)(Z, P, sigma, lam_full)
-    h_sp, h_kept, h_idx = _scatter(fns.hess.sparsity_out(0), n_stages, n, n, (n_w, n_w))
-    H = _assemble(h_sp, _nonzeros(H_blocks), h_kept, h_idx)
+    H = ca.mtimes(W.T, ca.mtimes(_block_diagonal(H_blocks, fns.hess.sparsity_out(0), n_stages), W))
 
     grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
     jac_g = ca.Function("nlp_jac_g", [w, p], [g, J], ["x", "p"], ["g", "jac_g_x"])
