@@ -91,3 +91,44 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
     mtime = libs[0].stat().st_mtime_ns
     stagewise.compiled_stage_functions(z, p, cost, cons)
     assert libs[0].stat().st_mtime_ns == mtime
+
+
+def test_native_code_is_keyed_on_the_host_cpu(tmp_path, monkeypatch):
+    """A library compiled with -march=native is not served to another CPU sharing the cache folder."""
+    from skatelib.pipeline.ocp import stagewise
+
+    if stagewise.c_compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path))
+    stagewise.compiled_stage_functions(*_toy_stage())
+    monkeypatch.setattr(stagewise, "host_cpu", lambda: "another processor")
+    stagewise.compiled_stage_functions(*_toy_stage())
+    assert len(list(tmp_path.glob("stage_*.so"))) == 2
+    stagewise.compiled_stage_functions(*_toy_stage(), flags=("-O1",))  # portable code: no CPU in its key
+    monkeypatch.setattr(stagewise, "host_cpu", lambda: "a third processor")
+    stagewise.compiled_stage_functions(*_toy_stage(), flags=("-O1",))
+    assert len(list(tmp_path.glob("stage_*.so"))) == 3
+
+
+def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
+    """A compiler that rejects -march=native (it is only an optimization) compiles without it."""
+    from skatelib.pipeline.ocp import stagewise
+
+    real = stagewise.c_compiler()
+    if real is None:
+        pytest.skip("no C compiler")
+    fake = tmp_path / "cc-without-native"
+    calls = tmp_path / "calls.txt"
+    fake.write_text(f'#!/bin/sh\necho "$@" >> {calls}\nfor a in "$@"; do [ "$a" = -march=native ] && exit 1; done\n'
+                    f'exec {real} "$@"\n')
+    fake.chmod(0o755)
+    monkeypatch.setenv("CC", str(fake))
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))
+    z, p, cost, cons = _toy_stage()
+    comp = stagewise.compiled_stage_functions(z, p, cost, cons)
+    sym = stagewise.stage_functions(z, p, cost, cons)
+    zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
+    assert np.allclose(np.asarray(ca.densify(comp.hess(zv, pv, 0.8, lam))),
+                       np.asarray(ca.densify(sym.hess(zv, pv, 0.8, lam))), atol=1e-12)
+    compiles = [ln for ln in calls.read_text().splitlines() if "-shared" in ln]
+    assert len(compiles) == 1 and "-march=native" not in compiles[0]

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
@@ -75,19 +76,47 @@ def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
     return ca.Function("stage_value", [z, p], [cost, cons]).serialize()
 
 
-def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: str = "-O1",
+# -O2 and above take many minutes on the push-off stage code. -march=native (where the compiler
+# takes it) evaluates the Jacobian 29 % and the Hessian 15 % faster and compiles in 60 instead of
+# 103 s here, with results identical to the last bit; the library then runs only on this kind of
+# CPU, so the host CPU is part of the cache key.
+_FLAGS = ("-O1", "-march=native")
+
+
+def host_cpu() -> str:
+    """The processor a ``-march=native`` library is built for: architecture, model and feature flags."""
+    try:
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+    except OSError:
+        lines = []
+    wanted = ("model name", "flags", "Features", "CPU implementer", "CPU part")
+    described = sorted({ln.strip() for ln in lines if ln.split(":")[0].strip() in wanted})
+    return "\n".join([platform.machine(), platform.processor(), *described])
+
+
+def _accepted(cc: str, flags: tuple[str, ...]) -> tuple[str, ...]:
+    """``flags`` without ``-march=native`` when the compiler rejects it (it is only an optimization)."""
+    if "-march=native" not in flags:
+        return flags
+    probe = subprocess.run([cc, "-march=native", "-x", "c", "-c", "-", "-o", os.devnull], input=b"",
+                           capture_output=True)
+    return flags if probe.returncode == 0 else tuple(f for f in flags if f != "-march=native")
+
+
+def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: tuple[str, ...] = _FLAGS,
                              serialized: str | None = None) -> StageFunctions:
     """The four stage functions compiled to C in one shared library, cached by content hash.
 
-    The key is :func:`serialized_stage` (``serialized``, when the caller has it already), so a
-    cache hit costs neither differentiation nor code generation. Without a C compiler, returns the
-    symbolic functions.
+    The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the
+    flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a cache hit costs
+    neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
     """
     cc = c_compiler()
     if cc is None:
         return stage_functions(z, p, cost, cons)
     text = serialized if serialized is not None else serialized_stage(z, p, cost, cons)
-    key_src = text + flags + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
+    native = host_cpu() if "-march=native" in flags else ""
+    key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = cache_dir() / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
     if not lib.exists():
         fns = stage_functions(z, p, cost, cons)
@@ -100,8 +129,8 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags
             c_file = Path(tmp) / "stage.c"
             c_file.write_text(gen.dump())
             so_tmp = Path(tmp) / "stage.so"
-            subprocess.run([cc, flags, "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)], check=True,
-                           capture_output=True)
+            subprocess.run([cc, *_accepted(cc, flags), "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)],
+                           check=True, capture_output=True)
             os.replace(so_tmp, lib)  # atomic: parallel workers never load a half-written library
     return StageFunctions(*(ca.external(name, str(lib)) for name in _NAMES))
 

@@ -35,8 +35,8 @@ def announce(cfg: QuadrupedConfig) -> None:
         err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
                           "3-4x slower; install gcc to compile them")
     else:
-        console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about 35 s, "
-                             f"once; cached in {cache_dir()})"))
+        console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about a "
+                             f"minute, once; cached in {cache_dir()})"))
 
 
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
