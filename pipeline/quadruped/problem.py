@@ -147,7 +147,7 @@ class PushoffProblem:
         K = len(self.schedule.t)
         W = w.reshape(K, self.n)
         state = W[:, :NX].copy()
-        feet = np.stack([np.asarray(self._contacts(state[k])).T for k in range(K)])
+        feet = np.asarray(self._contacts.map(K)(state.T)).T.reshape(K, 4, 3)
         board = np.column_stack([W[:, I_BOARD_XY], np.full(K, self.system.board.deck_height_m), state[:, S_RPY][:, 2]])
         return {"t": self.schedule.t.copy(), "state": state, "control": W[:-1, NXA:].copy(),
                 "contact": self.schedule.contact.copy(), "foot_pos": feet, "board_pos": board}
