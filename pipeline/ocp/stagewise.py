@@ -84,7 +84,8 @@ _FLAGS = ("-O1", "-march=native")
 
 
 def host_cpu() -> str:
-    """The processor a ``-march=native`` library is built for: architecture, model and feature flags."""
+    """The processor a ``-march=native`` library is built for: architecture, model and feature flags
+    (from /proc/cpuinfo on Linux; elsewhere only the platform's machine and processor names)."""
     try:
         lines = Path("/proc/cpuinfo").read_text().splitlines()
     except OSError:
