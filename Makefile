@@ -24,7 +24,7 @@ define install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
 	$(BIN)/python -m pip install -q -e '.[$(1)]' --config-settings editable_mode=strict
-	@ls pipeline/*.py pipeline/*/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules
+	@find pipeline library runtime control -name '*.py' | sort > $(VENV)/.skatelib-modules
 endef
 
 $(STAMP): pyproject.toml
@@ -49,11 +49,11 @@ ifneq ($(origin PYTHON),file)
 	   echo "rebuilding $(VENV) with $(PYTHON) ($$want; it had $$have)"; rm -rf $(VENV); \
 	   $(MAKE) --no-print-directory $(STAMP); fi
 endif
-	@{ ls pipeline/*.py pipeline/*/*.py library/*.py runtime/*.py control/*.py | cmp -s - $(VENV)/.skatelib-modules && \
-	   $(BIN)/python -c 'import skatelib.pipeline.cli, skatelib.library.reader' 2>/dev/null; } || { \
+	@{ find pipeline library runtime control -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
+	   $(BIN)/python -c 'import skatelib.pipeline.cli.app, skatelib.library.reader' 2>/dev/null; } || { \
 	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
-	  ls pipeline/*.py pipeline/*/*.py library/*.py runtime/*.py control/*.py > $(VENV)/.skatelib-modules; }
+	  find pipeline library runtime control -name '*.py' | sort > $(VENV)/.skatelib-modules; }
 
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))

@@ -26,14 +26,14 @@ import statistics
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from skatelib.pipeline.build.contract import BuildOptions
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped import pushoff
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
@@ -81,7 +81,7 @@ def bench_pushoff(repeats: int = 3) -> None:
 def bench_library() -> Path:
     import tempfile
 
-    from skatelib.pipeline.build import build_library
+    from skatelib.pipeline.build.orchestrate import build_library
 
     cfg = load_config(None, QuadrupedConfig)
     serial_cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, warm_start=False))
@@ -92,8 +92,8 @@ def bench_library() -> Path:
     t_par = time.perf_counter()
     rp = build_library(cfg, out, BuildOptions(jobs=2, cache=False))
     t_par = time.perf_counter() - t_par
-    it_s = sum(o.result.iterations for o in rs.outcomes)
-    it_p = sum(o.result.iterations for o in rp.outcomes)
+    it_s = sum(cast(Any, o).result.iterations for o in rs.outcomes)
+    it_p = sum(cast(Any, o).result.iterations for o in rp.outcomes)
     print(f"default library ({len(rp.outcomes)} entries, {len(rp.failed)} failed)")
     print(f"  serial, cold (baseline): {t_serial:6.1f} s  {it_s:5d} IPOPT iterations")
     print(f"  2 workers, warm chains:  {t_par:6.1f} s  {it_p:5d} IPOPT iterations   {t_serial / t_par:.1f}x")
@@ -109,7 +109,7 @@ def bench_runtime(path: Path | None = None) -> None:
     from skatelib.runtime import MotionLibrary
 
     if path is None:
-        from skatelib.pipeline.build import build_library
+        from skatelib.pipeline.build.orchestrate import build_library
 
         # the resume cache makes this quick
         path = build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
@@ -154,9 +154,9 @@ def bench_rerun(path: Path | None = None) -> None:
     import tempfile
 
     import rerun as rr
-    from skatelib.pipeline.build import build_library
-    from skatelib.pipeline.inspect_rerun import log_library
+    from skatelib.pipeline.build.orchestrate import build_library
     from skatelib.pipeline.quadruped.rerun import Robot
+    from skatelib.pipeline.views.rerun_inspect import log_library
     from skatelib.runtime import MotionLibrary
 
     path = path or build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
@@ -177,7 +177,7 @@ def bench_rerun(path: Path | None = None) -> None:
     entries = list(lib)[:2]
     n_rows = 0
     for e in entries:
-        from skatelib.library.margins import rpy_matrices
+        from skatelib.library.rotations import rpy_matrices
 
         R = rpy_matrices(e.state[:, 3:6])
         trans, quats, _ = robot.poses(e.state[:, 0:3], R, e.state[:, 12:24])
@@ -265,14 +265,15 @@ def bench_mpc(path: Path | None = None) -> None:
     import numpy as np
     from skatelib.control.closed_loop import EntryReference, TrackSettings
     from skatelib.control.kinematics import LegKinematics
-    from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
+    from skatelib.control.linear_model import Feedback
     from skatelib.control.mpc import SOLVERS, Discretizer, MpcConfig, build_problem, make_solver
     from skatelib.control.params import SkateParams
     from skatelib.control.track import track_library
+    from skatelib.library.rotations import board_rotations, rpy_matrices
     from skatelib.runtime import MotionLibrary
 
     if path is None:
-        from skatelib.pipeline.build import build_library
+        from skatelib.pipeline.build.orchestrate import build_library
 
         path = build_library(load_config(None, QuadrupedConfig), Path("out") / "bench-default.h5").path
     lib = MotionLibrary.open(path)
@@ -286,9 +287,9 @@ def bench_mpc(path: Path | None = None) -> None:
     for t in np.arange(ref.t0, ref.t_end, cfg.dt):
         x0 = np.asarray(e.sample(t).state, float)
         k = int(np.clip(np.searchsorted(e.t, t), 0, len(e.t) - 1))
-        r_board = board_rotation(x0[26], x0[5]) @ np.vstack([p.deck_points_m, np.zeros(4)])
+        r_board = board_rotations(x0[5], x0[26]) @ np.vstack([p.deck_points_m, np.zeros(4)])
         fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board,
-                      torque_maps=kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6])))  # with the torque rows
+                      torque_maps=kin.torque_maps(x0[12:24], rpy_matrices(x0[3:6])))  # with the torque rows
         updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.prior_coast_mps2(t))))
     qps = [build_problem(p, cfg, disc, fb, xr, ur, ct, acc) for fb, xr, ur, ct, acc in updates]  # warm-up
     # Three timing passes; each figure is the median over the updates of the best pass (timeit's

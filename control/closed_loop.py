@@ -37,7 +37,7 @@ from typing import Protocol
 
 import numpy as np
 from skatelib.control.kinematics import LegKinematics
-from skatelib.control.linear_model import Feedback, board_rotation, rpy_matrix
+from skatelib.control.linear_model import Feedback
 from skatelib.control.mpc import (
     CoastObserver,
     Discretizer,
@@ -64,6 +64,7 @@ from skatelib.library.channels import (
     SWING,
 )
 from skatelib.library.margins import forward_speed, momentum_speed
+from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.runtime import Entry, MotionLibrary
 
 SPEED_TOLERANCE = 0.05
@@ -401,7 +402,7 @@ def _simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_para
     coast_observer = CoastObserver(cfg.coast_gain)
     h = cfg.dt / settings.plant_substeps
     s = np.array(x_init, dtype=np.float64)
-    s[0:3] += rpy_matrix(s[3:6]) @ com_shift  # the true COM
+    s[0:3] += rpy_matrices(s[3:6]) @ com_shift  # the true COM
     s[1] += dist.init_error_m
     s[2] += dist.init_error_m
     ground = ref.initial_ground()
@@ -413,13 +414,13 @@ def _simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_para
     for _ in range(round((ref.t_stop - ref.t0) / cfg.dt)):
         # Feedback: what the estimator reports (the model's COM, noise).
         x_fb = s[:NX].copy()
-        x_fb[0:3] -= rpy_matrix(x_fb[3:6]) @ com_shift
+        x_fb[0:3] -= rpy_matrices(x_fb[3:6]) @ com_shift
         if dist.noise_std > 0:
             x_fb[0:6] += rng.normal(0.0, dist.noise_std, 6)
             x_fb[6:12] += rng.normal(0.0, 5 * dist.noise_std, 6)
         pts = plant.contact_points(s, ref.contact(t), ground)
-        r_board = board_rotation(x_fb[I_BOARD_ROLL], x_fb[5]) @ np.vstack([model.deck_points_m, np.zeros(4)])
-        maps = None if kinematics is None else kinematics.torque_maps(q_legs, rpy_matrix(x_fb[3:6]))
+        r_board = board_rotations(x_fb[5], x_fb[I_BOARD_ROLL]) @ np.vstack([model.deck_points_m, np.zeros(4)])
+        maps = None if kinematics is None else kinematics.torque_maps(q_legs, rpy_matrices(x_fb[3:6]))
         fb = Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board, torque_maps=maps)
         v_ride = float(forward_speed(x_fb))
         bias = observer.update(v_ride, cfg.dt, float(x_fb[8]))
@@ -476,7 +477,7 @@ def _simulate(ref: Reference, x_init: np.ndarray, model: SkateParams, plant_para
             break
         run.updates.append((t, s.copy(), x_ref[0].copy()))
         # Errors against the reference of this update's first step (re-anchored).
-        pos_err = float(np.linalg.norm(s[0:3] - rpy_matrix(s[3:6]) @ com_shift - x_ref[0, 0:3]))
+        pos_err = float(np.linalg.norm(s[0:3] - rpy_matrices(s[3:6]) @ com_shift - x_ref[0, 0:3]))
         run.max_position_error_m = max(run.max_position_error_m, pos_err)
         run.max_attitude_error_rad = max(run.max_attitude_error_rad, float(np.max(np.abs(s[3:6] - x_ref[0, 3:6]))))
         if kinematics is not None:
@@ -497,10 +498,10 @@ def _whole_body(run: Run, kin: LegKinematics, model: SkateParams, s: np.ndarray,
                 q_ref: np.ndarray) -> np.ndarray:
     """Stance legs by inverse kinematics to where their feet touch the plant's deck or ground,
     swinging legs at the reference; records torque, reach and joint-limit figures in ``run``."""
-    R = rpy_matrix(s[3:6])
+    R = rpy_matrices(s[3:6])
     origin = s[0:3] - R @ (model.com_offset_m + com_shift)  # the trunk frame's origin
     loaded = contact != SWING
-    normals = np.where(contact[None, :] == BOARD, board_rotation(s[I_BOARD_ROLL], s[5])[:, 2:3],
+    normals = np.where(contact[None, :] == BOARD, board_rotations(s[5], s[I_BOARD_ROLL])[:, 2:3],
                        np.array([[0.0], [0.0], [1.0]]))
     centres = R.T @ (points + kin.foot_radius_m * normals - origin[:, None])
     q0 = np.where(np.repeat(loaded, 3), q_prev, q_ref)

@@ -22,30 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NU, NX, SWING
-from skatelib.library.margins import board_rotations, forward_speed, rpy_matrices
+from skatelib.library.margins import forward_speed
+from skatelib.library.rotations import board_rotations, euler_rate_map, rpy_matrices, skew
 
 _SIGN_DEADBAND_MPS = 0.02  # |v| below this: sign() = 0 (the board is at rest)
-
-
-def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll): trunk frame to world (Z-Y-X Euler angles)."""
-    return rpy_matrices(np.asarray(rpy, dtype=np.float64))
-
-
-def euler_rate_map(rpy: np.ndarray) -> np.ndarray:
-    """T(theta): d(rpy)/dt = T omega for the body-frame angular velocity omega (Z-Y-X angles)."""
-    r, p = rpy[0], rpy[1]
-    sr, cr, cp, tp = np.sin(r), np.cos(r), np.cos(p), np.tan(p)
-    return np.array([[1.0, sr * tp, cr * tp], [0.0, cr, -sr], [0.0, sr / cp, cr / cp]])
-
-
-def board_rotation(roll: float, yaw: float) -> np.ndarray:
-    """R_B: deck frame to world, roll about x after yaw (Eq. 7)."""
-    return board_rotations(float(yaw), float(roll))
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 @dataclass(frozen=True)
@@ -79,8 +59,8 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
     """
     x = fb.x
     rpy = x[3:6]
-    R = rpy_matrix(rpy)
-    R_B = board_rotation(x[I_BOARD_ROLL], rpy[2])
+    R = rpy_matrices(rpy)
+    R_B = board_rotations(rpy[2], x[I_BOARD_ROLL])
     A = np.zeros((NX, NX))
     A[0:3, 6:9] = np.eye(3)
     A[3:6, 9:12] = euler_rate_map(rpy)
@@ -93,7 +73,7 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
     C[6:9] = g
     I_inv = np.linalg.inv(p.inertia_kgm2)
     yaw = rpy[2]
-    T_vB = board_rotation(0.0, yaw)[:2, :2] @ np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # Eq. (5b)
+    T_vB = board_rotations(yaw, 0.0)[:2, :2] @ np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # Eq. (5b)
     S_xy_RB_Sx = R_B[:2, :] @ np.diag([1.0, 0.0, 0.0])
     for i in range(4):
         if contact[i] == SWING:

@@ -38,9 +38,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from skatelib.control.linear_model import Discretizer, Feedback, board_rotation, continuous_model
+from skatelib.control.linear_model import Discretizer, Feedback, continuous_model
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, NU, NX, S_Q, S_VEL, SWING
+from skatelib.library.rotations import board_rotations
 
 SOLVERS = ("daqp", "proxqp", "osqp")
 NF = 12  # force variables per step
@@ -198,8 +199,8 @@ def _legs_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarr
     def pyramid(frame: np.ndarray) -> np.ndarray:  # (facets + 1, 3): facet rows, then the normal
         return np.vstack([directions.T @ frame.T, frame[:, 2]])
 
-    ground = [pyramid(board_rotation(0.0, x0[5]))]
-    deck = [pyramid(board_rotation(r, x0[5])) for r in rolls]
+    ground = [pyramid(board_rotations(x0[5], 0.0))]
+    deck = [pyramid(board_rotations(x0[5], r)) for r in rolls]
     rows: list[np.ndarray] = []
     lo: list[float] = []
     hi: list[float] = []

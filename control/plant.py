@@ -22,10 +22,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from skatelib.control.linear_model import board_rotation, euler_rate_map, rpy_matrix
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NX, SWING
 from skatelib.library.margins import momentum_speed
+from skatelib.library.rotations import board_rotations, euler_rate_map, rpy_matrices
 
 NB = NX + 3  # plant state: the 28 channels, then the board origin x, y and the deck height z
 
@@ -66,7 +66,7 @@ class Plant:
 
     def contact_points(self, s: np.ndarray, contact: np.ndarray, ground_points: np.ndarray) -> np.ndarray:
         """(3, 4) world contact points: deck points moved with the board, ground points fixed."""
-        R_B = board_rotation(s[I_BOARD_ROLL], s[5])
+        R_B = board_rotations(s[5], s[I_BOARD_ROLL])
         out = np.array(ground_points, dtype=float, copy=True)
         origin = s[NX:NX + 3]
         for i in range(4):
@@ -79,7 +79,7 @@ class Plant:
         """The forces the contacts can give: zero for swinging feet, inside Coulomb's cone (mu of
         the plant) about the deck normal or the ground normal; clipping is counted as a slip."""
         out = np.zeros((3, 4))
-        n_deck = board_rotation(s[I_BOARD_ROLL], s[5])[:, 2]
+        n_deck = board_rotations(s[5], s[I_BOARD_ROLL])[:, 2]
         for i in range(4):
             if contact[i] == SWING:
                 continue
@@ -111,7 +111,7 @@ class Plant:
         """ds/dt of the plant state (28 channels, board origin) under admissible forces (3, 4)."""
         p = self.p
         rpy, v, w = s[3:6], s[6:9], s[9:12]
-        R = rpy_matrix(rpy)
+        R = rpy_matrices(rpy)
         com = s[0:3]
         pts = self.contact_points(s, contact, ground_points)
         total = forces.sum(axis=1) + (external_N if external_N is not None else 0.0)
@@ -123,7 +123,7 @@ class Plant:
         w_dot = self.I_inv @ (R.T @ torque_world - _cross(w, self.I @ w))
         yaw = rpy[2]
         heading = np.array([np.cos(yaw), np.sin(yaw)])
-        R_B = board_rotation(s[I_BOARD_ROLL], yaw)
+        R_B = board_rotations(yaw, s[I_BOARD_ROLL])
         f_board = np.zeros(3)
         torque_board = np.zeros(3)
         origin = s[NX:NX + 3]

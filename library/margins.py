@@ -1,39 +1,13 @@
 """Numpy helpers shared by the physics checks, the Rerun views, the runtime and the reference
-controller (numpy only): the trunk and board rotations, Coulomb friction margins and forward speed
-of stored trajectories."""
+controller (numpy only): Coulomb friction margins and forward speed of stored trajectories."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, S_BOARD_V, S_RPY, S_VEL
+from skatelib.library.rotations import board_rotations
 
 UNLOADED_N = 1e-3  # [N]
-
-
-def rpy_matrices(rpy: np.ndarray) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll), trunk frame to world, for Z-Y-X angles (..., 3): (..., 3, 3)."""
-    if np.ndim(rpy) == 1:  # one attitude (a controller's hot path): no stacking
-        cr, sr, cp, sp, cy, sy = (f(float(a)) for a in (rpy[0], rpy[1], rpy[2]) for f in (math.cos, math.sin))
-        return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]])
-    r, p, y = rpy[..., 0], rpy[..., 1], rpy[..., 2]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    return np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
-                     np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
-                     np.stack([-sp, cp * sr, cp * cr], -1)], axis=-2)
-
-
-def board_rotations(yaw: np.ndarray | float, roll: np.ndarray | float) -> np.ndarray:
-    """R_B = Rz(yaw) Rx(roll) for arrays of angles (or scalars): (..., 3, 3), deck frame to world."""
-    if np.ndim(yaw) == 0 and np.ndim(roll) == 0:  # one attitude (a controller's hot path): no stacking
-        c, s, c_r, s_r = math.cos(yaw), math.sin(yaw), math.cos(roll), math.sin(roll)
-        return np.array([[c, -s * c_r, s * s_r], [s, c * c_r, -c * s_r], [0.0, s_r, c_r]])
-    cy, sy, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(roll), np.sin(roll)
-    z = np.zeros_like(yaw)
-    return np.stack([np.stack([cy, -sy * cr, sy * sr], -1), np.stack([sy, cy * cr, -cy * sr], -1),
-                     np.stack([z, sr, cr], -1)], axis=-2)
 
 
 def contact_forces_local(state: np.ndarray, control: np.ndarray, contact: np.ndarray) -> np.ndarray:

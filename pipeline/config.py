@@ -21,7 +21,7 @@ from typing import Any
 
 from skatelib.library.errors import ConfigError
 from skatelib.library.schema import HDF5_SIGNATURE
-from skatelib.pipeline.kinds import KINDS, part
+from skatelib.pipeline.kinds import KINDS, RobotKind
 
 # The checkout's configs/ (editable install) or the installed package skatelib.configs (package
 # data of a wheel): the same place relative to this file.
@@ -171,16 +171,15 @@ if typing.TYPE_CHECKING:
 
 AnyConfig = typing.Union["QuadrupedConfig", "HumanoidConfig"]
 C = typing.TypeVar("C", "QuadrupedConfig", "HumanoidConfig")
-def _kind(path: Path, name: Any, expect: type | None) -> Any:
-    """The ``config`` module of the kind's subpackage (CONFIG_CLASS, from_toml, from_json), from
-    the kind table (``pipeline/kinds.py``)."""
+def _kind(path: Path, name: Any, expect: type | None) -> RobotKind:
+    """The kind of a config's ``meta.kind`` (from the kind table), checked against ``expect``."""
     if name not in KINDS:
         raise ConfigError(path, "meta.kind", f"{name!r}: use one of {', '.join(map(repr, KINDS))}")
-    module = part(name, "config")
-    if expect is not None and module.CONFIG_CLASS is not expect:
-        wanted = next(k for k in KINDS if part(k, "config").CONFIG_CLASS is expect)
+    kind = KINDS[name].load()
+    if expect is not None and kind.config_class is not expect:
+        wanted = next(k for k, row in KINDS.items() if row.load().config_class is expect)
         raise ConfigError(path, "meta.kind", f"expected {wanted!r}, got {name!r}: this command takes {wanted} configs")
-    return module
+    return kind
 
 
 @typing.overload

@@ -4,24 +4,21 @@ from __future__ import annotations
 
 import datetime
 import json
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
 from skatelib.library.reader import read_library
-from skatelib.pipeline.kinds import kind_named
+from skatelib.pipeline.kinds import ReportFn, kind_named
 from skatelib.runtime import MotionLibrary
 
-Report = Callable[[str, str, str, dict[str, float]], None]  # key, "ok" | "failed" | "skipped", message, figures
 
-
-def validate_library(path: Path | str, report: Report) -> int:
+def validate_library(path: Path | str, report: ReportFn) -> int:
     """Check the file (raises on a corrupt one) and each entry's physics; returns the failures.
     ``report`` gets each entry's key, verdict, message and the figures measured."""
     read_library(path, full=True)  # integrity: checksum, and every attribute and view against the index
     lib = MotionLibrary.open(path)
-    return int(kind_named(lib.kind, lib.path).validate_entries(lib, report))
+    return kind_named(lib.kind, lib.path).validate_entries(lib, report)
 
 
 def closed_loop_verdicts(path: Path, perturb: str, jobs: int) -> list[Any]:

@@ -7,4 +7,4 @@ import sys
 from pathlib import Path
 
 TINY = Path(__file__).parent / "configs" / "tiny.toml"  # 2 entries, 1 stride, interpreted stage functions
-CLI = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+CLI = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]

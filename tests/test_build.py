@@ -10,10 +10,10 @@ import subprocess
 import numpy as np
 import pytest
 from skatelib.library.reader import read_library
-from skatelib.pipeline import sweep
-from skatelib.pipeline.build import build_library
+from skatelib.pipeline.build import sweep
+from skatelib.pipeline.build.contract import BuildOptions
+from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.kinds import BuildOptions
 from skatelib.pipeline.quadruped.attempts import retry_ladder
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart, solver_options
 from skatelib.runtime import MotionLibrary
@@ -133,7 +133,7 @@ def test_interrupted_build_leaves_no_file(cache, tmp_path, monkeypatch):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("skatelib.pipeline.build.run_sweep", interrupted)
+    monkeypatch.setattr("skatelib.pipeline.build.orchestrate.run_sweep", interrupted)
     with pytest.raises(KeyboardInterrupt):
         build_library(load_config(TINY), tmp_path / "x.h5")
     assert list(tmp_path.iterdir()) == []

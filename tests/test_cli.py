@@ -87,7 +87,7 @@ def test_shell_completion_is_offered():
 def _options() -> list[tuple[str, Any, Any]]:
     """(command, its click command, option) of every option of every command."""
     import typer
-    from skatelib.pipeline.cli import app
+    from skatelib.pipeline.cli.app import app
 
     group = typer.main.get_command(app)
     return [(name, cmd, p) for name, cmd in group.commands.items() for p in cmd.params  # type: ignore[attr-defined]
@@ -99,7 +99,7 @@ def test_every_help_shows_defaults_choices_and_units():
     whose default is a rule), each choice option its choices, each speed or other physical number
     its unit; and every command is reachable with --help (exit 0)."""
     from skatelib.control.mpc import SOLVERS
-    from skatelib.pipeline.cli import QpSolver, app
+    from skatelib.pipeline.cli.app import QpSolver, app
     from typer._click.core import Context  # typer's own click
     from typer.testing import CliRunner
 

@@ -18,10 +18,11 @@ pytest.importorskip("daqp")
 
 from scipy.linalg import expm
 from skatelib.control.closed_loop import TrackSettings, track_entry
-from skatelib.control.linear_model import Discretizer, Feedback, board_rotation, continuous_model
+from skatelib.control.linear_model import Discretizer, Feedback, continuous_model
 from skatelib.control.mpc import MpcConfig, build_problem, make_solver, qp_objective
 from skatelib.control.params import PerturbationError, SkateParams, parse_perturbation
 from skatelib.control.plant import NB, Plant
+from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY
@@ -72,7 +73,7 @@ def test_linear_model_is_the_nonlinear_derivative_with_arms_frozen(seed):
     ground = np.zeros((3, 4))
     ground[:, 2] = [-0.15, 0.17, 0.0]
     pts = plant.contact_points(s, contact, ground)
-    R_B = board_rotation(s[26], s[5])
+    R_B = board_rotations(s[5], s[26])
     fb = Feedback(x=s[:NX], r_robot=pts - s[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]))
     A, B, C = continuous_model(p, fb, contact, accelerating=True)
     f = rng.normal(0, 5, (3, 4)) + np.array([[0.0], [0.0], [22.0]])
@@ -89,8 +90,7 @@ def test_linear_model_is_the_nonlinear_derivative_with_arms_frozen(seed):
     contact4 = np.array([BOARD] * 4)
     A4, B4, C4 = continuous_model(p, fb, contact4, accelerating=False)
     xdot = A4 @ s[:NX] + B4 @ u + C4
-    from skatelib.control.linear_model import rpy_matrix
-    acc_local = rpy_matrix(s[3:6]).T @ xdot[6:9]
+    acc_local = rpy_matrices(s[3:6]).T @ xdot[6:9]
     np.testing.assert_allclose(xdot[24:26], np.array([np.cos(s[5]), np.sin(s[5])]) * acc_local[0], atol=1e-12)
 
 
@@ -115,7 +115,7 @@ def _one_update(e, p: SkateParams, cfg: MpcConfig, t: float, torque_maps: np.nda
     """The QP of one update fed with the entry's own state at ``t`` (its window and contacts)."""
     x0 = np.asarray(e.sample(t).state, float)
     pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
-    R_B = board_rotation(x0[26], x0[5])
+    R_B = board_rotations(x0[5], x0[26])
     fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]),
                   torque_maps=torque_maps)
     w = e.window(t, cfg.horizon + 1, cfg.dt)
@@ -293,7 +293,6 @@ def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
     torques -J^T R^T f of the optimization; inverse kinematics recovers perturbed joint angles."""
     import casadi as ca
     from skatelib.control.kinematics import LegKinematics
-    from skatelib.control.linear_model import rpy_matrix
     from skatelib.pipeline.quadruped.dynamics import joint_torques
     from skatelib.pipeline.quadruped.kind import system_from_library
 
@@ -307,7 +306,7 @@ def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
     np.testing.assert_allclose(kin.foot_positions(q), feet, atol=1e-9)
     xs, us = ca.SX.sym("x", NX), ca.SX.sym("u", NU)
     expected = np.asarray(ca.Function("tau", [xs, us], [joint_torques(system, xs, us)])(x, u)).reshape(-1)
-    R = rpy_matrix(x[3:6])
+    R = rpy_matrices(x[3:6])
     forces = u[:12].reshape(4, 3).T
     np.testing.assert_allclose(kin.torques(q, R.T @ forces, np.ones(4, bool)), expected, atol=1e-9)
     maps = kin.torque_maps(q, R)
@@ -325,14 +324,13 @@ def test_torque_rows_hold_the_joint_torques(lib):
     import dataclasses
 
     from skatelib.control.kinematics import LegKinematics
-    from skatelib.control.linear_model import rpy_matrix
 
     e = lib[lib.keys()[0]]
     kin = LegKinematics.from_library(lib)
     cfg = MpcConfig()
     t = float(e.t[0]) + 0.3
     x0 = np.asarray(e.sample(t).state, float)
-    maps = kin.torque_maps(x0[12:24], rpy_matrix(x0[3:6]))
+    maps = kin.torque_maps(x0[12:24], rpy_matrices(x0[3:6]))
     for limit, rows in ((12.0, True), (4.0, True), (4.0, False)):
         p = dataclasses.replace(SkateParams.from_library(lib), torque_limit_Nm=limit)
         qp, w = _one_update(e, p, cfg, t, maps if rows else None)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from skatelib.pipeline import sweep
+from skatelib.pipeline.build import sweep
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import chains, pushoff
 from skatelib.pipeline.quadruped import costs as pushoff_costs
+from skatelib.pipeline.quadruped import pushoff, tasks
 
 from tests.helpers import TINY
 
@@ -20,8 +20,8 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache"
 
 
-def _chain() -> chains.Chain:
-    return chains.Chain(load_config(TINY), 1, (0.3,))
+def _chain() -> tasks.BuildTask:
+    return tasks.BuildTask(load_config(TINY), 1, (0.3,))
 
 
 def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):

@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from skatelib.library.errors import ConfigError
-from skatelib.pipeline.build import build_library
+from skatelib.pipeline.build.contract import BuildOptions
+from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, step_model, walking_steps
 from skatelib.pipeline.humanoid.verify import check_steps, failures
-from skatelib.pipeline.kinds import BuildOptions
 from skatelib.runtime import MotionLibrary
 
 WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"
@@ -98,7 +98,7 @@ def test_library_round_trip_and_cli(tmp_path):
     """`skatelib build` on the skating config writes a humanoid library that validates."""
     out = tmp_path / "skate.h5"
     env = {**os.environ, "COLUMNS": "200"}
-    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out)], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stdout + r.stderr
     lib = MotionLibrary.open(out)
@@ -135,7 +135,7 @@ def test_humanoid_build_goes_the_one_build_path(tmp_path):
     solve as tasks in worker processes (-j 2), a second build is served from the entry cache
     (every step marked c) with the same arrays, and --frontier is refused (exit 2, nothing written)."""
     env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
-    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     out = tmp_path / "s.h5"
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "--frontier"], capture_output=True, text=True,
                        env=env)
@@ -178,7 +178,8 @@ def test_build_judges_each_motion_with_the_independent_checks(walk):
     """A solved walk passes the step checks; the same walk with one step's accelerations scaled by
     1.5 (its states left as they were) fails them, and its entry is stored as failed with the check."""
     from skatelib.pipeline.humanoid.entries import entry_from_motion
-    from skatelib.pipeline.humanoid.tasks import MotionOutcome, judge
+    from skatelib.pipeline.humanoid.tasks import EntryOutcome
+    from skatelib.pipeline.humanoid.verify import judge
 
     c, m = walk
     assert judge(c, m) == ()
@@ -186,7 +187,7 @@ def test_build_judges_each_motion_with_the_independent_checks(walk):
     doctored = dataclasses.replace(m, steps=[*m.steps[:2], bad, *m.steps[3:]])
     found = judge(c, doctored)
     assert found and any("dynamics" in f for f in found), found
-    record = entry_from_motion(MotionOutcome("walk_v0.375_n6", doctored, found, False), c)
+    record = entry_from_motion(EntryOutcome("walk_v0.375_n6", doctored, found, False), c)
     assert record.attrs["success"] is False and record.attrs["status"].startswith("Physics_Check_Failed")
 
 

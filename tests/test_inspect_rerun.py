@@ -13,10 +13,10 @@ import pytest
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
-from skatelib.pipeline.build import build_library  # noqa: E402
+from skatelib.pipeline.build.contract import BuildOptions  # noqa: E402
+from skatelib.pipeline.build.orchestrate import build_library  # noqa: E402
 from skatelib.pipeline.config import CONFIG_DIR, load_config  # noqa: E402
-from skatelib.pipeline.inspect_rerun import inspect_library  # noqa: E402
-from skatelib.pipeline.kinds import BuildOptions  # noqa: E402
+from skatelib.pipeline.views.rerun_inspect import inspect_library  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
 
 from tests.helpers import TINY  # noqa: E402
@@ -100,7 +100,7 @@ def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
 def test_cli_save_then_rerun_verify(quad_lib, tmp_path):
     """`skatelib inspect LIB --save x.rrd` then `rerun rrd verify x.rrd` both succeed."""
     out = tmp_path / "x.rrd"
-    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     r = subprocess.run([*cli, "inspect", str(quad_lib), "--save", str(out)], capture_output=True, text=True,
                        env={**os.environ, "COLUMNS": "200"})
     assert r.returncode == 0, r.stdout + r.stderr
@@ -124,7 +124,7 @@ def test_track_save_puts_the_run_beside_its_reference(quad_lib, tmp_path):
     entry plus transfer and ride at the MPC's 30 Hz, and `rerun rrd verify` accepts the file."""
     pytest.importorskip("daqp")
     out = tmp_path / "t.rrd"
-    cli = [sys.executable, "-c", "from skatelib.pipeline.cli import main; main()"]
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     r = subprocess.run([*cli, "track", str(quad_lib), "-e", "v0.30_s1", "--perturb", "none", "--save", str(out)],
                        capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
     assert r.returncode in (0, 1) and out.exists(), r.stdout + r.stderr
@@ -148,7 +148,7 @@ def test_spawn_finds_the_viewer_installed_beside_python(monkeypatch):
     viewer installed with it (beside this Python) is put there first."""
     import shutil
 
-    from skatelib.pipeline.inspect_rerun import put_viewer_on_path
+    from skatelib.pipeline.views.rerun_inspect import put_viewer_on_path
 
     monkeypatch.setenv("PATH", "/usr/bin:/bin")
     beside = Path(sys.executable).parent / "rerun"

@@ -29,11 +29,11 @@ def test_checker_reports_long_modules_long_functions_and_wrong_imports(tmp_path)
         shutil.copytree(ROOT / top, tmp_path / top, ignore=shutil.ignore_patterns("__pycache__", "cpp"))
     body = "\n".join(f"    x{i} = {i}" for i in range(70))
     (tmp_path / "runtime" / "long.py").write_text(
-        "import skatelib.pipeline.build\n\n\ndef f():\n" + body + "\n" + "# pad\n" * 230)
+        "import skatelib.pipeline.build.orchestrate\n\n\ndef f():\n" + body + "\n" + "# pad\n" * 230)
     (tmp_path / "pipeline" / "ocp" / "bad.py").write_text("from skatelib.pipeline.quadruped import robot\n")
     found = check.problems(tmp_path)
     assert any(f.startswith("runtime/long.py: 304 lines (at most 250)") for f in found)
     assert any(f.startswith("runtime/long.py:4: function f has 71 lines") for f in found)
-    assert any(f.startswith("runtime/long.py:1: imports skatelib.pipeline.build") for f in found)
+    assert any(f.startswith("runtime/long.py:1: imports skatelib.pipeline.build.orchestrate") for f in found)
     assert any(f.startswith("pipeline/ocp/bad.py:1: imports skatelib.pipeline.quadruped") for f in found)
     assert len(found) == 4, found

@@ -8,13 +8,13 @@ import dataclasses
 import numpy as np
 import pytest
 from skatelib.library.channels import BOARD
-from skatelib.library.margins import board_rotations, friction_margins
+from skatelib.library.margins import friction_margins
+from skatelib.library.rotations import board_rotations
 from skatelib.pipeline.quadruped import problem, pushoff
-from skatelib.pipeline.quadruped.attempts import judge
 from skatelib.pipeline.quadruped.bounds import bound_terms
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
 from skatelib.pipeline.quadruped.terms import FinalSpeed
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory, judge
 
 
 @pytest.fixture(scope="module")
@@ -164,7 +164,7 @@ def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shov
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 
     path = write_quadruped_library(tmp_path / "shove.h5", small_cfg, system, [entry_from_result(shove)], {})
-    r = subprocess.run([sys.executable, "-c", "from skatelib.pipeline.cli import main; main()", "validate",
+    r = subprocess.run([sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()", "validate",
                         str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
     assert r.returncode == 1, r.stdout + r.stderr
     assert "v0.30_s1" in r.stdout and "momentum speed" in r.stdout

@@ -12,11 +12,11 @@ import pytest
 
 pytest.importorskip("matplotlib")
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.build import build_library
+from skatelib.pipeline.build.contract import BuildOptions
+from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.plots import write_figures
 from skatelib.pipeline.quadruped.plots import push_foot_forces
+from skatelib.pipeline.views.figures import write_figures
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
-from skatelib.pipeline.preflight import check_output
+from skatelib.pipeline.build.preflight import check_output
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY

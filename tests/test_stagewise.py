@@ -76,10 +76,9 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
 
     if shutil.which("gcc") is None and shutil.which("cc") is None:
         pytest.skip("no C compiler")
-    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path))
     z, p, cost, cons = _toy_stage()
     sym = stagewise.stage_functions(z, p, cost, cons)
-    comp = stagewise.compiled_stage_functions(z, p, cost, cons)
+    comp = stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path))
     libs = list(tmp_path.glob("stage_*.so"))
     assert len(libs) == 1
     zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
@@ -89,7 +88,7 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
                         strict=True):
             assert np.allclose(np.asarray(ca.densify(x)), np.asarray(ca.densify(y)), atol=1e-12)
     mtime = libs[0].stat().st_mtime_ns
-    stagewise.compiled_stage_functions(z, p, cost, cons)
+    stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path))
     assert libs[0].stat().st_mtime_ns == mtime
 
 
@@ -99,14 +98,14 @@ def test_native_code_is_keyed_on_the_host_cpu(tmp_path, monkeypatch):
 
     if stagewise.c_compiler() is None:
         pytest.skip("no C compiler")
-    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path))
-    stagewise.compiled_stage_functions(*_toy_stage())
+    stagewise.compiled_stage_functions(*_toy_stage(), stagewise.CompileTarget(tmp_path))
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "another processor")
-    stagewise.compiled_stage_functions(*_toy_stage())
+    stagewise.compiled_stage_functions(*_toy_stage(), stagewise.CompileTarget(tmp_path))
     assert len(list(tmp_path.glob("stage_*.so"))) == 2
-    stagewise.compiled_stage_functions(*_toy_stage(), flags=("-O1",))  # portable code: no CPU in its key
+    portable = stagewise.CompileTarget(tmp_path, ("-O1",))  # portable code: no CPU in its key
+    stagewise.compiled_stage_functions(*_toy_stage(), portable)
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "a third processor")
-    stagewise.compiled_stage_functions(*_toy_stage(), flags=("-O1",))
+    stagewise.compiled_stage_functions(*_toy_stage(), portable)
     assert len(list(tmp_path.glob("stage_*.so"))) == 3
 
 
@@ -123,9 +122,8 @@ def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
                     f'exec {real} "$@"\n')
     fake.chmod(0o755)
     monkeypatch.setenv("CC", str(fake))
-    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))
     z, p, cost, cons = _toy_stage()
-    comp = stagewise.compiled_stage_functions(z, p, cost, cons)
+    comp = stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path / "cache"))
     sym = stagewise.stage_functions(z, p, cost, cons)
     zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
     assert np.allclose(np.asarray(ca.densify(comp.hess(zv, pv, 0.8, lam))),

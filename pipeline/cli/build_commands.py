@@ -12,7 +12,7 @@ import typer
 from rich.markup import escape
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
-from skatelib.pipeline.report import console, count, frontier_table
+from skatelib.pipeline.views.console import console, count, frontier_table
 
 
 class Backend(enum.StrEnum):
@@ -58,10 +58,10 @@ def build(
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
-    from skatelib.pipeline.build import default_output, run_build
+    from skatelib.pipeline.build.contract import BuildOptions
+    from skatelib.pipeline.build.orchestrate import default_output, run_build
+    from skatelib.pipeline.build.preflight import check_output
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.kinds import BuildOptions
-    from skatelib.pipeline.preflight import check_output
 
     cfg = load_config(config)
     target = out or default_output(cfg)
@@ -114,10 +114,10 @@ def solve(
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
-    from skatelib.pipeline.build import build_library
+    from skatelib.pipeline.build.contract import BuildOptions
+    from skatelib.pipeline.build.orchestrate import build_library
+    from skatelib.pipeline.build.preflight import check_output
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.kinds import BuildOptions
-    from skatelib.pipeline.preflight import check_output
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
     if config is not None and config_option is not None and config != config_option:
@@ -129,9 +129,10 @@ def solve(
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
+    from skatelib.pipeline.build.contract import Written
     from skatelib.pipeline.quadruped.builder import summary
 
-    summary(report.outcomes)
+    summary(Written(report.path, report.outcomes, report.frontier))
     console.print(f"wrote {escape(str(report.path))}")
     if report.failed:
         raise typer.Exit(1)

@@ -10,7 +10,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
-from skatelib.pipeline.report import (
+from skatelib.pipeline.views.console import (
     console,
     count,
     jsonable,
@@ -112,10 +112,10 @@ def inspect(
     force: Annotated[bool, typer.Option(help="Overwrite --save even if it is not a Rerun recording.")] = False,
 ) -> None:
     """Look at trajectories in Rerun: robot, board, forces and plots, with a default layout."""
-    from skatelib.pipeline.preflight import check_output
+    from skatelib.pipeline.build.preflight import check_output
 
     try:
-        from skatelib.pipeline.inspect_rerun import inspect_library
+        from skatelib.pipeline.views.rerun_inspect import inspect_library
     except ImportError as e:
         raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
     if save is None and not spawn:
@@ -139,7 +139,7 @@ def plot(
     """Figures of a library (matplotlib). Quadruped: board and momentum speed over time (the paper's
     Fig. 6), deck roll, the push foot's forces against the friction cone, the reachable-speed
     frontier. Humanoid: COM speed and height, COM and ZMP paths over the support polygons."""
-    from skatelib.pipeline.plots import FORMATS, write_figures
+    from skatelib.pipeline.views.figures import FORMATS, write_figures
 
     formats = tuple(f.value for f in fmt) if fmt else FORMATS
     for p in write_figures(library, out, frontier_file, formats):
@@ -180,10 +180,10 @@ def track(
             raise typer.Exit(1)
         return
     if save is not None:
-        from skatelib.pipeline.preflight import check_output
+        from skatelib.pipeline.build.preflight import check_output
 
         try:  # before the runs, not after them
-            from skatelib.pipeline.inspect_rerun import save_closed_loop
+            from skatelib.pipeline.views.rerun_inspect import save_closed_loop
         except ImportError as e:
             raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
         check_output(save, [library], what="recording")

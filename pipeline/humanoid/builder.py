@@ -1,18 +1,19 @@
-"""The humanoid's part of a build (``pipeline/build.py``): its options check, its tasks (one motion
+"""The humanoid's part of a build (``pipeline/build/orchestrate.py``): its options check, its tasks (one motion
 per velocity), the library it writes and the table it prints."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from rich.markup import escape
 from rich.table import Table
 from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.build.contract import BuildOptions, Outcome, Written
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.tasks import MotionOutcome, MotionTask
-from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.report import console
+from skatelib.pipeline.humanoid.tasks import BuildTask, EntryOutcome
+from skatelib.pipeline.views.console import console
 
 
 def check(cfg: HumanoidConfig, opts: BuildOptions) -> None:
@@ -26,26 +27,26 @@ def announce(cfg: HumanoidConfig) -> None:
     console.print(escape(f"{cfg.sweep.motion}: {cfg.gpm.nodes} LG nodes per step, {cfg.gpm.solver}"))
 
 
-def tasks(cfg: HumanoidConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[MotionTask]:
+def tasks(cfg: HumanoidConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:
     """One task per velocity (a motion's steps chain through their states, so they stay together)."""
-    return [MotionTask(cfg, v) for v in sorted(cfg.sweep.velocities_mps)]
+    return [BuildTask(cfg, v) for v in sorted(cfg.sweep.velocities_mps)]
 
 
 def prepare(cfg: HumanoidConfig, opts: BuildOptions) -> None:
     """Nothing to share: a step NLP builds in milliseconds in each worker."""
 
 
-def write(cfg: HumanoidConfig, out: Path, outcomes: list[MotionOutcome],
-          opts: BuildOptions) -> tuple[Path, list[MotionOutcome], None]:
+def write(cfg: HumanoidConfig, out: Path, finished: Sequence[Outcome], opts: BuildOptions) -> Written:
     """Write the library in velocity order; returns the file and the ordered outcomes."""
     from skatelib.pipeline.humanoid.entries import write_humanoid_library
 
-    outcomes = sorted(outcomes, key=lambda o: o.motion.velocity_mps)
-    return write_humanoid_library(out, cfg, outcomes), outcomes, None
+    outcomes = sorted(cast("list[EntryOutcome]", list(finished)), key=lambda o: o.motion.velocity_mps)
+    return Written(write_humanoid_library(out, cfg, outcomes), outcomes)
 
 
-def summary(outcomes: list[MotionOutcome], extra: Any = None) -> None:
+def summary(written: Written) -> None:
     """One row per step of every motion: status, iterations, time and cost; then the checks' failures."""
+    outcomes = cast("list[EntryOutcome]", list(written.outcomes))
     t = Table(title="entries (time: c = from the cache)")
     for col in ("entry", "step", "status", "iter", "time [ms]", "cost"):
         t.add_column(escape(col))

@@ -108,5 +108,3 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
 def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _HUMANOID_SECTIONS.items()}
     return HumanoidConfig(path=Path(origin), text="", **sections)
-
-CONFIG_CLASS = HumanoidConfig

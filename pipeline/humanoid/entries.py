@@ -17,11 +17,11 @@ from skatelib.library.channels import (
 )
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
+from skatelib.pipeline.build.provenance import root_attributes
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import Motion, plan_json
-from skatelib.pipeline.humanoid.tasks import MotionOutcome, entry_name
+from skatelib.pipeline.humanoid.tasks import EntryOutcome, entry_name
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
-from skatelib.pipeline.provenance import root_attributes
 
 
 def node_arrays(m: Motion, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -34,7 +34,7 @@ def node_arrays(m: Motion, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.nda
     return nodes_t, nodes_state, np.stack([r.U for r in m.steps])
 
 
-def entry_from_motion(o: MotionOutcome, config: HumanoidConfig) -> EntryRecord:
+def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
     """A library entry with the sampled trajectory and every step's GPM node values; ``success``
     only when every step converged and the independent checks hold."""
     m, steps = o.motion, o.motion.steps
@@ -64,7 +64,7 @@ def entry_from_motion(o: MotionOutcome, config: HumanoidConfig) -> EntryRecord:
     return EntryRecord(key=o.key, attrs=attrs, arrays=arrays, columns=columns, units=units)
 
 
-def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[MotionOutcome]) -> Path:
+def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[EntryOutcome]) -> Path:
     """Write the motions as a library (atomically): its model, provenance and one entry each."""
     h = config.humanoid
     model = {"robot_mass_kg": h.mass_kg, "gravity_mps2": h.gravity_mps2, "com_height_m": h.com_height_m,

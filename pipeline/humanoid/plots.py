@@ -15,7 +15,7 @@ from skatelib.library import schema
 from skatelib.library.channels import HUMANOID_STATE_NAMES, HUMANOID_STATE_UNITS
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.humanoid.motion import stored_plan
-from skatelib.pipeline.plots import library_name, panels
+from skatelib.pipeline.views.figures import library_name, panels
 from skatelib.runtime import MotionLibrary
 
 

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 from skatelib.library import schema
-from skatelib.pipeline.rerun_parts import ground, series, time_index
+from skatelib.pipeline.views.rerun_parts import ground, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
 PANELS = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), ("ZMP y", "zmp_y")]

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
-from typing import Any
 
 from skatelib.library import schema
-from skatelib.pipeline.cache import cache_key, cached_or_solved
+from skatelib.pipeline.build.cache import cache_key, cached_or_solved
+from skatelib.pipeline.build.contract import EntryEvent, EventSink
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import Motion, plan_for, plan_json, solve_motion, step_model
 from skatelib.pipeline.humanoid.step import SOLVER_OPTIONS, StepSpec, step_problem
-from skatelib.pipeline.sweep import EntryEvent
+from skatelib.pipeline.humanoid.verify import judge
 
 
 def entry_name(config: HumanoidConfig, velocity_mps: float) -> tuple[str, int]:
@@ -35,7 +35,7 @@ def motion_key(config: HumanoidConfig, velocity_mps: float, plan: list[StepSpec]
 
 
 @dataclass(frozen=True)
-class MotionOutcome:
+class EntryOutcome:
     """A finished motion: the solved motion, the independent checks' failures (none: it holds),
     cache origin and key, and any note for the user."""
 
@@ -62,7 +62,7 @@ class MotionOutcome:
 
 
 @dataclass(frozen=True)
-class MotionTask:
+class BuildTask:
     """One velocity of a humanoid sweep."""
 
     config: HumanoidConfig
@@ -72,9 +72,9 @@ class MotionTask:
     def n_entries(self) -> int:
         return 1
 
-    def run(self, use_cache: bool, events: Any) -> list[MotionOutcome]:
+    def run(self, use_cache: bool, events: EventSink | None) -> list[EntryOutcome]:
         """Solve (or read from the cache) and judge the motion (a task of
-        :func:`skatelib.pipeline.sweep.run_sweep`)."""
+        :func:`skatelib.pipeline.build.sweep.run_sweep`)."""
         cfg, v = self.config, self.velocity_mps
         name = entry_name(cfg, v)[0]
         if events is not None:
@@ -82,18 +82,7 @@ class MotionTask:
         key = motion_key(cfg, v, plan_for(cfg, v)[1])
         payload, cached, note = cached_or_solved(key, ("motion",), lambda: {"motion": solve_motion(cfg, v)}, use_cache)
         motion = payload["motion"]
-        outcome = MotionOutcome(name, motion, judge(cfg, motion), cached, key, note)
+        outcome = EntryOutcome(name, motion, judge(cfg, motion), cached, key, note)
         if events is not None:
             events.put(outcome.event())
         return [outcome]
-
-
-def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
-    """The independent step checks (``skatelib validate``'s) on a solved motion's node values."""
-    from skatelib.pipeline.humanoid.entries import node_arrays
-    from skatelib.pipeline.humanoid.verify import check_steps, failures
-
-    if not motion.success:
-        return ()
-    nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)
-    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, step_model(config))))

@@ -3,11 +3,15 @@ plan, with scipy's barycentric interpolation and numpy polynomials (not skatelib
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
 from skatelib.pipeline.humanoid.step import StepModel, StepSpec
+
+if TYPE_CHECKING:
+    from skatelib.pipeline.humanoid.config import HumanoidConfig
+    from skatelib.pipeline.humanoid.motion import Motion
 
 
 def _lg_nodes(n: int) -> np.ndarray:
@@ -97,3 +101,14 @@ def _check_terminal(worst: _Worst, spec: StepSpec, x_end: np.ndarray, u_end: np.
 
 def failures(report: dict[str, float], tol: float = 1e-6) -> list[str]:
     return [f"{k} violated by {v:.2e}" for k, v in sorted(report.items()) if v > tol]
+
+
+def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
+    """The independent step checks (``skatelib validate``'s) on a solved motion's node values."""
+    from skatelib.pipeline.humanoid.entries import node_arrays
+    from skatelib.pipeline.humanoid.motion import step_model
+
+    if not motion.success:
+        return ()
+    nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)
+    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, step_model(config))))

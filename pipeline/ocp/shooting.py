@@ -10,10 +10,12 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 from skatelib.pipeline.ocp.stagewise import (
+    CompileTarget,
     StagewiseNLP,
     build_stagewise_nlp,
     compiled_stage_functions,
@@ -52,15 +54,16 @@ def window_stage(sizes: tuple[int, int, int], dt: float) -> tuple[ca.SX, ca.SX, 
 
 
 def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Sequence[CostTerm],
-               constraints: Sequence[ConstraintTerm], compile_c: bool = False) -> Transcribed:
+               constraints: Sequence[ConstraintTerm], compile_dir: Path | None = None) -> Transcribed:
     """Build the stage function from the terms and assemble the NLP over all intervals; ``sizes``
-    is (state, control, stage parameters)."""
+    is (state, control, stage parameters). With ``compile_dir`` the stage functions are compiled to C
+    and kept in that folder (:func:`compiled_stage_functions`); without, they run interpreted."""
     z, p, stage = window_stage(sizes, method.dt)
     cost = sum((c.cost(stage) for c in costs), ca.SX(0))
     cons = ca.vertcat(*[term.rows(stage) for term in constraints])
     text = serialized_stage(z, p, cost, cons)  # the fingerprint, and the compiled functions' cache key
-    if compile_c:
-        fns = compiled_stage_functions(z, p, cost, cons, serialized=text)
+    if compile_dir is not None:
+        fns = compiled_stage_functions(z, p, cost, cons, CompileTarget(compile_dir), serialized=text)
     else:
         fns = stage_functions(z, p, cost, cons)
     N = method.n_intervals

@@ -27,14 +27,6 @@ import casadi as ca
 import numpy as np
 from skatelib.library.atomic import remove_stale_temporaries
 
-CACHE_ENV = "SKATELIB_CACHE_DIR"
-
-
-def cache_dir() -> Path:
-    """Where compiled stage functions are kept (``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib)."""
-    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
-    return Path(base)
-
 
 @dataclass(frozen=True)
 class StageFunctions:
@@ -104,9 +96,18 @@ def _accepted(cc: str, flags: tuple[str, ...]) -> tuple[str, ...]:
     return flags if probe.returncode == 0 else tuple(f for f in flags if f != "-march=native")
 
 
-def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags: tuple[str, ...] = _FLAGS,
+@dataclass(frozen=True)
+class CompileTarget:
+    """Where compiled stage functions are kept (the caller's cache folder) and the compiler flags."""
+
+    folder: Path
+    flags: tuple[str, ...] = _FLAGS
+
+
+def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, target: CompileTarget,
                              serialized: str | None = None) -> StageFunctions:
-    """The four stage functions compiled to C in one shared library, cached by content hash.
+    """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
+    content hash.
 
     The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the
     flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a cache hit costs
@@ -115,10 +116,11 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, flags
     cc = c_compiler()
     if cc is None:
         return stage_functions(z, p, cost, cons)
+    flags = target.flags
     text = serialized if serialized is not None else serialized_stage(z, p, cost, cons)
     native = host_cpu() if "-march=native" in flags else ""
     key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
-    lib = cache_dir() / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
+    lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
     if not lib.exists():
         fns = stage_functions(z, p, cost, cons)
         gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})

@@ -1,26 +1,10 @@
-"""One entry's attempts: the retry ladder of a solve that fails, and the physics verdict on the
-result (the independent checks of ``verify.py``)."""
+"""One entry's attempts: the retry ladder of a solve that fails."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, problem_for, solve
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
-
-
-def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[str, float]]:
-    """Run the independent physics checks on a converged result; a result that fails them is
-    returned with ``success = False`` and the failed checks as its status."""
-    if not r.success:
-        return r, {}
-    system = problem_for(config, r.n_strides).system
-    report = check_trajectory(system, Trajectory.of(r), r.target_velocity_mps)
-    failures = report.failures(system)
-    if failures:
-        r = replace(r, success=False, status=f"Physics_Check_Failed: {'; '.join(failures)}")
-    return r, report.as_dict()
+from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, solve
 
 
 def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:

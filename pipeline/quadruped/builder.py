@@ -1,24 +1,25 @@
-"""The quadruped's part of a build (``pipeline/build.py``): its options check, its tasks (one
+"""The quadruped's part of a build (``pipeline/build/orchestrate.py``): its options check, its tasks (one
 warm-start chain per stride count), the library it writes (with the frontier when asked) and the
 table it prints."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from rich.markup import escape
 from skatelib.library.schema import entry_key
-from skatelib.pipeline.kinds import BuildOptions
-from skatelib.pipeline.quadruped.chains import Chain, EntryOutcome, chains_for, ordered
+from skatelib.pipeline.build.contract import BuildOptions, Outcome, Written
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.report import console, entry_table, err_console, fmt, frontier_table
+from skatelib.pipeline.quadruped.tasks import BuildTask, EntryOutcome, ordered, tasks_for
+from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table
 
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     """Compiled stage functions are cached in the cache folder too: it must be writable even with
     ``--no-cache`` (with the cache on, ``build.check_options`` has checked it already)."""
-    from skatelib.pipeline.preflight import check_cache_dir
+    from skatelib.pipeline.build.preflight import check_cache_dir
 
     if cfg.optimization.compile and not opts.cache:
         check_cache_dir()
@@ -28,7 +29,8 @@ def announce(cfg: QuadrupedConfig) -> None:
     """What the user should know before the solves start: how the stage functions run."""
     if not cfg.optimization.compile:
         return
-    from skatelib.pipeline.ocp.stagewise import c_compiler, cache_dir
+    from skatelib.pipeline.build.cache import cache_dir
+    from skatelib.pipeline.ocp.stagewise import c_compiler
 
     cc = c_compiler()
     if cc is None:
@@ -39,9 +41,9 @@ def announce(cfg: QuadrupedConfig) -> None:
                              f"minute, once; cached in {cache_dir()})"))
 
 
-def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
+def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:
     """One warm-start chain per stride count (most strides first, for load balance)."""
-    return chains_for(cfg, ipopt)
+    return tasks_for(cfg, ipopt)
 
 
 def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
@@ -53,28 +55,28 @@ def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
         problem_for(cfg, min(cfg.sweep.strides))
 
 
-def write(cfg: QuadrupedConfig, out: Path, outcomes: list[EntryOutcome],
-          opts: BuildOptions) -> tuple[Path, list[EntryOutcome], Any]:
+def write(cfg: QuadrupedConfig, out: Path, finished: Sequence[Outcome], opts: BuildOptions) -> Written:
     """Write the library (failed entries included, ``success = false`` with their status); with
     ``opts.frontier`` search the reachable-speed frontier of every stride count and store it.
-    Returns the file, the outcomes in the library's order and the frontier (or None)."""
+    The frontier (or None) is the result's ``extra``."""
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
     from skatelib.pipeline.quadruped.system import SkateSystem
 
-    outcomes = ordered(outcomes)
+    outcomes = ordered(cast("list[EntryOutcome]", list(finished)))
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
     solver_options = outcomes[0].result.ipopt_options if outcomes else {}
     search = FrontierSearch() if opts.frontier else None
     points = find_frontier(cfg, cfg.sweep.strides, search, opts.jobs) if search is not None else None
     stored = frontier_json(points, search) if points is not None and search is not None else None
     path = write_quadruped_library(out, cfg, SkateSystem.from_config(cfg), entries, solver_options, stored)
-    return path, outcomes, points
+    return Written(path, outcomes, points)
 
 
-def summary(outcomes: list[EntryOutcome], frontier: Any = None) -> None:
+def summary(written: Written) -> None:
     """One row per entry: status, iterations, tries, time and the independent checks' figures;
     then the frontier, when searched."""
+    outcomes = cast("list[EntryOutcome]", list(written.outcomes))
     t = entry_table("entries (time: c = from the cache; momentum: the speed robot and board ride at together)",
                     ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
                      "Coulomb margin [N]", "torque [N m]", "defect"))
@@ -87,5 +89,5 @@ def summary(outcomes: list[EntryOutcome], frontier: Any = None) -> None:
                   fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
                   fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
-    if frontier is not None:
-        frontier_table(frontier)
+    if written.extra is not None:
+        frontier_table(written.extra)

@@ -245,5 +245,3 @@ def _check_sweep(cfg: QuadrupedConfig) -> None:
     if abs(steps - round(steps)) > 1e-6:
         raise ConfigError(p, "optimization.dt_s", f"must divide schedule.period_s ({cfg.schedule.period_s} s)")
 
-
-CONFIG_CLASS = QuadrupedConfig

@@ -13,7 +13,7 @@ from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
-from skatelib.pipeline.provenance import root_attributes
+from skatelib.pipeline.build.provenance import root_attributes
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import SolveResult
 from skatelib.pipeline.quadruped.system import SkateSystem

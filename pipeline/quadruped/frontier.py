@@ -14,9 +14,9 @@ import json
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 
-from skatelib.pipeline.quadruped.attempts import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
+from skatelib.pipeline.quadruped.verify import judge
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,12 @@
-"""The quadruped's row of the kind table (``pipeline/kinds.py``): its model summary and the
-independent checks of a stored library (its build is in :mod:`.builder`)."""
+"""The quadruped as a robot kind (:class:`skatelib.pipeline.kinds.RobotKind`): its model summary, the
+independent checks of a stored library, and the parts that build (:mod:`.builder`) and show it
+(:mod:`.rerun`, :mod:`.plots`), imported when asked."""
 
 from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rich.markup import escape
@@ -13,13 +14,18 @@ from rich.table import Table
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.report import (
+from skatelib.pipeline.views.console import (
     console,
     parameter_table,
 )
 from skatelib.runtime import MotionLibrary
 
-CONFIG_CLASS = QuadrupedConfig
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from skatelib.pipeline.build.contract import BuildOptions, BuildTask, Outcome, Written
+    from skatelib.pipeline.kinds import ReportFn
+
 # Vendor single-rigid-body figures (ROBOT_DATA.md), printed beside ours for comparison.
 VENDOR_MASS_KG = 8.3644
 VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
@@ -65,7 +71,7 @@ def system_from_library(lib: MotionLibrary) -> Any:
             raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {e}") from e
 
 
-def validate_entries(lib: MotionLibrary, report: Any) -> int:
+def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
     """The independent physics checks of every successful entry; returns the failures."""
     from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
 
@@ -85,3 +91,74 @@ def validate_entries(lib: MotionLibrary, report: Any) -> int:
                    "max_torque_rigid_legs_Nm": rep.max_torque_rigid_legs_Nm}
         report(e.key, "failed" if failures else "ok", ok if not failures else "; ".join(failures), figures)
     return bad
+
+
+class QuadrupedKind:
+    """The quadruped's operations of :class:`skatelib.pipeline.kinds.RobotKind`."""
+
+    name = "quadruped"
+    config_class = QuadrupedConfig
+
+    def from_toml(self, path: Path, data: dict[str, Any], text: str) -> QuadrupedConfig:
+        from skatelib.pipeline.quadruped.config import from_toml
+
+        return from_toml(path, data, text)
+
+    def from_json(self, data: dict[str, Any], origin: Path, urdf: Path | None) -> QuadrupedConfig:
+        from skatelib.pipeline.quadruped.config import from_json
+
+        return from_json(data, origin, urdf)
+
+    def print_model(self, cfg: QuadrupedConfig) -> None:
+        print_model(cfg)
+
+    def validate_entries(self, lib: MotionLibrary, report: ReportFn) -> int:
+        return validate_entries(lib, report)
+
+    def check(self, cfg: QuadrupedConfig, opts: BuildOptions) -> None:
+        from skatelib.pipeline.quadruped import builder
+
+        builder.check(cfg, opts)
+
+    def announce(self, cfg: QuadrupedConfig) -> None:
+        from skatelib.pipeline.quadruped import builder
+
+        builder.announce(cfg)
+
+    def tasks(self, cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> Sequence[BuildTask]:
+        from skatelib.pipeline.quadruped import builder
+
+        return builder.tasks(cfg, ipopt)
+
+    def prepare(self, cfg: QuadrupedConfig, opts: BuildOptions) -> None:
+        from skatelib.pipeline.quadruped import builder
+
+        builder.prepare(cfg, opts)
+
+    def write(self, cfg: QuadrupedConfig, out: Path, outcomes: Sequence[Outcome], opts: BuildOptions) -> Written:
+        from skatelib.pipeline.quadruped import builder
+
+        return builder.write(cfg, out, outcomes, opts)
+
+    def summary(self, written: Written) -> None:
+        from skatelib.pipeline.quadruped import builder
+
+        builder.summary(written)
+
+    def rerun_panels(self) -> list[tuple[str, str]]:
+        from skatelib.pipeline.quadruped import rerun
+
+        return list(rerun.PANELS)
+
+    def rerun_logger(self, lib: MotionLibrary) -> Any:
+        from skatelib.pipeline.quadruped import rerun
+
+        return rerun.logger(lib)
+
+    def figures(self, lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
+        from skatelib.pipeline.quadruped import plots
+
+        return plots.figures(lib, plt, frontier_file)
+
+
+KIND = QuadrupedKind()

@@ -7,7 +7,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_RPY, S_VEL, SWING
-from skatelib.library.margins import board_rotations, momentum_speed
+from skatelib.library.margins import momentum_speed
+from skatelib.library.rotations import board_rotations
 from skatelib.pipeline.quadruped.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
 from skatelib.pipeline.quadruped.system import SkateSystem
 

@@ -20,8 +20,8 @@ import numpy as np
 from skatelib.library.channels import GROUND
 from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import forward_speed, momentum_speed
-from skatelib.pipeline.plots import by_strides, library_name, panels
-from skatelib.pipeline.report import console
+from skatelib.pipeline.views.console import console
+from skatelib.pipeline.views.figures import by_strides, library_name, panels
 from skatelib.runtime import Entry, MotionLibrary
 
 

@@ -13,6 +13,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU, NX, S_POS, S_Q, S_RPY
+from skatelib.pipeline.build.cache import cache_dir
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
@@ -72,7 +73,8 @@ class PushoffProblem:
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
-                                          self.constraints, compile_c=opt.compile)
+                                          self.constraints,
+                                          compile_dir=cache_dir() if opt.compile else None)
         self.bound_terms = bound_terms(config, system, self.schedule, self.x0)
         x_sym = ca.SX.sym("x", NX)
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])

@@ -12,8 +12,9 @@ import numpy as np
 import pinocchio as pin
 import rerun as rr
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, LEGS, S_Q, S_RPY
-from skatelib.library.margins import board_rotations, forward_speed, friction_margins, rpy_matrices
-from skatelib.pipeline.rerun_parts import ground, quat_rows, series, time_index
+from skatelib.library.margins import forward_speed, friction_margins
+from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.pipeline.views.rerun_parts import ground, quat_rows, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)

@@ -8,8 +8,8 @@ stored arrays. ``skatelib validate`` runs these on every library entry.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import asdict, dataclass
-from typing import Any
+from dataclasses import asdict, dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from skatelib.library.channels import (
@@ -31,6 +31,10 @@ from skatelib.pipeline.quadruped.measures import (
     swing_clearance,
 )
 from skatelib.pipeline.quadruped.system import SkateSystem
+
+if TYPE_CHECKING:
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
+    from skatelib.pipeline.quadruped.pushoff import SolveResult
 
 
 @dataclass(frozen=True)
@@ -196,3 +200,18 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
         max_board_roll_rad=float(np.abs(state[:, I_BOARD_ROLL]).max()),
         **riding_end(system, state[-1], target_velocity_mps),
     )
+
+
+def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[str, float]]:
+    """Run the independent physics checks on a converged result; a result that fails them is
+    returned with ``success = False`` and the failed checks as its status."""
+    from skatelib.pipeline.quadruped.pushoff import problem_for
+
+    if not r.success:
+        return r, {}
+    system = problem_for(config, r.n_strides).system
+    report = check_trajectory(system, Trajectory.of(r), r.target_velocity_mps)
+    failures = report.failures(system)
+    if failures:
+        r = replace(r, success=False, status=f"Physics_Check_Failed: {'; '.join(failures)}")
+    return r, report.as_dict()

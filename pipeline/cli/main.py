@@ -22,6 +22,6 @@ def main() -> None:
             "This is a runtime-only install (numpy + h5py, enough for skatelib.runtime on a robot).\n"
             "To build, validate or inspect libraries: pip install 'skatelib[pipeline]'\n")
         raise SystemExit(EXIT_DEPENDENCY)
-    from skatelib.pipeline.cli import main as cli_main
+    from skatelib.pipeline.cli.app import main as cli_main
 
     cli_main()

@@ -13,7 +13,6 @@ import json
 import os
 import sys
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import rerun as rr
@@ -21,23 +20,22 @@ import rerun.blueprint as rrb
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
-from skatelib.pipeline.kinds import check_library_kind, part
+from skatelib.pipeline.kinds import RobotKind, kind_named
 from skatelib.runtime import Entry, MotionLibrary
 
 SPACING_M = 1.2  # side-by-side entries are this far apart along y
 
 
-def kind_rerun(lib: MotionLibrary) -> ModuleType:
-    """The Rerun module of the library's kind (``<kind>.rerun``: ``PANELS``, ``logger(lib)``)."""
-    check_library_kind(lib.kind, lib.path)
-    return part(lib.kind, "rerun")
+def kind_rerun(lib: MotionLibrary) -> RobotKind:
+    """The library's kind (its ``rerun_panels()`` and ``rerun_logger(lib)``)."""
+    return kind_named(lib.kind, lib.path)
 
 
 def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
     """One tab per entry: its own 3D view (the others out of it) beside its summary and plots (a
     closed-loop run shares its entry's tab with the reference), so that nothing mixes entries; a
     last tab shows all entries side by side."""
-    panels = kind_rerun(lib).PANELS
+    panels = kind_rerun(lib).rerun_panels()
     groups: dict[str, list[str]] = {}
     for r in roots:
         groups.setdefault(r.strip("/").split("/")[0], []).append(r)
@@ -78,7 +76,7 @@ def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | N
                 overlay: bool = False) -> list[str]:
     """Log entries (all by default) side by side (or overlaid); returns their entity roots."""
     entries = [lib[k] for k in keys] if keys else list(lib)
-    log = kind_rerun(lib).logger(lib)
+    log = kind_rerun(lib).rerun_logger(lib)
     roots = []
     rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     for n, e in enumerate(entries):
@@ -94,7 +92,7 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
     """Each entry's reference beside its closed-loop run (``skatelib track --save``), with the views
     of ``inspect``: the reference at ``/<key>/reference``, the run 0.6 m beside it at
     ``/<key>/closed_loop``. Written atomically."""
-    log = kind_rerun(lib).logger(lib)
+    log = kind_rerun(lib).rerun_logger(lib)
     rec = rr.RecordingStream(f"skatelib-track-{lib.path.stem}")
     roots = []
     with atomic_path(save) as tmp:

@@ -1,6 +1,6 @@
 """Figures of a motion library with matplotlib (``skatelib plot``): what a paper or a review shows,
-from the file alone. Each robot kind draws its own (the ``plots`` module of its subpackage, through
-the kind table: ``figures(lib, plt, frontier_file) -> {stem: figure}``); here the shared parts and
+from the file alone. Each robot kind draws its own (its ``figures(lib, plt, frontier_file) -> {stem:
+figure}``, from the ``plots`` module of its subpackage); here the shared parts and
 the writer.
 """
 
@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library.atomic import atomic_path
-from skatelib.pipeline.kinds import kind_named, part
+from skatelib.pipeline.kinds import kind_named
 from skatelib.runtime import Entry, MotionLibrary
 
 FORMATS = ("png", "svg")
@@ -52,9 +52,9 @@ def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
         SkatelibError: A frontier file that is not one, or one given for a kind without a frontier.
     """
     lib = MotionLibrary.open(path)
-    kind_named(lib.kind, lib.path)  # an unknown kind is refused, naming the known ones
+    kind = kind_named(lib.kind, lib.path)  # an unknown kind is refused, naming the known ones
     plt = _pyplot()
-    figures = part(lib.kind, "plots").figures(lib, plt, frontier_file)
+    figures = kind.figures(lib, plt, frontier_file)
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
     for stem, fig in figures.items():

@@ -1,12 +1,13 @@
 """The entry cache of a build, for every robot kind: each solved entry under a key of what
 determines it (each kind says what that is), checksummed, so that an interrupted build resumes and
 a changed problem (code, config, URDF, options) never gets an old trajectory. The folder is the
-compiled-code cache's (``SKATELIB_CACHE_DIR``)."""
+compiled stage functions' (``SKATELIB_CACHE_DIR``), which this module owns."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 import pickle
 from collections.abc import Callable
 from pathlib import Path
@@ -14,12 +15,19 @@ from typing import Any
 
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
-from skatelib.pipeline.ocp.stagewise import cache_dir
 
 # Bump when a kind's retry ladder, the solve's post-processing or the cached payload changes: the
 # keys cover the problems themselves (stage functions, bounds, guesses, plans, options), not that code.
 CACHE_VERSION = "2"
 _MAGIC = b"skatelib-entry-cache 2\n"
+CACHE_ENV = "SKATELIB_CACHE_DIR"
+
+
+def cache_dir() -> Path:
+    """The user's cache folder of entries and compiled stage functions (``$SKATELIB_CACHE_DIR`` or
+    ~/.cache/skatelib)."""
+    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
+    return Path(base)
 
 
 def cache_key(*parts: Any) -> str:

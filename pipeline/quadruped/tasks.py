@@ -10,11 +10,12 @@ from functools import partial
 from typing import Any
 
 from skatelib.library import schema
-from skatelib.pipeline.cache import cache_key, cached_or_solved
-from skatelib.pipeline.quadruped.attempts import judge, solve_with_retries
+from skatelib.pipeline.build.cache import cache_key, cached_or_solved
+from skatelib.pipeline.build.contract import EntryEvent, EventSink
+from skatelib.pipeline.quadruped.attempts import solve_with_retries
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solver_options
-from skatelib.pipeline.sweep import EntryEvent
+from skatelib.pipeline.quadruped.verify import judge
 
 
 def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
@@ -42,13 +43,17 @@ class EntryOutcome:
     note: str = ""
 
     @property
+    def key(self) -> str:
+        return schema.entry_key(self.result.target_velocity_mps, self.result.n_strides)
+
+    @property
     def success(self) -> bool:
         return self.result.success
 
     def event(self) -> EntryEvent:
         """The finished event of this entry (what the progress display hears)."""
         r = self.result
-        return EntryEvent(schema.entry_key(r.target_velocity_mps, r.n_strides), True, r.status, r.success, self.cached)
+        return EntryEvent(self.key, True, r.status, r.success, self.cached)
 
 
 def solve_order(velocities: Iterable[float]) -> list[tuple[float, float | None]]:
@@ -66,7 +71,7 @@ def solve_order(velocities: Iterable[float]) -> list[tuple[float, float | None]]
 
 
 @dataclass(frozen=True)
-class Chain:
+class BuildTask:
     """Entries of one stride count, solved in :func:`solve_order`."""
 
     config: QuadrupedConfig
@@ -78,10 +83,10 @@ class Chain:
     def n_entries(self) -> int:
         return len(self.velocities)
 
-    def run(self, use_cache: bool, events: Any) -> list[EntryOutcome]:
+    def run(self, use_cache: bool, events: EventSink | None) -> list[EntryOutcome]:
         """Solve the chain in :func:`solve_order`, each entry warm-started from the nearest success on
         its way to the middle speed, cold when there is none (a task of
-        :func:`skatelib.pipeline.sweep.run_sweep`); cached entries are read instead of solved."""
+        :func:`skatelib.pipeline.build.sweep.run_sweep`); cached entries are read instead of solved."""
         out: list[EntryOutcome] = []
         order = solve_order(self.velocities)
         source = dict(order)
@@ -112,10 +117,10 @@ def _solve(spec: PushoffSpec) -> dict[str, Any]:
     return {"result": result, "attempts": attempts}
 
 
-def chains_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[Chain]:
+def tasks_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:
     """One chain per stride count, longest-running (most strides) first for load balance."""
     v = tuple(sorted(config.sweep.velocities_mps))
-    return [Chain(config, s, v, ipopt) for s in sorted(config.sweep.strides, reverse=True)]
+    return [BuildTask(config, s, v, ipopt) for s in sorted(config.sweep.strides, reverse=True)]
 
 
 def ordered(outcomes: Iterable[EntryOutcome]) -> list[EntryOutcome]:

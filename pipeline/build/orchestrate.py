@@ -1,26 +1,28 @@
 """``skatelib build`` for every robot kind: config -> the kind's tasks -> parallel sweep (cache,
 progress) -> verified, atomically written motion library.
 
-The kind's ``builder`` module (through the kind table) supplies what differs: ``check(cfg, opts)``
-refuses its own options before anything runs, ``announce(cfg)``, ``tasks(cfg, ipopt)`` cuts the build into
-picklable tasks (:class:`skatelib.pipeline.sweep.Task`), ``prepare(cfg, opts)`` readies what the
-workers share, ``write(cfg, out, outcomes, opts)`` writes the library and ``summary(outcomes,
-extra)`` prints its table. The sweep, the entry
-cache, the progress bar, interruption and the exit code are the same for every kind.
+The kind (:class:`skatelib.pipeline.kinds.RobotKind`) supplies what differs: ``check(cfg, opts)``
+refuses its own options before anything runs, ``announce(cfg)``, ``tasks(cfg, ipopt)`` cuts the
+build into picklable tasks (:class:`skatelib.pipeline.build.contract.BuildTask`), ``prepare(cfg,
+opts)`` readies what the workers share, ``write(cfg, out, outcomes, opts)`` writes the library and
+``summary(written)`` prints its table. The sweep, the entry cache, the progress bar, interruption
+and the exit code are the same for every kind.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rich.markup import escape
 from skatelib.library.errors import Interrupted, SkatelibError
-from skatelib.pipeline.kinds import BuildOptions, BuildRun, part
-from skatelib.pipeline.report import console, count
-from skatelib.pipeline.sweep import EntryEvent, ProgressFn, run_sweep
+from skatelib.pipeline.build.contract import BuildOptions, BuildRun, EntryEvent, Outcome, ProgressFn, Written
+from skatelib.pipeline.build.sweep import run_sweep
+from skatelib.pipeline.kinds import KindConfig, kind_of
+from skatelib.pipeline.views.console import console, count
 
 
 @dataclass(frozen=True)
@@ -29,25 +31,17 @@ class BuildReport:
     time and what else the kind found (the quadruped's frontier, when asked)."""
 
     path: Path
-    outcomes: list[Any]
+    outcomes: Sequence[Outcome]
     wall_time_s: float
     frontier: Any = None
 
     @property
-    def failed(self) -> list[Any]:
+    def failed(self) -> list[Outcome]:
         return [o for o in self.outcomes if not o.success]
 
 
-def default_output(config: Any) -> Path:
+def default_output(config: KindConfig) -> Path:
     return Path("out") / f"{config.meta.name}.h5"
-
-
-def builder(config: Any) -> Any:
-    """The ``builder`` module of the config's kind."""
-    from skatelib.pipeline.kinds import kind_of
-
-    kind_of(config)  # an unknown kind is refused, naming the known ones
-    return part(config.meta.kind, "builder")
 
 
 def build_library(config: Any, out: Path | None = None, options: BuildOptions | None = None,
@@ -58,11 +52,12 @@ def build_library(config: Any, out: Path | None = None, options: BuildOptions | 
     t0 = time.perf_counter()
     out = out or default_output(config)
     options = options or BuildOptions()
-    kind = builder(config)
+    kind = kind_of(config)
     kind.prepare(config, options)
     outcomes = run_sweep(kind.tasks(config, ipopt), options, on_entry)
-    path, outcomes, extra = kind.write(config, out, outcomes, options)
-    return BuildReport(path=path, outcomes=outcomes, wall_time_s=time.perf_counter() - t0, frontier=extra)
+    written: Written = kind.write(config, out, outcomes, options)
+    return BuildReport(path=written.path, outcomes=written.outcomes, wall_time_s=time.perf_counter() - t0,
+                       frontier=written.extra)
 
 
 class _Progress:
@@ -90,7 +85,7 @@ class _Progress:
 def check_options(cfg: Any, opts: BuildOptions) -> None:
     """Refuse options that cannot work before anything runs: a dask backend without a reachable
     scheduler, an unwritable cache folder, and what the kind's ``check`` refuses."""
-    from skatelib.pipeline.preflight import check_cache_dir, check_scheduler
+    from skatelib.pipeline.build.preflight import check_cache_dir, check_scheduler
 
     if opts.backend == "dask":
         if opts.scheduler is None:
@@ -98,7 +93,7 @@ def check_options(cfg: Any, opts: BuildOptions) -> None:
         check_scheduler(opts.scheduler)
     if opts.cache:
         check_cache_dir()
-    builder(cfg).check(cfg, opts)
+    kind_of(cfg).check(cfg, opts)
 
 
 def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
@@ -116,7 +111,7 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
         TimeRemainingColumn,
     )
 
-    kind = builder(cfg)
+    kind = kind_of(cfg)
     check_options(cfg, opts)
     total = sum(t.n_entries for t in kind.tasks(cfg))
     console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
@@ -130,7 +125,7 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
             kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
                     else "nothing is cached (--no-cache)")
             raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
-    kind.summary(report.outcomes, report.frontier)
+    kind.summary(Written(report.path, report.outcomes, report.frontier))
     for o in report.outcomes:
         if o.note:
             console.print(f"[yellow]note:[/] {escape(o.note)}")

@@ -4,7 +4,7 @@ or in this process with ``jobs = 1``.
 
 A task is what a robot kind cuts its build into (a quadruped's warm-start chain along velocity,
 a humanoid's motion): a picklable object whose ``run(use_cache, events)`` solves its entries,
-caching each finished one on disk (:mod:`skatelib.pipeline.cache`) so that an interrupted build
+caching each finished one on disk (:mod:`skatelib.pipeline.build.cache`) so that an interrupted build
 resumes, and reports each start and finish as a small :class:`EntryEvent`. Outcomes come back
 whole; the library file itself is written only at the end, atomically.
 """
@@ -14,39 +14,12 @@ from __future__ import annotations
 import os
 import threading
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any, Protocol
+from collections.abc import Sequence
+from typing import Any
 
-from skatelib.pipeline.kinds import BuildOptions
+from skatelib.pipeline.build.contract import BuildOptions, BuildTask, EntryEvent, EventSink, Outcome, ProgressFn
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-@dataclass(frozen=True)
-class EntryEvent:
-    """What the progress display hears of an entry: it started (``done`` False) or finished, with
-    its status. Small, so that no trajectory crosses the process boundary for it."""
-
-    key: str
-    done: bool
-    status: str = ""
-    success: bool = False
-    cached: bool = False
-
-
-
-ProgressFn = Callable[[EntryEvent], None]
-
-
-class Task(Protocol):
-    """A picklable unit of a build: it solves ``n_entries`` entries in order and returns their
-    outcomes, each with ``success`` and ``event()`` (its finished :class:`EntryEvent`)."""
-
-    @property
-    def n_entries(self) -> int: ...
-
-    def run(self, use_cache: bool, events: Any) -> list[Any]: ...
 
 
 def exit_with_parent(parent_pid: int | None, poll_s: float = 0.5) -> None:
@@ -69,8 +42,8 @@ def exit_with_parent(parent_pid: int | None, poll_s: float = 0.5) -> None:
 _WATCHDOG_STARTED = False  # per process: workers start one watchdog thread
 
 
-def run_task(task: Task, use_cache: bool = True, events: Any = None,
-             parent_pid: int | None = None, worker: bool = False) -> list[Any]:
+def run_task(task: BuildTask, use_cache: bool = True, events: EventSink | None = None,
+             parent_pid: int | None = None, worker: bool = False) -> list[Outcome]:
     """Run one task (a module-level function, so worker processes can import it).
 
     ``events`` is an optional queue that receives an :class:`EntryEvent` as an entry starts and
@@ -83,11 +56,11 @@ def run_task(task: Task, use_cache: bool = True, events: Any = None,
     if worker:
         for var in THREAD_VARS:
             os.environ[var] = "1"
-    return task.run(use_cache, events)
+    return list(task.run(use_cache, events))
 
 
-def run_sweep(tasks: list[Any], options: BuildOptions | None = None,
-              on_entry: ProgressFn | None = None) -> list[Any]:
+def run_sweep(tasks: Sequence[BuildTask], options: BuildOptions | None = None,
+              on_entry: ProgressFn | None = None) -> list[Outcome]:
     """Run every task and return all their outcomes (in no particular order).
 
     Args:
@@ -132,7 +105,7 @@ def _drain(events: Any, on_entry: ProgressFn | None, stop: threading.Event) -> N
             on_entry(event)
 
 
-def _run_loky(tasks: list[Any], jobs: int, use_cache: bool, on_entry: ProgressFn | None) -> list[Any]:
+def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: ProgressFn | None) -> list[Outcome]:
     from multiprocessing.managers import SyncManager
 
     from joblib import Parallel, delayed, parallel_config
@@ -156,7 +129,8 @@ def _run_loky(tasks: list[Any], jobs: int, use_cache: bool, on_entry: ProgressFn
     return outcomes
 
 
-def _run_dask(tasks: list[Any], scheduler: Any, use_cache: bool, on_entry: ProgressFn | None) -> list[Any]:
+def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
+              on_entry: ProgressFn | None) -> list[Outcome]:
     try:
         from distributed import Client, as_completed
     except ImportError as e:
@@ -165,7 +139,7 @@ def _run_dask(tasks: list[Any], scheduler: Any, use_cache: bool, on_entry: Progr
     client = Client(scheduler) if own else scheduler
     try:
         futures = [client.submit(run_task, task, use_cache, None, None, True, pure=False) for task in tasks]
-        outcomes: list[Any] = []
+        outcomes: list[Outcome] = []
         for fut in as_completed(futures):
             task_out = fut.result()
             for o in task_out:

@@ -13,7 +13,7 @@ from pathlib import Path
 from skatelib.library.atomic import remove_stale_temporaries
 from skatelib.library.errors import ConfigError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
-from skatelib.pipeline.ocp.stagewise import CACHE_ENV, cache_dir
+from skatelib.pipeline.build.cache import CACHE_ENV, cache_dir
 
 SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?P<port>\d{1,5})$")
 

@@ -7,17 +7,17 @@ import dataclasses
 from typing import Any
 
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import chains
+from skatelib.pipeline.quadruped import tasks
 
 from tests.helpers import TINY
 
 
 def test_solve_order_starts_cold_in_the_middle_and_walks_outwards():
-    assert chains.solve_order([1.0, 0.2, 0.85, 0.5, 0.3, 0.7]) == [
+    assert tasks.solve_order([1.0, 0.2, 0.85, 0.5, 0.3, 0.7]) == [
         (0.5, None), (0.3, 0.5), (0.2, 0.3), (0.7, 0.5), (0.85, 0.7), (1.0, 0.85)]
-    assert chains.solve_order([0.4]) == [(0.4, None)]
-    assert chains.solve_order([0.7, 0.4]) == [(0.4, None), (0.7, 0.4)]
-    assert chains.solve_order([]) == []
+    assert tasks.solve_order([0.4]) == [(0.4, None)]
+    assert tasks.solve_order([0.7, 0.4]) == [(0.4, None), (0.7, 0.4)]
+    assert tasks.solve_order([]) == []
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,10 +45,10 @@ def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_middle
         keyed_on[spec.target_velocity_mps] = predecessor
         return f"key {spec.target_velocity_mps}"
 
-    monkeypatch.setattr(chains, "solve_with_retries", solve)
-    monkeypatch.setattr(chains, "entry_key", key)
-    monkeypatch.setattr(chains, "judge", lambda config, result: (result, {}))
-    chain = chains.Chain(load_config(TINY), 1, (0.2, 0.3, 0.5, 0.7, 0.85, 1.0))
+    monkeypatch.setattr(tasks, "solve_with_retries", solve)
+    monkeypatch.setattr(tasks, "entry_key", key)
+    monkeypatch.setattr(tasks, "judge", lambda config, result: (result, {}))
+    chain = tasks.BuildTask(load_config(TINY), 1, (0.2, 0.3, 0.5, 0.7, 0.85, 1.0))
     out = chain.run(use_cache=False, events=None)
 
     assert [o.result.target_velocity_mps for o in out] == [0.5, 0.3, 0.2, 0.7, 0.85, 1.0]

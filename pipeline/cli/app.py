@@ -1,0 +1,71 @@
+"""The ``skatelib`` command line: the app, its commands (:mod:`.build_commands`,
+:mod:`.library_commands`) and the entry point that turns errors into messages and exit codes."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.cli import build_commands, library_commands
+from skatelib.pipeline.cli.library_commands import QpSolver
+from skatelib.pipeline.views.console import console, err_console
+
+app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
+                  help="Offline motion-library pipeline for legged robots on skateboards.")
+for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS):
+    app.command()(_command)
+
+__all__ = ["QpSolver", "app", "main"]
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib import metadata
+
+        console.print(f"skatelib {metadata.version('skatelib')}")
+        raise typer.Exit()
+
+
+def _root(
+    version: Annotated[bool, typer.Option("--version", callback=_print_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Offline motion-library pipeline for legged robots on skateboards.
+
+    Exit codes: 0 ok, 1 entries failed, 2 usage/config/output error, 3 bad library file,
+    4 missing optional package, 130 interrupted. Add --debug for a traceback instead of a message.
+    """
+
+
+app.callback()(_root)
+
+
+def _sigterm(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
+
+
+def main() -> None:
+    """Entry point: errors become a one-paragraph message on stderr and a documented exit code
+    (README "Exit codes"), not a traceback; ``--debug`` anywhere on the line shows the traceback."""
+    import signal
+    import sys
+
+    from skatelib.library.errors import EXIT_INTERRUPTED, exit_code
+
+    debug = "--debug" in sys.argv
+    if debug:
+        sys.argv.remove("--debug")
+    signal.signal(signal.SIGTERM, _sigterm)
+    try:
+        app()
+    except SystemExit as e:
+        if e.code == EXIT_INTERRUPTED:  # typer's answer to Ctrl-C in a command that does not say more
+            err_console.print("interrupted")
+        raise
+    except (SkatelibError, ImportError) as e:
+        if debug:
+            raise
+        err_console.print(f"[bold red]error:[/] {escape(str(e))}")
+        raise SystemExit(exit_code(e)) from None

@@ -1,0 +1,1 @@
+"""What the commands show: console tables, figures and Rerun recordings."""
