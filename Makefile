@@ -61,9 +61,12 @@ library: venv-build
 test: venv
 	$(BIN)/python -m pytest
 
+# mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
+PACKAGES := pipeline library runtime control
 lint: venv
-	$(BIN)/ruff check pipeline library runtime control tests benchmarks
-	$(BIN)/mypy pipeline library runtime control benchmarks
+	$(BIN)/ruff check $(PACKAGES) tests benchmarks tools examples
+	$(BIN)/mypy $(foreach p,$(PACKAGES),-p skatelib.$(p))
+	$(BIN)/mypy benchmarks tools examples
 	$(BIN)/python tools/check_layout.py
 
 bench: venv

@@ -263,13 +263,16 @@ def _time_each(fn: Callable[[Any], object], items: list[Any]) -> list[float]:
 
 def bench_mpc(path: Path | None = None) -> None:
     import numpy as np
-    from skatelib.control.closed_loop import EntryReference, TrackSettings
     from skatelib.control.kinematics import LegKinematics
     from skatelib.control.linear_model import Feedback
-    from skatelib.control.mpc import SOLVERS, Discretizer, MpcConfig, build_problem, make_solver
+    from skatelib.control.mpc import Discretizer, MpcConfig, build_problem
     from skatelib.control.params import SkateParams
-    from skatelib.control.track import track_library
+    from skatelib.control.qp import SOLVERS, make_solver
+    from skatelib.control.reference import EntryReference
+    from skatelib.control.settings import TrackSettings
+    from skatelib.control.track import track_jobs
     from skatelib.library.rotations import board_rotations, rpy_matrices
+    from skatelib.pipeline.build.sweep import run_calls
     from skatelib.runtime import MotionLibrary
 
     if path is None:
@@ -290,8 +293,8 @@ def bench_mpc(path: Path | None = None) -> None:
         r_board = board_rotations(x0[5], x0[26]) @ np.vstack([p.deck_points_m, np.zeros(4)])
         fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board,
                       torque_maps=kin.torque_maps(x0[12:24], rpy_matrices(x0[3:6])))  # with the torque rows
-        updates.append((fb, *ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.prior_coast_mps2(t))))
-    qps = [build_problem(p, cfg, disc, fb, xr, ur, ct, acc) for fb, xr, ur, ct, acc in updates]  # warm-up
+        updates.append((fb, ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.prior_coast_mps2(t))))
+    qps = [build_problem(p, cfg, disc, fb, horizon) for fb, horizon in updates]  # warm-up
     # Three timing passes; each figure is the median over the updates of the best pass (timeit's
     # practice: the VM's noise only ever adds time).
     t_build = [min(ts) for ts in zip(*(_time_each(lambda u: build_problem(p, cfg, disc, *u), updates)
@@ -300,7 +303,7 @@ def bench_mpc(path: Path | None = None) -> None:
     for name in SOLVERS:
         passes = []
         for _ in range(3 if name != "osqp" else 1):
-            solver = make_solver(dataclasses.replace(cfg, solver=name))  # warm starts from the same first update
+            solver = make_solver(name)  # warm starts from the same first update
             passes.append(_time_each(solver.solve, qps))
         solve[name] = [min(ts) for ts in zip(*passes, strict=True)]
     print(f"MPC update along v0.50_s2 ({len(qps)} updates at 30 Hz, N = {cfg.horizon}; medians over the updates, "
@@ -315,7 +318,7 @@ def bench_mpc(path: Path | None = None) -> None:
               f"{base / t:5.1f}x the sparse OSQP baseline")
     print("  target (issue #10): build + solve <= 2 ms median")
     t0 = time.perf_counter()
-    results = [r for r, _ in track_library(Path(path), None, "", cfg, TrackSettings(), jobs=2)]
+    results = [r for r, _ in run_calls(track_jobs(Path(path), None, "", cfg, TrackSettings()), 2)]
     print(f"skatelib track, {len(results)} entries, exact plant, 2 workers: {time.perf_counter() - t0:5.1f} s "
           f"({sum(r.passed for r in results)} pass); target <= 60 s")
 

@@ -20,6 +20,7 @@ angles integrate the commanded joint velocities.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from skatelib.control.params import SkateParams
@@ -47,6 +48,15 @@ class ContactLog:
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b of two 3-vectors (np.cross costs ten times as much on vectors this small)."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+class PlantInput(NamedTuple):
+    """What drives the plant over a step: the commanded foot forces (3, 4) [N], the joint
+    velocities (12,) [rad/s] and an external force on the robot's COM (3,) [N] or None."""
+
+    forces: np.ndarray
+    qd: np.ndarray
+    external_N: np.ndarray | None = None
 
 
 class Plant:
@@ -148,14 +158,14 @@ class Plant:
         ds[NX:NX + 2] = s[24:26]
         return ds
 
-    def step(self, s: np.ndarray, forces_cmd: np.ndarray, qd: np.ndarray, contact: np.ndarray,
-             ground_points: np.ndarray, h: float, t: float, external_N: np.ndarray | None = None) -> np.ndarray:
+    def step(self, s: np.ndarray, u: PlantInput, contact: np.ndarray, ground_points: np.ndarray, h: float,
+             t: float) -> np.ndarray:
         """One RK4 step of ``h`` seconds; the commanded forces are made admissible at the start of
         the step and held (the whole-body controller's torques hold them between its updates)."""
-        f = self.admissible(s, forces_cmd, contact, t, record=True)
+        f = self.admissible(s, u.forces, contact, t, record=True)
 
         def d(x: np.ndarray) -> np.ndarray:
-            return self.derivative(x, f, qd, contact, ground_points, external_N)
+            return self.derivative(x, f, u.qd, contact, ground_points, u.external_N)
 
         k1 = d(s)
         k2 = d(s + h / 2 * k1)
@@ -168,4 +178,4 @@ class Plant:
         return float(momentum_speed(s[:NX], self.p.mass_kg, self.p.board_mass_kg))
 
 
-__all__ = ["GROUND", "NB", "ContactLog", "Plant"]
+__all__ = ["GROUND", "NB", "ContactLog", "Plant", "PlantInput"]

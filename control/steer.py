@@ -14,14 +14,16 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from skatelib.control.closed_loop import TrackSettings, simulate, slip_reason
-from skatelib.control.mpc import MpcConfig
-from skatelib.control.params import Disturbances, SkateParams
+from skatelib.control.loop import simulate
+from skatelib.control.mpc import HorizonRef
+from skatelib.control.params import SkateParams
 from skatelib.control.plant import NB
+from skatelib.control.settings import ClosedLoop
+from skatelib.control.verdict import slip_reason
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NU, NX
 from skatelib.runtime import MotionLibrary
 
-ROLL_RMS_LIMIT_RAD = 0.03  # issue 10: deck-roll tracking error below this, RMS
+ROLL_RMS_LIMIT_RAD = 0.03  # deck-roll tracking error below this, RMS
 SHIFT_LIMIT = 0.85  # the torso's sideways shift at most this fraction of the feet's half-width
 
 
@@ -54,16 +56,25 @@ class SteerResult:
         return asdict(self)
 
 
+@dataclass(frozen=True)
+class RollWave:
+    """The deck roll the experiment asks for: ``amplitude_rad sin(2 pi t / period_s)``."""
+
+    amplitude_rad: float = 0.1
+    period_s: float = 3.0
+
+
 class SteerReference:
     """Four legs on the deck, deck roll following ``amplitude sin(2 pi t / period)``."""
 
     def __init__(self, lib: MotionLibrary, p: SkateParams, speed_mps: float, duration_s: float,
-                 amplitude_rad: float = 0.1, period_s: float = 3.0, adapt_stiffness: bool = True):
+                 adapt_stiffness: bool = True, wave: RollWave | None = None):
         last = np.asarray(lib.select(speed_mps, clamp=True).state[-1], dtype=np.float64)
         self.p = p
         self.t0, self.t_end, self.t_stop = 0.0, 0.0, duration_s
         self.speed = speed_mps
-        self.amplitude, self.period = amplitude_rad, period_s
+        wave = wave or RollWave()
+        self.amplitude, self.period = wave.amplitude_rad, wave.period_s
         self.deck_z = float(lib.model["board_deck_height_m"])  # the board origin is on the deck's top
         self.height = float(last[2]) - self.deck_z
         self.rel_x = float(np.mean(p.deck_points_m[0]))  # the COM over the middle of the feet
@@ -125,8 +136,8 @@ class SteerReference:
     def touchdown_point(self, t: float, leg: int) -> np.ndarray:
         raise AssertionError("no foot touches the ground while steering")
 
-    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float, coast_mps2: float | None = None
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def horizon(self, t: float, n: int, dt: float, board_xy: np.ndarray, v_ride: float,
+                coast_mps2: float | None = None) -> HorizonRef:
         x_ref = np.zeros((n, NX))
         u_ref = np.zeros((n, NU))
         mg = self.p.mass_kg * self.p.gravity_mps2
@@ -145,18 +156,16 @@ class SteerReference:
             for i in range(4):
                 side = np.sign(self.p.deck_points_m[1, i])
                 u_ref[k, 3 * i + 2] = mg / 4 * (1.0 + side * share)
-        return x_ref, u_ref, np.full((n, 4), BOARD, dtype=np.int8), np.ones(n, dtype=bool)
+        return HorizonRef(x_ref, u_ref, np.full((n, 4), BOARD, dtype=np.int8), np.ones(n, dtype=bool))
 
 
-def steer(lib: MotionLibrary, model: SkateParams, plant_params: SkateParams, speed_mps: float,
-          duration_s: float = 9.0, dist: Disturbances | None = None, cfg: MpcConfig | None = None,
-          settings: TrackSettings | None = None, adapt_stiffness: bool = True) -> SteerResult:
+def steer(lib: MotionLibrary, loop: ClosedLoop, speed_mps: float, duration_s: float = 9.0,
+          adapt_stiffness: bool = True) -> SteerResult:
     """Run the steering experiment and judge it: deck-roll error below 0.03 rad RMS, no foot
     unloading from the deck, no fall, no slip. ``adapt_stiffness``: the torso shift follows the
     trucks' stiffness as measured while rolling (False: the model's K_B throughout)."""
-    ref = SteerReference(lib, model, speed_mps, duration_s, adapt_stiffness=adapt_stiffness)
-    run = simulate(ref, ref.initial_state(), model, plant_params, dist or Disturbances(), cfg or MpcConfig(),
-                   settings or TrackSettings())
+    ref = SteerReference(lib, loop.model, speed_mps, duration_s, adapt_stiffness=adapt_stiffness)
+    run = simulate(ref, ref.initial_state(), loop)
     t = np.array([u[0] for u in run.updates])
     states = np.array([u[1] for u in run.updates]).reshape(-1, NB)
     settled = t >= 1.0

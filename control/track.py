@@ -1,79 +1,95 @@
-"""Track every entry of a library in closed loop, in parallel over entries (joblib, like build);
-the steering experiment at several speeds."""
+"""A library's entries (or the steering experiment's speeds) as closed-loop jobs: picklable
+callables, checked before any runs, that a caller runs in any order and on any worker (the
+command line runs them on the build's parallel runner, ``skatelib.pipeline.build.sweep.run_calls``;
+``[job() for job in jobs]`` runs them here)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-from skatelib.control.closed_loop import TrackResult, TrackSettings, track_entry
+from skatelib.control.closed_loop import track_entry
 from skatelib.control.mpc import MpcConfig
 from skatelib.control.params import SkateParams, parse_perturbation
+from skatelib.control.settings import ClosedLoop, TrackSettings
 from skatelib.control.steer import SteerResult, steer
+from skatelib.control.verdict import TrackResult
 from skatelib.library.errors import SkatelibError
-from skatelib.runtime import Entry
+from skatelib.runtime import Entry, MotionLibrary
 
 
-def _one(path: str, key: str, perturb: str, cfg: MpcConfig, settings: TrackSettings,
-         keep_run: bool) -> tuple[TrackResult, Entry | None]:
-    from skatelib.runtime import MotionLibrary
+@dataclass(frozen=True)
+class JobSpec:
+    """What every job of one command shares: the library, the plant's perturbation and the
+    controller's settings."""
 
+    path: str
+    perturb: str
+    mpc: MpcConfig
+    settings: TrackSettings
+
+    def loop(self, lib: MotionLibrary) -> ClosedLoop:
+        nominal = SkateParams.from_library(lib)
+        plant, dist = parse_perturbation(self.perturb, nominal)
+        return ClosedLoop(nominal, plant, dist, self.mpc, self.settings)
+
+
+@dataclass(frozen=True)
+class TrackJob:
+    """One entry in closed loop; with ``keep_run`` its run as an entry (states, forces, contacts at
+    the MPC's rate: what a viewer needs, a thirtieth of what would cross a process boundary)."""
+
+    spec: JobSpec
+    key: str
+    keep_run: bool = False
+
+    def __call__(self) -> tuple[TrackResult, Entry | None]:
+        lib = MotionLibrary.open(self.spec.path)
+        result, trace = track_entry(lib, self.key, self.spec.loop(lib), keep_trace=self.keep_run)
+        stride = self.spec.settings.plant_substeps
+        return result, trace.as_entry(self.key, result.label_mps, stride) if trace is not None else None
+
+
+@dataclass(frozen=True)
+class SteerJob:
+    """The steering experiment at one speed, with the library's model and stance."""
+
+    spec: JobSpec
+    speed_mps: float
+
+    def __call__(self) -> SteerResult:
+        lib = MotionLibrary.open(self.spec.path)
+        return steer(lib, self.spec.loop(lib), self.speed_mps)
+
+
+def _quadruped(path: Path, perturb: str, what: str) -> MotionLibrary:
     lib = MotionLibrary.open(path)
-    nominal = SkateParams.from_library(lib)
-    plant, dist = parse_perturbation(perturb, nominal)
-    result, trace = track_entry(lib, key, nominal, plant, dist, cfg, settings, keep_trace=keep_run)
-    # At the MPC's rate: what a viewer needs, a thirtieth of what crosses the process boundary.
-    run = trace.as_entry(key, result.label_mps, settings.plant_substeps) if trace is not None else None
-    return result, run
+    if lib.kind != "quadruped":
+        raise SkatelibError(f"{path}: {what} is for quadruped libraries; this one is {lib.kind}")
+    parse_perturbation(perturb, SkateParams.from_library(lib))  # refuse a bad --perturb before any work
+    return lib
 
 
-def track_library(path: Path, keys: Sequence[str] | None, perturb: str, cfg: MpcConfig | None = None,
-                  settings: TrackSettings | None = None, jobs: int = 2,
-                  keep_runs: bool = False) -> list[tuple[TrackResult, Entry | None]]:
-    """Closed-loop results of the chosen entries (all successful ones by default), each with its
-    run as an entry (states, forces, contacts at the MPC's rate) when ``keep_runs``.
+def track_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcConfig | None = None,
+               settings: TrackSettings | None = None, keep_runs: bool = False) -> list[TrackJob]:
+    """One job per chosen entry (all successful ones by default).
 
     Raises:
-        SkatelibError: A library that is not a quadruped one, or an unknown entry key.
+        SkatelibError: A library that is not a quadruped one, a bad perturbation, or an unknown
+            entry key (naming the valid ones), before any work.
     """
-    from joblib import Parallel, delayed
-    from skatelib.runtime import MotionLibrary
-
-    cfg = cfg or MpcConfig()
-    settings = settings or TrackSettings()
-    lib = MotionLibrary.open(path)
-    if lib.kind != "quadruped":
-        raise SkatelibError(f"{path}: closed-loop tracking is for quadruped libraries; this one is {lib.kind}")
-    nominal = SkateParams.from_library(lib)
-    parse_perturbation(perturb, nominal)  # refuse a bad --perturb before any work
+    lib = _quadruped(path, perturb, "closed-loop tracking")
     chosen = list(keys) if keys else [e.key for e in lib if e.success]
     for k in chosen:
-        lib[k]  # an unknown key raises EntryNotFound, naming the valid ones, before any work
-    return list(Parallel(n_jobs=min(jobs, len(chosen)) or 1)(
-        delayed(_one)(str(path), k, perturb, cfg, settings, keep_runs) for k in chosen))
+        lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
+    spec = JobSpec(str(path), perturb, mpc or MpcConfig(), settings or TrackSettings())
+    return [TrackJob(spec, k, keep_runs) for k in chosen]
 
 
-def _steer_one(path: str, speed: float, perturb: str, cfg: MpcConfig, settings: TrackSettings) -> SteerResult:
-    from skatelib.runtime import MotionLibrary
-
-    lib = MotionLibrary.open(path)
-    nominal = SkateParams.from_library(lib)
-    plant, dist = parse_perturbation(perturb, nominal)
-    return steer(lib, nominal, plant, speed, dist=dist, cfg=cfg, settings=settings)
-
-
-def steer_library(path: Path, speeds: Sequence[float], perturb: str, cfg: MpcConfig | None = None,
-                  settings: TrackSettings | None = None, jobs: int = 2) -> list[SteerResult]:
-    """The steering experiment (:mod:`skatelib.control.steer`) at each speed, with the library's
-    model and stance."""
-    from joblib import Parallel, delayed
-    from skatelib.runtime import MotionLibrary
-
-    cfg = cfg or MpcConfig()
-    settings = settings or TrackSettings()
-    lib = MotionLibrary.open(path)
-    if lib.kind != "quadruped":
-        raise SkatelibError(f"{path}: the steering experiment is for quadruped libraries; this one is {lib.kind}")
-    parse_perturbation(perturb, SkateParams.from_library(lib))
-    return list(Parallel(n_jobs=min(jobs, len(speeds)) or 1)(
-        delayed(_steer_one)(str(path), v, perturb, cfg, settings) for v in speeds))
+def steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: MpcConfig | None = None,
+               settings: TrackSettings | None = None) -> list[SteerJob]:
+    """One steering job per speed (:mod:`skatelib.control.steer`)."""
+    _quadruped(path, perturb, "the steering experiment")
+    spec = JobSpec(str(path), perturb, mpc or MpcConfig(), settings or TrackSettings())
+    return [SteerJob(spec, v) for v in speeds]

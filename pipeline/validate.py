@@ -31,10 +31,12 @@ def closed_loop_verdicts(path: Path, perturb: str, jobs: int) -> list[Any]:
     from skatelib.library.amend import amend_library
 
     try:
-        from skatelib.control.track import track_library
+        from skatelib.control.track import track_jobs
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    results = [r for r, _ in track_library(path, None, "" if perturb == "none" else perturb, jobs=jobs)]
+    from skatelib.pipeline.build.sweep import run_calls
+
+    results = [r for r, _ in run_calls(track_jobs(path, None, "" if perturb == "none" else perturb), jobs)]
     amend_library(path, {"closed_loop_plant": perturb,
                          "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
                   {r.key: {schema.A_CLOSED_LOOP: json.dumps(r.as_dict(), sort_keys=True)} for r in results})

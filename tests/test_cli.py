@@ -98,8 +98,9 @@ def test_every_help_shows_defaults_choices_and_units():
     """Every command's --help, as printed: each option with a default shows it (``-o`` included,
     whose default is a rule), each choice option its choices, each speed or other physical number
     its unit; and every command is reachable with --help (exit 0)."""
-    from skatelib.control.mpc import SOLVERS
-    from skatelib.pipeline.cli.app import QpSolver, app
+    from skatelib.control.qp import SOLVERS
+    from skatelib.pipeline.cli.app import app
+    from skatelib.pipeline.cli.library_commands import QpSolver
     from typer._click.core import Context  # typer's own click
     from typer.testing import CliRunner
 

@@ -176,8 +176,9 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_
     entry delivers its label; the shove (board at the label, robot slow and sinking) ends the push-off
     with the system's momentum far short of the label and fails."""
     pytest.importorskip("daqp")
-    from skatelib.control.closed_loop import TrackSettings, track_entry
+    from skatelib.control.closed_loop import track_entry
     from skatelib.control.params import SkateParams
+    from skatelib.control.settings import ClosedLoop, TrackSettings
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
     from skatelib.runtime import MotionLibrary
 
@@ -186,7 +187,7 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_
         path = write_quadruped_library(tmp_path / f"{name}.h5", small_cfg, system, [entry_from_result(r)], {})
         lib = MotionLibrary.open(path)
         p = SkateParams.from_library(lib)
-        verdicts[name], _ = track_entry(lib, "v0.30_s1", p, p, settings=TrackSettings(ride_s=1.2))
+        verdicts[name], _ = track_entry(lib, "v0.30_s1", ClosedLoop(p, p, settings=TrackSettings(ride_s=1.2)))
     assert verdicts["honest"].passed, verdicts["honest"].reasons
     assert abs(verdicts["honest"].momentum_at_end_mps - 0.3) < 0.05 * 0.3
     assert not verdicts["shove"].passed and "delivered speed" in verdicts["shove"].reasons

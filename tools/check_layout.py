@@ -1,9 +1,13 @@
 """Hold the repository to its layout rules (README "Layout"); run by ``make lint``.
 
-* Modules of ``pipeline/``, ``library/`` and ``runtime/`` at most 250 lines, functions at most 60.
+* Modules of every package folder (``pipeline/``, ``library/``, ``runtime/``, ``control/``,
+  ``sim/``) at most 250 lines, functions at most 60.
 * Imports follow the data path: ``library/`` imports neither ``pipeline`` nor ``runtime`` nor
-  ``control``; ``runtime/`` not ``pipeline`` or ``control``; ``control/`` not ``pipeline``;
-  ``pipeline/ocp/`` (the engine) no robot subpackage.
+  ``control`` nor ``sim``; ``runtime/`` not ``pipeline``, ``control`` or ``sim``; ``control/`` and
+  ``sim/`` not ``pipeline``; ``sim/`` not ``control``; ``pipeline/ocp/`` (the engine) no robot
+  subpackage.
+* ``library/`` and ``runtime/`` (what a robot installs) import only the standard library, numpy,
+  h5py and skatelib.
 
 Usage: ``python tools/check_layout.py [ROOT]``; exit 1 listing every breach.
 """
@@ -16,13 +20,16 @@ from pathlib import Path
 
 MAX_MODULE_LINES = 250
 MAX_FUNCTION_LINES = 60
-SIZED = ("pipeline", "library", "runtime")
+PACKAGES = ("pipeline", "library", "runtime", "control", "sim")
 FORBIDDEN = {  # folder -> imported packages it must not use
-    "library": ("skatelib.pipeline", "skatelib.runtime", "skatelib.control"),
-    "runtime": ("skatelib.pipeline", "skatelib.control"),
-    "control": ("skatelib.pipeline",),
+    "library": ("skatelib.pipeline", "skatelib.runtime", "skatelib.control", "skatelib.sim"),
+    "runtime": ("skatelib.pipeline", "skatelib.control", "skatelib.sim"),
+    "control": ("skatelib.pipeline", "skatelib.sim"),
+    "sim": ("skatelib.pipeline", "skatelib.control"),
     "pipeline/ocp": ("skatelib.pipeline.quadruped", "skatelib.pipeline.humanoid"),
 }
+ONBOARD = ("library", "runtime")  # what a robot installs
+ONBOARD_ALLOWED = {*sys.stdlib_module_names, "numpy", "h5py", "skatelib"}
 
 
 def _imports(tree: ast.AST) -> list[tuple[int, str]]:
@@ -51,13 +58,15 @@ def _sizes(path: Path, rel: str, tree: ast.AST, n_lines: int) -> list[str]:
 def problems(root: Path) -> list[str]:
     """Every breach of the layout rules under ``root`` (a checkout), one line each."""
     found: list[str] = []
-    paths = [p for top in ("pipeline", "library", "runtime", "control") for p in sorted((root / top).rglob("*.py"))]
+    paths = [p for top in PACKAGES for p in sorted((root / top).rglob("*.py"))]
     for path in paths:
         rel = path.relative_to(root).as_posix()
         text = path.read_text()
         tree = ast.parse(text, filename=rel)
-        if rel.split("/")[0] in SIZED:
-            found += _sizes(path, rel, tree, len(text.splitlines()))
+        found += _sizes(path, rel, tree, len(text.splitlines()))
+        if rel.split("/")[0] in ONBOARD:
+            found += [f"{rel}:{line}: imports {name} (a robot installs only numpy and h5py)"
+                      for line, name in _imports(tree) if name.split(".")[0] not in ONBOARD_ALLOWED]
         for folder, banned in FORBIDDEN.items():
             if rel.startswith(folder + "/"):
                 found += [f"{rel}:{line}: imports {name} ({folder}/ must not)"
@@ -72,7 +81,8 @@ def main() -> None:
         print(line)
     if found:
         sys.exit(1)
-    print(f"layout ok: modules <= {MAX_MODULE_LINES} lines, functions <= {MAX_FUNCTION_LINES}, imports follow the data path")
+    print(f"layout ok: modules <= {MAX_MODULE_LINES} lines, functions <= {MAX_FUNCTION_LINES}, "
+          "imports follow the data path")
 
 
 if __name__ == "__main__":

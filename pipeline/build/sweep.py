@@ -1,12 +1,15 @@
-"""Parallel sweeps for every robot kind: a build's tasks run in separate processes (joblib/loky by
-default, or an existing dask cluster), one solver per process with BLAS and OpenMP threads at 1,
-or in this process with ``jobs = 1``.
+"""The parallel runner of builds and closed-loop runs. A build's tasks, for every robot kind, run
+in separate processes (joblib/loky by default, or an existing dask cluster), one solver per
+process with BLAS and OpenMP threads at 1, or in this process with ``jobs = 1``.
 
 A task is what a robot kind cuts its build into (a quadruped's warm-start chain along velocity,
 a humanoid's motion): a picklable object whose ``run(use_cache, events)`` solves its entries,
 caching each finished one on disk (:mod:`skatelib.pipeline.build.cache`) so that an interrupted build
 resumes, and reports each start and finish as a small :class:`EntryEvent`. Outcomes come back
 whole; the library file itself is written only at the end, atomically.
+
+:func:`run_calls` runs other picklable jobs (the closed loop's) on the same workers: the same
+thread limits, and each worker ends with the process that started it.
 """
 
 from __future__ import annotations
@@ -14,8 +17,8 @@ from __future__ import annotations
 import os
 import threading
 import time
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 from skatelib.pipeline.build.contract import BuildOptions, BuildTask, EntryEvent, EventSink, Outcome, ProgressFn
 
@@ -150,3 +153,23 @@ def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
     finally:
         if own:
             client.close()
+
+
+T = TypeVar("T")
+
+
+def _call(job: Callable[[], T], parent_pid: int) -> T:
+    exit_with_parent(parent_pid)
+    return job()
+
+
+def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int) -> list[T]:
+    """Each picklable no-argument callable's result, in the order given: in ``n_jobs`` loky
+    workers (BLAS and OpenMP at one thread), or in this process with ``n_jobs`` 1 or one job."""
+    if n_jobs <= 1 or len(jobs) <= 1:
+        return [job() for job in jobs]
+    from joblib import Parallel, delayed, parallel_config
+
+    with parallel_config(backend="loky", inner_max_num_threads=1):
+        return list(Parallel(n_jobs=min(n_jobs, len(jobs)), backend="loky")(
+            delayed(_call)(job, os.getpid()) for job in jobs))

@@ -9,7 +9,6 @@ import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.cli import build_commands, library_commands
-from skatelib.pipeline.cli.library_commands import QpSolver
 from skatelib.pipeline.views.console import console, err_console
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
@@ -17,7 +16,7 @@ app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=No
 for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS):
     app.command()(_command)
 
-__all__ = ["QpSolver", "app", "main"]
+__all__ = ["app", "main"]
 
 
 def _print_version(value: bool) -> None:

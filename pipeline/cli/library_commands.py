@@ -34,7 +34,7 @@ class FigureFormat(enum.StrEnum):
 
 
 class QpSolver(enum.StrEnum):
-    """The MPC's QP solvers (``skatelib.control.mpc.SOLVERS``)."""
+    """The MPC's QP backends (the names of ``skatelib.control.qp.SOLVERS``; a test holds them equal)."""
 
     daqp = "daqp"
     proxqp = "proxqp"
@@ -168,15 +168,17 @@ def track(
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a nonlinear plant
     with model error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails)."""
     try:
-        from skatelib.control.closed_loop import TrackSettings
         from skatelib.control.mpc import MpcConfig
-        from skatelib.control.track import steer_library, track_library
+        from skatelib.control.settings import TrackSettings
+        from skatelib.control.track import steer_jobs, track_jobs
+        from skatelib.pipeline.build.sweep import run_calls
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
     if maneuver is Maneuver.steer:
-        if steer_table(steer_library(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed), jobs), perturb):
+        if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed)), jobs),
+                       perturb):
             raise typer.Exit(1)
         return
     if save is not None:
@@ -187,7 +189,8 @@ def track(
         except ImportError as e:
             raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
         check_output(save, [library], what="recording")
-    runs = track_library(library, entry, plant_error, mpc, TrackSettings(seed=seed), jobs, keep_runs=save is not None)
+    runs = run_calls(track_jobs(library, entry, plant_error, mpc, TrackSettings(seed=seed), keep_runs=save is not None),
+                     jobs)
     results = [r for r, _ in runs]
     if save is not None:
         from skatelib.runtime import MotionLibrary

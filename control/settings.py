@@ -1,0 +1,49 @@
+"""How a closed loop is set up: the run's settings and the whole set-up (model, plant, disturbances,
+MPC, settings) that every closed-loop function takes as one object."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from skatelib.control.mpc import MpcConfig
+from skatelib.control.params import Disturbances, SkateParams
+
+
+@dataclass(frozen=True)
+class TrackSettings:
+    """Closed-loop run settings.
+
+    Attributes:
+        plant_substeps: Plant RK4 steps per MPC update (30 Hz x 17 = 510 Hz).
+        transfer_s: Push leg back onto the deck after the entry [s] (Sec. IV-A: 0.4 s).
+        ride_s: Four-leg riding after the transfer [s].
+        seed: Random seed of the feedback noise.
+        board_mass_always: The MPC models the board with its mass (Eq. 9) also while balancing;
+            False uses the paper's balancing model Eq. (5a) there (the board follows the robot),
+            with which the default model-error set falls after the push-off (README "Closed loop").
+    """
+
+    plant_substeps: int = 17
+    board_mass_always: bool = True
+    transfer_s: float = 0.4
+    ride_s: float = 1.5
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """One closed-loop set-up.
+
+    Attributes:
+        model: What the controller believes (the library's model).
+        plant: What it drives (the model with the perturbation applied).
+        dist: Disturbances of the run (noise, an impulse, a COM offset, an initial error).
+        mpc: The MPC's settings.
+        settings: The run's settings.
+    """
+
+    model: SkateParams
+    plant: SkateParams
+    dist: Disturbances = field(default_factory=Disturbances)
+    mpc: MpcConfig = field(default_factory=MpcConfig)
+    settings: TrackSettings = field(default_factory=TrackSettings)
