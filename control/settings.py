@@ -20,7 +20,7 @@ class TrackSettings:
         seed: Random seed of the feedback noise.
         board_mass_always: The MPC models the board with its mass (Eq. 9) also while balancing;
             False uses the paper's balancing model Eq. (5a) there (the board follows the robot),
-            with which the default model-error set falls after the push-off (README "Closed loop").
+            with which the default model-error set falls after the push-off (docs/closed-loop.md).
     """
 
     plant_substeps: int = 17

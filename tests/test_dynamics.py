@@ -99,7 +99,7 @@ def test_board_roll_calibration_reproduces_paper_fig5(system, cfg):
         x = rk4_step(f, x, ca.DM(u), ca.DM(system.stance.cr), 1e-3)
     assert float(x[26]) == pytest.approx(-cfg.board.calibration_roll_rad, rel=1e-6)
     assert abs(float(x[27])) < 1e-9
-    # Static stability bound of ROBOT_DATA: K_B above m g h.
+    # Static stability bound (docs/sources.md): K_B above m g h.
     h = cfg.stance.base_height_above_deck_m
     assert system.board.roll_stiffness_Nm_per_rad > system.srb.mass_kg * system.gravity_mps2 * h
 

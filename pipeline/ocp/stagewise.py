@@ -6,9 +6,8 @@ expression graph and letting CasADi differentiate it costs tens of seconds; inst
 function per stage is differentiated once (gradient, constraint Jacobian, Lagrangian Hessian),
 mapped over the stages, and the results are put together by sparse products with a constant
 0/1 window matrix W (``w -> [z_0; ...; z_{N-1}]``): the gradient is ``W' g``, the Jacobian
-``blockdiag(J_k) W`` and the Hessian ``W' blockdiag(H_k) W`` (SOLVER_NOTES: 0.5 s build instead of
-29 s; these products build in about 13 ms for 80 stages). The stage functions can be compiled to
-C once and cached on disk by content hash.
+``blockdiag(J_k) W`` and the Hessian ``W' blockdiag(H_k) W`` (docs/design-notes.md). The stage
+functions can be compiled to C once and cached on disk by content hash.
 """
 
 from __future__ import annotations
@@ -68,10 +67,9 @@ def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
     return ca.Function("stage_value", [z, p], [cost, cons]).serialize()
 
 
-# -O2 and above take many minutes on the push-off stage code. -march=native (where the compiler
-# takes it) evaluates the Jacobian 29 % and the Hessian 15 % faster and compiles in 60 instead of
-# 103 s here, with results identical to the last bit; the library then runs only on this kind of
-# CPU, so the host CPU is part of the cache key.
+# -O2 and above take many minutes on the push-off stage code; -march=native (where the compiler
+# takes it) evaluates faster with results identical to the last bit (docs/design-notes.md). The
+# library then runs only on this kind of CPU, so the host CPU is part of the cache key.
 _FLAGS = ("-O1", "-march=native")
 
 

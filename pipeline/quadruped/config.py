@@ -118,7 +118,7 @@ class OptimizationConfig:
     friction_margin: float = _f(0.5, 1.0, "Planning margin: the TO uses mu_plan = margin x mu [-].", default=1.0)
     rolling_friction_factor: float = _f(
         1.0, 5.0, "The TO plans against this multiple of the board's rolling resistance; on a board that rolls "
-        "easier the controller pushes less (README 'Closed loop') [-].", default=1.0)
+        "easier the controller pushes less (docs/closed-loop.md) [-].", default=1.0)
     joint_limit_margin_rad: float = _f(0.0, 0.3, "The TO keeps joint angles this far inside their limits [rad].",
                                        default=0.0)
     weights: WeightsConfig = _f(doc="Cost weights of Eq. (16).", default_factory=lambda: WeightsConfig(

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import BuildOptions, BuildTask, Outcome, Written
     from skatelib.pipeline.kinds import ReportFn
 
-# Vendor single-rigid-body figures (ROBOT_DATA.md), printed beside ours for comparison.
+# Vendor single-rigid-body figures (docs/sources.md), printed beside ours for comparison.
 VENDOR_MASS_KG = 8.3644
 VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 

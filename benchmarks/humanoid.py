@@ -1,0 +1,70 @@
+"""One humanoid skating push step (10 Legendre-Gauss nodes): CasADi's SQP (the default) and IPOPT
+against scipy SLSQP with finite-difference gradients on the same NLP (the paper's solver)."""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+import time
+
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.humanoid.config import HumanoidConfig
+
+from benchmarks.figures import Figure, Measured
+
+STEP = Figure("humanoid-step", "humanoid skating push step, 10 LG nodes (SQP)", "ms", 5.0,
+              "scipy SLSQP, finite differences (the paper's)")
+FIGURES = (STEP,)
+
+
+def measure(repeats: int = 21) -> list[Measured]:
+    import casadi as ca
+    import numpy as np
+    from scipy.optimize import minimize
+    from skatelib.pipeline.config import CONFIG_DIR
+    from skatelib.pipeline.humanoid.motion import skating_steps, step_model
+    from skatelib.pipeline.humanoid.step import solve_step, step_problem
+
+    c = load_config(CONFIG_DIR / "hrp2_skate.toml", HumanoidConfig)
+    h = c.humanoid
+    x0, specs = skating_steps(c, 1.0)
+    push = specs[0]
+    rows: dict[str, tuple[float, int, float]] = {}
+    for solver in ("sqp", "ipopt"):
+        times = []
+        for _ in range(repeats):
+            r = solve_step(push, x0, 0.0, dataclasses.replace(step_model(c), solver=solver))
+            assert r.success, r.status
+            times.append(r.solve_time_s)
+        rows[solver] = (statistics.median(times), r.iterations, r.objective)
+    prob = step_problem(c.gpm.nodes, "skate", "ipopt")
+    p, _, _ = prob.parameters(push, x0, h.gravity_mps2, h.leg_min_m, h.leg_max_m)
+    f = ca.Function("f", [prob.nlp["x"], prob.nlp["p"]], [prob.nlp["f"]])
+    g = ca.Function("g", [prob.nlp["x"], prob.nlp["p"]], [prob.nlp["g"]])
+    n_eq = prob.n_eq
+    lb, ub = prob.lbg[n_eq:], prob.ubg[n_eq:]
+    finite_ub = np.isfinite(ub)
+
+    def fun(w: np.ndarray) -> float:
+        return float(f(w, p))
+
+    def eq(w: np.ndarray) -> np.ndarray:
+        return np.asarray(g(w, p)).reshape(-1)[:n_eq]
+
+    def ineq(w: np.ndarray) -> np.ndarray:
+        gi = np.asarray(g(w, p)).reshape(-1)[n_eq:]
+        return np.concatenate([gi - lb, (ub - gi)[finite_ub]])
+
+    w0 = prob.initial_guess(x0, push)
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        res = minimize(fun, w0, method="SLSQP", constraints=[{"type": "eq", "fun": eq}, {"type": "ineq", "fun": ineq}],
+                       options={"maxiter": 500, "ftol": 1e-10})
+        times.append(time.perf_counter() - t0)
+    rows["scipy SLSQP, finite differences (paper)"] = (statistics.median(times), res.nit, res.fun)
+    if not res.success:
+        raise RuntimeError(f"humanoid benchmark: SLSQP did not converge ({res.message})")
+    sqp_s, sqp_it, _ = rows["sqp"]
+    note = f"{sqp_it} SQP iterations; IPOPT {rows['ipopt'][0] * 1e3:.1f} ms; {prob.n_w} variables"
+    return [Measured(STEP, sqp_s * 1e3, rows["scipy SLSQP, finite differences (paper)"][0] * 1e3, note)]
