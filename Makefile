@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
 BUILD_STAMP := $(VENV)/.skatelib-build-installed
 # make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
-ALL_EXTRAS := build,viz,plot,control,dask,dev
+ALL_EXTRAS := build,viz,plot,control,sim,dask,dev
 CONFIG ?=
 OUT    ?=
 
@@ -24,7 +24,7 @@ define install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
 	$(BIN)/python -m pip install -q -e '.[$(1)]' --config-settings editable_mode=strict
-	@find pipeline library runtime control -name '*.py' | sort > $(VENV)/.skatelib-modules
+	@find pipeline library runtime control sim -name '*.py' | sort > $(VENV)/.skatelib-modules
 endef
 
 $(STAMP): pyproject.toml
@@ -49,11 +49,11 @@ ifneq ($(origin PYTHON),file)
 	   echo "rebuilding $(VENV) with $(PYTHON) ($$want; it had $$have)"; rm -rf $(VENV); \
 	   $(MAKE) --no-print-directory $(STAMP); fi
 endif
-	@{ find pipeline library runtime control -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
+	@{ find pipeline library runtime control sim -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
 	   $(BIN)/python -c 'import skatelib.pipeline.cli.app, skatelib.library.reader' 2>/dev/null; } || { \
 	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
-	  find pipeline library runtime control -name '*.py' | sort > $(VENV)/.skatelib-modules; }
+	  find pipeline library runtime control sim -name '*.py' | sort > $(VENV)/.skatelib-modules; }
 
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
@@ -62,7 +62,7 @@ test: venv
 	$(BIN)/python -m pytest
 
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
-PACKAGES := pipeline library runtime control
+PACKAGES := pipeline library runtime control sim
 lint: venv
 	$(BIN)/ruff check $(PACKAGES) tests benchmarks tools examples
 	$(BIN)/mypy $(foreach p,$(PACKAGES),-p skatelib.$(p))

@@ -50,7 +50,10 @@ class Measured:
 
     @property
     def ratio(self) -> float:
-        """Baseline over value: how many times better than the baseline (for times)."""
+        """How many times better than the baseline: baseline over value for a time, value over
+        baseline for a figure to reach (``at_least``)."""
+        if self.figure.at_least:
+            return self.value / self.baseline_value if self.baseline_value else float("nan")
         return self.baseline_value / self.value if self.value else float("nan")
 
     def row(self) -> str:

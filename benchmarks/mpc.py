@@ -52,7 +52,7 @@ def measure(path: Path) -> list[Measured]:
     for t in np.arange(ref.t0, ref.t_end, cfg.dt):
         x0 = np.asarray(e.sample(t).state, float)
         k = int(np.clip(np.searchsorted(e.t, t), 0, len(e.t) - 1))
-        r_board = board_rotations(x0[5], x0[26]) @ np.vstack([p.deck_points_m, np.zeros(4)])
+        r_board = p.moment_arms(board_rotations(x0[5], x0[26]))
         fb = Feedback(x=x0, r_robot=ref.feet[k].T - x0[0:3, None], r_board=r_board,
                       torque_maps=kin.torque_maps(x0[12:24], rpy_matrices(x0[3:6])))  # with the torque rows
         updates.append((fb, ref.horizon(t, cfg.horizon, cfg.dt, ref.board_xy(t), 0.0, ref.prior_coast_mps2(t))))

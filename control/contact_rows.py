@@ -11,12 +11,15 @@ import numpy as np
 from skatelib.control.linear_model import Feedback
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, SWING
-from skatelib.library.rotations import board_rotations
+from skatelib.library.rotations import board_rotations, skew
 
 if TYPE_CHECKING:
     from skatelib.control.mpc import MpcConfig
 
 NF = 12  # force variables per step
+# The first step's deck pyramids also hold this far beyond the roll the update predicts at its end:
+# the plant's deck rolls on with what the model does not know (its stiffness, the feet's levers).
+ROLL_SLACK_RAD = 0.01
 
 
 def leg_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarray,
@@ -54,7 +57,31 @@ def leg_rows(p: SkateParams, cfg: MpcConfig, x0: np.ndarray, contact: np.ndarray
             rows.append(block)
             lo.extend((-p.torque_limit_Nm,) * 3)
             hi.extend((p.torque_limit_Nm,) * 3)
+    wheels = wheel_rows(p, x0, contact)
+    if wheels is not None:
+        rows.append(wheels[0])
+        lo.extend(wheels[1])
+        hi.extend((np.inf, np.inf))
     return (np.vstack(rows) if rows else np.zeros((0, 12))), np.array(lo), np.array(hi)
+
+
+def wheel_rows(p: SkateParams, x0: np.ndarray, contact: np.ndarray) -> tuple[np.ndarray, list[float]] | None:
+    """Every wheel keeps a load: the feet's roll moment on the deck M and the wheels' load N
+    (board weight + the feet's vertical forces) with ``(1 - margin) N w / 2 -/+ M >= 0``; two rows
+    (12 columns) and their lower bounds, or None without a wheel track or a foot on the deck."""
+    on_deck = contact == BOARD
+    if p.wheel_track_m <= 0.0 or not np.any(on_deck):
+        return None
+    R_B = board_rotations(x0[5], x0[I_BOARD_ROLL])
+    arms = p.moment_arms(R_B)
+    half = (1.0 - p.wheel_load_margin) * p.wheel_track_m / 2
+    block = np.zeros((2, 12))
+    for i in np.flatnonzero(on_deck):
+        moment = (R_B.T @ skew(arms[:, i]))[0]  # M = -moment . f_i summed: the feet push the deck with -f
+        block[0, 3 * i:3 * i + 3] = half * np.array([0.0, 0.0, 1.0]) + moment
+        block[1, 3 * i:3 * i + 3] = half * np.array([0.0, 0.0, 1.0]) - moment
+    floor = -half * p.board_mass_kg * p.gravity_mps2
+    return block, [floor, floor]
 
 
 def step_constraints(p: SkateParams, cfg: MpcConfig, fb: Feedback, contact: np.ndarray, dt: float
@@ -71,7 +98,8 @@ def step_constraints(p: SkateParams, cfg: MpcConfig, fb: Feedback, contact: np.n
         torque = k < cfg.torque_steps
         key = contact[k].tobytes() + bytes([k == 0, torque])
         if key not in rows_cache:
-            rolls = (roll, roll + roll_rate * dt) if k == 0 else (roll,)
+            end = roll + roll_rate * dt  # the first step's force is held while the deck rolls on
+            rolls = (roll, end - ROLL_SLACK_RAD, end + ROLL_SLACK_RAD) if k == 0 else (roll,)
             rows_cache[key] = leg_rows(p, cfg, fb.x, contact[k], rolls, fb.torque_maps if torque else None)
         per_step.append(rows_cache[key])
     C = np.zeros((sum(len(rows) for rows, _, _ in per_step), N * NF))

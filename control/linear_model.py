@@ -65,7 +65,7 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
     A[0:3, 6:9] = np.eye(3)
     A[3:6, 9:12] = euler_rate_map(rpy)
     A[I_BOARD_ROLL, I_BOARD_ROLL_RATE] = 1.0
-    A[I_BOARD_ROLL_RATE, I_BOARD_ROLL] = -p.kb_Nm_per_rad / p.roll_inertia_kgm2
+    A[I_BOARD_ROLL_RATE, I_BOARD_ROLL] = -p.loaded_roll_stiffness / p.roll_inertia_kgm2
     A[I_BOARD_ROLL_RATE, I_BOARD_ROLL_RATE] = -p.bb_Nms_per_rad / p.roll_inertia_kgm2
     B = np.zeros((NX, NU))
     C = np.zeros(NX)
@@ -88,9 +88,15 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
         if not accelerating:
             B[24:26, cols] = T_vB @ R.T / p.mass_kg
     if accelerating:
+        # Rolling resistance in proportion to the wheels' load (the board's weight and the deck
+        # feet's vertical forces): rolling_N is the board's with the robot's weight on it.
         v_fwd = float(forward_speed(x))
         sign = 0.0 if abs(v_fwd) < _SIGN_DEADBAND_MPS else float(np.sign(v_fwd))
-        C[24:26] = -S_xy_RB_Sx @ np.array([sign * p.rolling_N, 0.0, 0.0]) / p.board_mass_kg
+        per_newton = sign * p.rolling_N / ((p.board_mass_kg + p.mass_kg) * p.gravity_mps2)
+        drag = -S_xy_RB_Sx @ np.array([per_newton, 0.0, 0.0]) / p.board_mass_kg
+        C[24:26] = drag * p.board_mass_kg * p.gravity_mps2
+        for leg in np.flatnonzero(contact == BOARD):
+            B[24:26, 3 * int(leg) + 2] += drag
     else:
         C[24:26] = T_vB @ R.T @ g
     B[12:24, 12:24] = np.eye(12)
@@ -104,7 +110,8 @@ class Discretizer:
         from scipy.linalg import expm
 
         self.dt = dt_s
-        M = np.array([[0.0, 1.0], [-p.kb_Nm_per_rad / p.roll_inertia_kgm2, -p.bb_Nms_per_rad / p.roll_inertia_kgm2]])
+        M = np.array([[0.0, 1.0], [-p.loaded_roll_stiffness / p.roll_inertia_kgm2,
+                                   -p.bb_Nms_per_rad / p.roll_inertia_kgm2]])
         aug = np.zeros((4, 4))
         aug[:2, :2], aug[:2, 2:] = M, np.eye(2)
         E = expm(aug * dt_s)

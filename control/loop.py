@@ -107,7 +107,7 @@ class _Loop:
             x_fb[0:6] += self.rng.normal(0.0, dist.noise_std, 6)
             x_fb[6:12] += self.rng.normal(0.0, 5 * dist.noise_std, 6)
         pts = self.plant.contact_points(s, self.ref.contact(self.t), self.ground)
-        r_board = board_rotations(x_fb[5], x_fb[I_BOARD_ROLL]) @ np.vstack([model.deck_points_m, np.zeros(4)])
+        r_board = model.moment_arms(board_rotations(x_fb[5], x_fb[I_BOARD_ROLL]))
         maps = None if self.kin is None else self.kin.torque_maps(self.q_legs, rpy_matrices(x_fb[3:6]))
         return Feedback(x=x_fb, r_robot=pts - x_fb[0:3, None], r_board=r_board, torque_maps=maps)
 

@@ -40,6 +40,11 @@ class SkateParams:
         torque_limit_Nm: |tau| bound of every joint (the MPC's torque rows).
         mu_plan: The friction coefficient the optimization planned with (a margin inside ``mu``);
             the MPC's default, leaving the same margin for the deck's roll within an update.
+        roll_axis_depth_m: The deck's roll axis below its top (0: about the top, as Eq. 8 reads).
+        deck_mass_kg: The deck's share of the board's mass, which rolls about that axis.
+        pivot_rad: The trucks' pivot axis angle from the ground (the roll torque's kinematics).
+        wheel_track_m: Between the wheels' contact points; 0: no wheel-load rows.
+        wheel_load_margin: The deck loads' roll moment at most (1 - margin) of what the track holds.
     """
 
     mass_kg: float
@@ -60,6 +65,46 @@ class SkateParams:
     push_leg: int
     mu_plan: float
     torque_limit_Nm: float = math.inf
+    roll_axis_depth_m: float = 0.0
+    deck_mass_kg: float = 0.0
+    pivot_rad: float = math.pi / 2
+    wheel_track_m: float = 0.0
+    wheel_load_margin: float = 0.0
+
+    @property
+    def upright_roll_stiffness(self) -> float:
+        """The deck's roll stiffness at small rolls [N m/rad]: the trucks', less what the deck's own
+        weight takes about the roll axis."""
+        return self.kb_Nm_per_rad - self.deck_mass_kg * self.gravity_mps2 * self.roll_axis_depth_m
+
+    @property
+    def loaded_roll_stiffness(self) -> float:
+        """The same with the robot's weight on the deck's top [N m/rad]: about the roll axis, h below
+        the feet, a rolled deck moves their vertical loads outwards (the linear model's roll block,
+        whose arms are frozen at an update's roll, would miss it otherwise)."""
+        return self.upright_roll_stiffness - self.mass_kg * self.gravity_mps2 * self.roll_axis_depth_m
+
+    def roll_torque(self, phi: float, psi: float) -> float:
+        """The trucks' torque on the deck about its roll axis and the deck's weight's [N m] (the
+        trucks' kinematics: see ``skatelib.pipeline.quadruped.board``)."""
+        c = math.cos(self.pivot_rad)
+        if c < 1e-9:  # a vertical pivot: the linear spring of Eq. (6)
+            trucks = -self.kb_Nm_per_rad * phi
+        else:
+            theta = math.atan(math.tan(phi) / c)
+            trucks = -self.kb_Nm_per_rad * c * theta / (math.cos(phi) ** 2 + math.sin(phi) ** 2 / c**2)
+        gravity = self.deck_mass_kg * self.gravity_mps2 * self.roll_axis_depth_m * math.sin(phi)
+        return trucks - self.bb_Nms_per_rad * psi + gravity
+
+    def deck_points(self, R_B: np.ndarray) -> np.ndarray:
+        """(3, 4) the feet's deck points relative to the board origin (the deck's top centre), world."""
+        h = self.roll_axis_depth_m
+        return self.moment_arms(R_B) - np.array([[0.0], [0.0], [h]])
+
+    def moment_arms(self, R_B: np.ndarray) -> np.ndarray:
+        """(3, 4) the feet's deck points relative to the roll axis, world (Eq. 8's r_Bi)."""
+        local = np.vstack([self.deck_points_m, np.full(4, self.roll_axis_depth_m)])
+        return np.asarray(R_B @ local)
 
     @staticmethod
     def from_library(lib: Any) -> SkateParams:
@@ -85,6 +130,12 @@ class SkateParams:
             push_leg=legs.index(str(m.get("push_leg", "RL"))),
             mu_plan=float(m.get("friction_mu_plan", m["friction_mu"])),
             torque_limit_Nm=float(m.get("torque_limit_Nm", math.inf)),
+            roll_axis_depth_m=float(m["board_deck_height_m"]) - float(m.get("board_roll_axis_height_m",
+                                                                            m["board_deck_height_m"])),
+            deck_mass_kg=float(m.get("board_deck_mass_kg", 0.0)),
+            pivot_rad=float(m.get("board_pivot_from_horizontal_rad", math.pi / 2)),
+            wheel_track_m=float(m.get("board_wheel_track_m", 0.0)),
+            wheel_load_margin=float(m.get("board_wheel_load_margin", 0.0)),
         )
 
 

@@ -77,11 +77,12 @@ class Plant:
     def contact_points(self, s: np.ndarray, contact: np.ndarray, ground_points: np.ndarray) -> np.ndarray:
         """(3, 4) world contact points: deck points moved with the board, ground points fixed."""
         R_B = board_rotations(s[5], s[I_BOARD_ROLL])
+        deck = self.p.deck_points(R_B)
         out = np.array(ground_points, dtype=float, copy=True)
         origin = s[NX:NX + 3]
         for i in range(4):
             if contact[i] == BOARD:
-                out[:, i] = origin + R_B @ np.array([self.p.deck_points_m[0, i], self.p.deck_points_m[1, i], 0.0])
+                out[:, i] = origin + deck[:, i]
         return out
 
     def admissible(self, s: np.ndarray, forces: np.ndarray, contact: np.ndarray, t: float,
@@ -136,16 +137,18 @@ class Plant:
         R_B = board_rotations(yaw, s[I_BOARD_ROLL])
         f_board = np.zeros(3)
         torque_board = np.zeros(3)
-        origin = s[NX:NX + 3]
+        arms = p.moment_arms(R_B)  # about the roll axis
         for i in range(4):
             if contact[i] == BOARD:
                 f_board += forces[:, i]
-                torque_board += _cross(pts[:, i] - origin, forces[:, i])
+                torque_board += _cross(arms[:, i], forces[:, i])
         v_fwd = float(heading @ s[24:26])
-        friction = p.rolling_N * np.tanh(p.tanh_scale_s_per_m * v_fwd)
+        # Rolling resistance grows with the wheels' load: rolling_N is the board's with the robot on it.
+        load = (p.board_mass_kg * p.gravity_mps2 + f_board[2]) / ((p.board_mass_kg + p.mass_kg) * p.gravity_mps2)
+        friction = p.rolling_N * load * np.tanh(p.tanh_scale_s_per_m * v_fwd)
         a_fwd = (-(R_B.T @ f_board)[0] - friction) / p.board_mass_kg  # Eq. (9b) in every mode
-        psi_dot = (-(R_B.T @ torque_board)[0] - p.kb_Nm_per_rad * s[I_BOARD_ROLL]
-                   - p.bb_Nms_per_rad * s[I_BOARD_ROLL_RATE]) / p.roll_inertia_kgm2
+        psi_dot = (-(R_B.T @ torque_board)[0] + p.roll_torque(float(s[I_BOARD_ROLL]), float(s[I_BOARD_ROLL_RATE]))
+                   ) / p.roll_inertia_kgm2
         ds = np.zeros(NB)
         ds[0:3] = v
         ds[3:6] = euler_rate_map(rpy) @ w

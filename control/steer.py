@@ -34,7 +34,7 @@ class SteerResult:
     Attributes:
         speed_mps: Riding speed (0: at rest).
         roll_rms_error_rad: RMS of deck roll minus its reference over the run (after the first second).
-        max_lateral_shift_m: Largest torso (COM) shift from the deck's centre line.
+        max_lateral_shift_m: Largest torso (COM) shift from the deck's centre line after the first second.
         min_normal_N: Lowest normal force of a foot on the deck.
         unloaded_steps: Plant steps in which a deck foot carried no load (it would lift off).
     """
@@ -111,7 +111,10 @@ class SteerReference:
 
     def lateral_shift(self, roll: float) -> float:
         """COM offset from the centre line that holds the deck at ``roll`` (see the module docstring)."""
-        y = -self.kb_estimate * roll / (self.p.mass_kg * self.p.gravity_mps2)
+        # The COM over the roll axis that balances the trucks (their torque at the measured stiffness,
+        # the deck's weight included): m g y = roll_torque.
+        torque = self.p.roll_torque(roll, 0.0) * self.kb_estimate / self.p.kb_Nm_per_rad
+        y = torque / (self.p.mass_kg * self.p.gravity_mps2)
         limit = SHIFT_LIMIT * self.foot_y  # beyond it the far feet would lift: roll less instead
         return float(np.clip(y, -limit, limit))
 
@@ -172,7 +175,8 @@ def steer(lib: MotionLibrary, loop: ClosedLoop, speed_mps: float, duration_s: fl
     roll_ref = np.array([ref.roll(tt)[0] for tt in t])
     err = states[:, I_BOARD_ROLL] - roll_ref if len(t) else np.array([np.nan])
     rms = float(np.sqrt(np.mean(err[settled] ** 2))) if np.any(settled) else float("nan")
-    shift = float(np.max(np.abs(states[:, 1] - states[:, NX + 1]))) if len(t) else float("nan")
+    lateral = np.abs(states[:, 1] - states[:, NX + 1])
+    shift = float(np.max(lateral[settled], initial=0.0)) if len(t) else float("nan")  # as the RMS: after 1 s
     unloaded = run.plant.log.unloaded_steps
     reasons = []
     if not np.isfinite(rms) or rms > ROLL_RMS_LIMIT_RAD:

@@ -11,7 +11,7 @@ from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
 HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
-FORMAT_VERSION: Final = (1, 1)  # 1.1: friction model, terminal state, cache_key, frontier_json
+FORMAT_VERSION: Final = (1, 2)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board model
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -60,6 +60,15 @@ QUADRUPED_MODEL_ATTRS: Final = (
     "board_roll_inertia_kgm2",
     "board_rolling_friction_N",
     "board_K_board_m",
+)
+# Format 1.2: the board model's trucks, roll axis and wheels (a 1.1 file has none of them).
+QUADRUPED_BOARD_ATTRS_1_2: Final = (
+    "board_pivot_from_horizontal_rad",
+    "board_roll_axis_height_m",
+    "board_deck_mass_kg",
+    "board_wheel_track_m",
+    "board_wheel_load_margin",
+    "board_rolling_coeff",
 )
 D_JOINT_LOWER: Final = "joint_lower_rad"
 D_JOINT_UPPER: Final = "joint_upper_rad"

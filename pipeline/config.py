@@ -135,6 +135,9 @@ def build_section(path: Path, prefix: str, cls: type, data: dict[str, Any]) -> A
     fields = {f.name: f for f in dataclasses.fields(cls)}
     hints = typing.get_type_hints(cls)
     unknown = set(data) - set(fields)
+    renamed: dict[str, str] = getattr(cls, "RENAMED", {})  # a key of an earlier format -> what to write now
+    for key in sorted(unknown & set(renamed)):
+        raise ConfigError(path, f"{prefix}.{key}", renamed[key])
     if unknown:
         raise ConfigError(path, f"{prefix}.{sorted(unknown)[0]}",
                           f"unknown key; allowed keys in [{prefix}]: {', '.join(fields)}")

@@ -39,6 +39,19 @@ def foot_centres_world(system, x: np.ndarray) -> np.ndarray:
     return np.array([data.oMf[robot.model.getFrameId(f)].translation for f in robot.foot_frames])
 
 
+def truck_torque(b, phi: float, d: float = 1e-6) -> float:
+    """The trucks' torque on the deck as -dE/dphi of their two hinge springs (k = K_B cos^2 / 2
+    each), each hanger turned by the angle that keeps its wheels level: a numerical derivative of
+    the energy, not the closed form the dynamics use."""
+    c = np.cos(b.pivot_rad)
+
+    def energy(p: float) -> float:
+        theta = np.arctan(np.tan(p) / c)  # hanger level: sin(p) cos(theta) + cos(p) c sin(theta) = 0
+        return 2 * 0.5 * (b.roll_stiffness_Nm_per_rad * c * c / 2) * theta**2
+
+    return -(energy(phi + d) - energy(phi - d)) / (2 * d)
+
+
 def xdot(system, mode, x: np.ndarray, u: np.ndarray, cr: np.ndarray) -> np.ndarray:
     m, I = system.srb.mass_kg, system.srb.inertia_kgm2
     g = np.array([0, 0, -system.gravity_mps2])
@@ -61,17 +74,20 @@ def xdot(system, mode, x: np.ndarray, u: np.ndarray, cr: np.ndarray) -> np.ndarr
     vdot = F / m + g
     wdot = np.linalg.solve(I, R.T @ tau - np.cross(w, I @ w))
     tb, fb = np.zeros(3), np.zeros(3)
+    h = b.roll_axis_depth_m  # the deck rolls about its axles, h below its top
     for i in range(4):
         if mode.board_legs[i]:
-            rb = RB @ np.array([cr[0, i], cr[1, i], 0.0])
+            rb = RB @ np.array([cr[0, i], cr[1, i], h])
             tb += np.cross(rb, f[i])
             fb += f[i]
     psidot = (
-        -(RB.T @ tb)[0] - b.roll_stiffness_Nm_per_rad * phi - b.roll_damping_Nms_per_rad * psi
+        -(RB.T @ tb)[0] + truck_torque(b, phi) - b.roll_damping_Nms_per_rad * psi
+        + b.deck_mass_kg * system.gravity_mps2 * h * np.sin(phi)
     ) / b.roll_inertia_kgm2
     if mode.accelerating:
         v_fwd = np.cos(yaw) * x[24] + np.sin(yaw) * x[25]
-        a = (-(RB.T @ fb)[0] - np.tanh(b.tanh_scale_s_per_m * v_fwd) * b.rolling_friction_N) / b.mass_kg
+        load = b.mass_kg * system.gravity_mps2 + fb[2]  # the wheels carry the board and the feet on it
+        a = (-(RB.T @ fb)[0] - np.tanh(b.tanh_scale_s_per_m * v_fwd) * b.rolling_coeff * load) / b.mass_kg
         vb = (RB @ np.array([a, 0, 0]))[:2]
     else:
         a = (R.T @ vdot)[0]

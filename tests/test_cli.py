@@ -123,4 +123,4 @@ def test_every_help_shows_defaults_choices_and_units():
     assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()
                                              if p.name == "solver")
     assert set(QpSolver) == set(SOLVERS)
-    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track"}  # model: none
+    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model"}

@@ -76,7 +76,7 @@ def test_linear_model_is_the_nonlinear_derivative_with_arms_frozen(seed):
     ground[:, 2] = [-0.15, 0.17, 0.0]
     pts = plant.contact_points(s, contact, ground)
     R_B = board_rotations(s[5], s[26])
-    fb = Feedback(x=s[:NX], r_robot=pts - s[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]))
+    fb = Feedback(x=s[:NX], r_robot=pts - s[0:3, None], r_board=p.moment_arms(R_B))
     A, B, C = continuous_model(p, fb, contact, accelerating=True)
     f = rng.normal(0, 5, (3, 4)) + np.array([[0.0], [0.0], [22.0]])
     u = np.concatenate([f.T.reshape(-1), rng.normal(0, 1, 12)])
@@ -118,7 +118,7 @@ def _one_update(e, p: SkateParams, cfg: MpcConfig, t: float, torque_maps: np.nda
     x0 = np.asarray(e.sample(t).state, float)
     pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, t))], float).T
     R_B = board_rotations(x0[5], x0[26])
-    fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=R_B @ np.vstack([p.deck_points_m, np.zeros(4)]),
+    fb = Feedback(x=x0, r_robot=pts - x0[0:3, None], r_board=p.moment_arms(R_B),
                   torque_maps=torque_maps)
     w = e.window(t, cfg.horizon + 1, cfg.dt)
     ref = HorizonRef(np.array(w.state[1:]), np.array(w.control[:-1]), np.array(w.contact[:-1]),
@@ -234,13 +234,14 @@ def test_perturbations_parse_and_refuse():
     light, _ = parse_perturbation("mass=-10%", p)
     assert light.rolling_N == pytest.approx(1.1 * (8.01 + 2.2) / (8.9 + 2.2))
     # tanh: the plant's rolling resistance near rest (Eq. 10's k); at 5 mm/s the board's deceleration
-    # with nothing on the deck is tanh(k v) f_fri / m_B: a quarter of f_fri at k 50, 99 % of it at k 500
+    # with nothing on the deck is tanh(k v) f_fri m_B / (m_B + m_R) / m_B (the wheels carry the board
+    # alone): a quarter of that at k 50, 99 % of it at k 500
     stiff, _ = parse_perturbation("tanh=500", p)
     s, contact = np.zeros(NB), np.array([SWING] * 4)
     s[24] = 0.005
     for params, share in ((p, np.tanh(0.25)), (stiff, np.tanh(2.5))):
         decel = -Plant(params).derivative(s, np.zeros((3, 4)), np.zeros(12), contact, np.zeros((3, 4)))[24]
-        assert decel == pytest.approx(share * 1.1 / 2.2)
+        assert decel == pytest.approx(share * 1.1 * (2.2 / (2.2 + 8.9)) / 2.2)
     for bad in ("weight=+10%", "mass", "mass=abc", "mu=nan", "mass=-100%"):
         with pytest.raises(PerturbationError):
             parse_perturbation(bad, p)
@@ -248,7 +249,7 @@ def test_perturbations_parse_and_refuse():
 
 def test_steering_follows_the_deck_roll_and_its_negative_control(lib):
     """Four-leg steering with exact parameters (shortened to 4.5 s): deck roll within 0.03 rad RMS
-    of the 0.1 rad sine, the torso shifted by about the analytic K_B phi / (m g), every deck foot
+    of the 0.1 rad sine, the torso shifted by about the trucks' torque at 0.1 rad over m g, every deck foot
     loaded. A deck with half the trucks' stiffness: the torso shift that follows the stiffness
     measured while rolling keeps the error within the bound with less shift; negative control:
     with the model's K_B throughout it misses the bound."""
@@ -258,7 +259,7 @@ def test_steering_follows_the_deck_roll_and_its_negative_control(lib):
     r = steer(lib, ClosedLoop(p, p), 0.0, duration_s=4.5)
     assert r.passed, r.reasons
     assert r.roll_rms_error_rad < 0.03 and r.unloaded_steps == 0
-    expected_shift = p.kb_Nm_per_rad * 0.1 / (p.mass_kg * p.gravity_mps2)
+    expected_shift = -p.roll_torque(0.1, 0.0) / (p.mass_kg * p.gravity_mps2)
     assert r.max_lateral_shift_m == pytest.approx(expected_shift, rel=0.1)
     soft, _ = parse_perturbation("kb=-50%", p)
     adapted = steer(lib, ClosedLoop(p, soft), 0.0, duration_s=4.5)

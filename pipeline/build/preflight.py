@@ -42,23 +42,23 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
     (unless ``force``), or in a folder that cannot be written; remove stale temporaries there.
 
     Args:
-        what: ``"library"`` (an HDF5 motion library) or ``"recording"`` (a Rerun ``.rrd``).
+        what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
+            ``"twin"`` (a MuJoCo MJCF file).
 
     Raises:
         OutputError: Saying what to do.
     """
     out = Path(out)
-    example = "library.h5" if what == "library" else "recording.rrd"
+    example, same_type, kind = _OUTPUTS[what]
     if out.is_dir():
         raise OutputError(out, f"is a folder; name the {what} file, e.g. {out / example}")
     resolved = out.resolve()
     for p in inputs:
         if Path(p).resolve() == resolved:
             raise OutputError(out, "is an input of this command; choose another output file")
-    same_type = is_skatelib_library if what == "library" else is_rerun_recording
     if out.exists() and not force and not same_type(out):
-        raise OutputError(out, f"exists and is not a {'skatelib library' if what == 'library' else 'Rerun recording'}; "
-                               "refusing to overwrite it (choose another file, or pass --force)")
+        raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it (choose another file, or pass "
+                               "--force)")
     folder = out.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -105,3 +105,20 @@ def check_scheduler(address: str, timeout_s: float = 3.0) -> None:
                           f"no dask scheduler answers at {address} within {timeout_s:.0f} s ({e.strerror or e}); "
                           "start one with 'dask scheduler' or check the address") from e
 
+
+
+def is_mjcf(path: Path) -> bool:
+    """Whether ``path`` starts like a MuJoCo model file."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(64).lstrip().startswith(b"<mujoco")
+    except OSError:
+        return False
+
+
+# what -> (an example file name, whether an existing file is of that kind, what it is called)
+_OUTPUTS = {
+    "library": ("library.h5", is_skatelib_library, "skatelib library"),
+    "recording": ("recording.rrd", is_rerun_recording, "Rerun recording"),
+    "twin": ("twin.xml", is_mjcf, "MuJoCo model"),
+}

@@ -27,14 +27,31 @@ VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, define
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 
 
-def model(config: ConfigArg = None) -> None:
+def model(
+    config: Annotated[Path | None, typer.Argument(
+        help="Build config (TOML) or a quadruped library (.h5); the shipped default config when omitted.")] = None,
+    twin: Annotated[Path | None, typer.Option(
+        help="Write the physical twin (MuJoCo MJCF: robot and jointed skateboard) to this file.")] = None,
+) -> None:
     """Print the robot and board model of a config: SRB mass and inertia from the URDF, board
-    figures; for a humanoid config, its point-mass model and the LIP/DCM time constant."""
+    figures; for a humanoid config, its point-mass model and the LIP/DCM time constant. With
+    --twin, write the MuJoCo model of robot and board built from the same figures (open it with
+    python -m mujoco.viewer --mjcf OUT.xml)."""
+    from skatelib.pipeline.twin import is_library, write_twin
+
+    if config is not None and is_library(config):
+        if twin is None:
+            raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
+                                     param_hint="CONFIG")
+        console.print(escape(f"wrote {write_twin(config, twin)}"))
+        return
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.kinds import kind_of
 
     cfg = load_config(config)
     kind_of(cfg).print_model(cfg)
+    if twin is not None:
+        console.print(escape(f"wrote {write_twin(cfg, twin)}; open it with: python -m mujoco.viewer --mjcf {twin}"))
 
 
 OutOpt = Annotated[Path | None, typer.Option(

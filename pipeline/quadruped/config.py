@@ -14,6 +14,7 @@ from skatelib.library.channels import LEGS
 from skatelib.library.errors import ConfigError
 from skatelib.pipeline.config import MetaConfig, build_section, check_unique_keys, sections
 from skatelib.pipeline.config import setting as _f
+from skatelib.pipeline.quadruped.board_config import BoardConfig, ContactConfig
 
 FRICTION_MODELS = ("cone", "polygon8")
 
@@ -34,27 +35,6 @@ class RobotConfig:
         doc="URDF frames at the foot sphere centres, legs FL FR RL RR.",
         default=tuple(f"{leg}_foot" for leg in LEGS),
     )
-    source: str = _f(doc="Where the figures come from.", default="")
-
-
-@dataclass(frozen=True)
-class BoardConfig:
-    deck_length_m: float = _f(0.1, 2.0, "Deck length [m] (paper Sec. II-B: 0.74).")
-    deck_width_m: float = _f(0.05, 1.0, "Deck width [m] (paper: 0.265).")
-    deck_height_m: float = _f(0.0, 0.5, "Height of the deck's top surface above the ground [m].")
-    truck_distance_m: float = _f(0.05, 2.0, "Distance between front and rear truck pivots [m] (0.49).")
-    truck_width_m: float = _f(0.05, 1.0, "Truck (axle) width [m] (0.24).")
-    mass_kg: float = _f(0.1, 50.0, "Whole skateboard mass m_B of Eq. (9b) [kg].")
-    roll_inertia_kgm2: float = _f(1e-5, 10.0, "Deck roll inertia I_Bx of Eq. (7) [kg m^2].")
-    rake_front_rad: float = _f(0.05, 1.52, "Front truck rake angle gamma_f from horizontal, Eq. (11) [rad].")
-    rake_rear_rad: float = _f(0.05, 1.52, "Rear truck rake angle gamma_r from horizontal, Eq. (11) [rad].")
-    calibration_roll_rad: float = _f(
-        0.01, 0.5, "Steady roll [rad] when the robot's weight rests on one side's feet; K_B is set so."
-    )
-    roll_damping_ratio: float = _f(0.05, 10.0, "Damping ratio of the free deck roll; sets B_B of Eq. (6) [-].")
-    rolling_friction_coeff: float = _f(0.0, 0.2, "Rolling resistance f_fri / total weight, Eq. (9b) [-].")
-    tanh_scale_s_per_m: float = _f(1.0, 1e4, "Scale k of the tanh smoothing of sign(v), Eq. (10) [s/m].")
-    roll_limit_rad: float = _f(0.01, 0.6, "Largest allowed deck roll |phi_B| [rad].")
     source: str = _f(doc="Where the figures come from.", default="")
 
 
@@ -159,6 +139,7 @@ class QuadrupedConfig:
     robot: RobotConfig
     board: BoardConfig
     stance: StanceConfig
+    contact: ContactConfig
     schedule: ScheduleConfig
     optimization: OptimizationConfig
     terminal: TerminalConfig
@@ -190,8 +171,8 @@ class QuadrupedConfig:
 
 _SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "robot": RobotConfig, "board": BoardConfig, "stance": StanceConfig,
-    "schedule": ScheduleConfig, "optimization": OptimizationConfig, "terminal": TerminalConfig,
-    "sweep": SweepConfig,
+    "contact": ContactConfig, "schedule": ScheduleConfig, "optimization": OptimizationConfig,
+    "terminal": TerminalConfig, "sweep": SweepConfig,
 }
 
 
@@ -227,6 +208,14 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
                                 ("robot.foot_frames", cfg.robot.foot_frames, 4, "frame names (FL FR RL RR)")):
         if len(names) != n:
             raise ConfigError(p, key, f"needs {n} {what}")
+    b = cfg.board
+    parts: tuple[tuple[str, float, float, str], ...] = (
+        ("board.roll_axis_height_m", b.roll_axis_height_m, b.deck_height_m, "deck_height_m"),
+        ("board.deck_mass_kg", b.deck_mass_kg, b.mass_kg, "mass_kg"),
+        ("board.wheel_track_m", b.wheel_track_m, b.truck_width_m, "truck_width_m"))
+    for name, part, whole, what in parts:
+        if part > whole:
+            raise ConfigError(p, name, f"{part} is more than board.{what} ({whole}); it is part of it")
     if cfg.urdf_path.is_dir():
         raise ConfigError(p, "robot.urdf", f"{cfg.urdf_path} is a folder; name the URDF file in it")
     if not cfg.urdf_path.is_file():

@@ -107,7 +107,7 @@ def state_derivative(system: SkateSystem, mode: Mode, x: Any, u: Any, cr: Any) -
     f_board = ca.DM.zeros(3)
     for i in range(4):
         if mode.board_legs[i]:
-            r_b = R_B @ ca.vertcat(cr[0, i], cr[1, i], 0)  # Eq. (8)
+            r_b = board.moment_arm(R_B, cr[0, i], cr[1, i])  # Eq. (8), about the roll axis
             torque_board = torque_board + ca.cross(r_b, forces[:, i])
             f_board = f_board + forces[:, i]
     # Eq. (7), last row: the feet push the deck with -f_i.
@@ -115,7 +115,8 @@ def state_derivative(system: SkateSystem, mode: Mode, x: Any, u: Any, cr: Any) -
     heading = ca.vertcat(ca.cos(yaw), ca.sin(yaw))
     if mode.accelerating:
         v_fwd = ca.dot(heading, x[S_BOARD_V])  # S_x R_B^T v_B: roll does not change the x component
-        a_fwd = ((-(R_B.T @ f_board))[0] - board.friction_force(v_fwd)) / board.mass_kg  # Eq. (9b), (10)
+        rolling = board.friction_force(v_fwd, board.wheel_load(f_board[2]))  # Eq. (9b), (10)
+        a_fwd = ((-(R_B.T @ f_board))[0] - rolling) / board.mass_kg
     else:
         a_fwd = (R.T @ acc)[0]  # Eq. (5a): the robot's acceleration along its own x axis
     v_board_dot = heading * a_fwd  # Eq. (5a) / (9a): T_vB and S_xy R_B map x^B to the world

@@ -24,35 +24,54 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v
     guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = a * sch.t
     guess[:, S_POS.start] += 0.5 * a * sch.t**2
     guess[:, I_BOARD_XY.start] = 0.5 * a * sch.t**2
-    guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m)
+    guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m,
+                                     system.end_push_foot_height_m + 0.01)
     guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v_target, a, kind)
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
 
 
-def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray) -> np.ndarray:
+def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, end_lift_m: float) -> np.ndarray:
     """Joint angles per knot: the board stance, the push foot held where it touched down while the
-    trunk rides on, and between pushes the joints interpolated from lift-off to the next touchdown."""
+    trunk rides on, and between pushes the foot on a swing that leaves and meets the ground gently
+    (:func:`_swing`), by inverse kinematics; after the last push it rises to ``end_lift_m``."""
     p, K = system.push_index, len(sch.t)
     leg = slice(3 * p, 3 * p + 3)
     q = np.tile(system.stance.q_board, (K, 1))
     runs = sch.stance_intervals(p, GROUND)
     lo, hi = system.robot.lower_limits[leg], system.robot.upper_limits[leg]
     fk, newton = _leg_fk(system), DampedNewton(damping=1e-6, tol=1e-9, max_iter=20)
+    push_foot = np.asarray(system.robot.foot_positions_body(system.stance.q_push))[:, p]
+    holds = []
     for k0, k1 in runs:
-        foot_world = trunk[k0] + np.asarray(system.robot.foot_positions_body(system.stance.q_push))[:, p]
+        foot_world = trunk[k0] + push_foot
+        holds.append(foot_world)
         q_leg = system.stance.q_push[leg].copy()
         for k in range(k0, k1 + 1):
             q_leg, _ = newton.solve(fk, foot_world - trunk[k], q_leg, (lo, hi))
             q[k, leg] = q_leg
-    lifts = [k1 for _, k1 in runs]
-    downs = [k0 for k0, _ in runs[1:]] + [K - 1]
-    for k1, k2 in zip(lifts, downs, strict=True):
-        end = q[k2, leg] if k2 < K - 1 else system.stance.q_push[leg]
-        for k in range(k1 + 1, k2 + (1 if k2 == K - 1 else 0)):
-            w = (k - k1) / max(k2 - k1, 1)
-            q[k, leg] = (1 - w) * q[k1, leg] + w * end
+    for j, (_, k1) in enumerate(runs):
+        last = j + 1 == len(runs)
+        k2 = K - 1 if last else runs[j + 1][0]
+        start = holds[j]
+        end = trunk[k2] + push_foot + np.array([0.0, 0.0, end_lift_m]) if last else holds[j + 1]
+        q_leg = q[k1, leg].copy()
+        for k in range(k1 + 1, k2 + (1 if last else 0)):
+            target = _swing(start, end, (k - k1) / max(k2 - k1, 1), system.extra.get("swing_apex_m", 0.06), last)
+            q_leg, _ = newton.solve(fk, target - trunk[k], q_leg, (lo, hi))
+            q[k, leg] = q_leg
     return q
+
+
+def _swing(start: np.ndarray, end: np.ndarray, s: float, apex_m: float, rising: bool) -> np.ndarray:
+    """A foot point along a swing at phase ``s`` in [0, 1]: forward by a smootherstep (no speed at
+    either end, its first two derivatives zero), up by a half sine to ``apex_m`` (by a quarter sine
+    to the end's height when ``rising``): near the ground the foot moves mostly up or down."""
+    ease = s**3 * (10 - 15 * s + 6 * s**2)
+    point = start + ease * (end - start)
+    lift = apex_m * np.sin(np.pi * s) if not rising else (end[2] - start[2]) * np.sin(0.5 * np.pi * s)
+    point[2] = start[2] + (lift if rising else lift + ease * (end[2] - start[2]))
+    return point
 
 
 def _forces(system: SkateSystem, sch: KnotSchedule, v_target: float, a: float, kind: str) -> np.ndarray:

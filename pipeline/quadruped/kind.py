@@ -47,20 +47,30 @@ def print_model(cfg: QuadrupedConfig) -> None:
     console.print(t)
     b = s.board
     parameter_table("skateboard (Eq. 6, 9-14)", [
-        ("board mass m_B [kg]", b.mass_kg), ("roll inertia I_Bx [kg m^2]", b.roll_inertia_kgm2),
+        ("board mass m_B [kg]", b.mass_kg), ("roll inertia I_Bx about the roll axis [kg m^2]", b.roll_inertia_kgm2),
         ("roll stiffness K_B [N m/rad] (calibrated)", b.roll_stiffness_Nm_per_rad),
         ("roll damping B_B [N m s/rad]", b.roll_damping_Nms_per_rad),
         ("rolling friction f_fri [N]", b.rolling_friction_nominal_N),
         ("f_fri the TO plans with [N]", b.rolling_friction_N), ("K_board [m]", b.K_board_m),
+        ("truck pivot from the ground [rad]", b.pivot_rad), ("roll axis below the deck top [m]", b.roll_axis_depth_m),
+        ("wheel track [m]", b.wheel_track_m),
         ("l_f, l_r [m]", f"{b.l_front_m:.3f}, {b.l_rear_m:.3f}"), ("deck height [m]", b.deck_height_m)], "{:.5g}")
     q = np.round(s.stance.q_board, 3)
     console.print(escape(f"nominal stance q [rad] (FL FR RL RR x abad hip knee): {q.tolist()}"))
 
 
 def system_from_library(lib: MotionLibrary) -> Any:
-    """Rebuild the model from what the file stores: its resolved config and its own URDF."""
+    """Rebuild the model from what the file stores: its resolved config and its own URDF.
+
+    Raises:
+        LibraryFormatError: A library of the old board model (no truck pivot angle from the
+            ground: its steering read that angle as the paper's gamma from the vertical), or a
+            stored config this version cannot rebuild.
+    """
     from skatelib.pipeline.quadruped.system import SkateSystem
 
+    if "board_pivot_from_horizontal_rad" not in lib.model:
+        raise LibraryFormatError(lib.path, "/model/@board_pivot_from_horizontal_rad", OLD_BOARD)
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / "robot.urdf"
         urdf.write_text(lib.urdf)
@@ -69,6 +79,12 @@ def system_from_library(lib: MotionLibrary) -> Any:
             return SkateSystem.from_config(cfg)
         except SkatelibError as e:
             raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {e}") from e
+
+
+OLD_BOARD = ("built with the old board model: its trucks steered by K_board = l tan(pivot angle from the ground), "
+             "six times too weakly for the public truck, the deck rolled about its top and no wheel kept a load; "
+             "rebuild it (skatelib build CONFIG, with [board] pivot_from_horizontal_rad, roll_axis_height_m, "
+             "deck_mass_kg, wheel_track_m and wheel_load_margin)")
 
 
 def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:

@@ -62,8 +62,9 @@ def board_slip(system: SkateSystem, state: np.ndarray, contact: np.ndarray, foot
                 board_pos: np.ndarray) -> float:
     """Largest distance of a foot on the deck from its deck point (Eq. 8) [m]."""
     R_B = board_rotations(state[:, S_RPY][:, 2], state[:, I_BOARD_ROLL])
-    cr = np.vstack([system.stance.cr, np.zeros(4)])  # (3, 4) deck points in the board frame
-    points = board_pos[:, None, :3] + np.einsum("kij,jl->kli", R_B, cr)
+    h = system.board.roll_axis_depth_m  # the deck rolls about its axles, h below its top
+    cr = np.vstack([system.stance.cr, np.full(4, h)])  # (3, 4) deck points from the roll axis, board frame
+    points = board_pos[:, None, :3] + np.einsum("kij,jl->kli", R_B, cr) - np.array([0.0, 0.0, h])
     dist = np.linalg.norm(foot_pos - points, axis=-1)
     return float(dist[contact == BOARD].max(initial=0.0))
 
@@ -90,3 +91,36 @@ def max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> f
     tau = ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
     many = tau.map(len(control))
     return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())
+
+
+def wheel_loads(system: SkateSystem, state: np.ndarray, control: np.ndarray, contact: np.ndarray) -> float:
+    """The least load [N] the wheels of the lighter side carry over the control knots: half the
+    wheels' load less what the feet's roll moment on the deck (about its roll axis) takes, N / 2 -
+    |M| / w. Below zero a wheel lifts."""
+    b, n = system.board, len(control)
+    R_B = board_rotations(state[:n, S_RPY][:, 2], state[:n, I_BOARD_ROLL])
+    local = np.vstack([system.stance.cr, np.full(4, b.roll_axis_depth_m)])
+    arms = np.einsum("kij,jl->kli", R_B, local)  # (n, 4, 3)
+    f = control[:, :12].reshape(n, 4, 3)
+    on_deck = (contact[:n] == BOARD)[:, :, None]
+    moment = np.einsum("kji,kj->ki", R_B, np.sum(np.cross(arms, -f) * on_deck, axis=1))[:, 0]
+    load = b.mass_kg * system.gravity_mps2 + np.sum(f[:, :, 2] * on_deck[:, :, 0], axis=1)
+    return float(np.min(load / 2 - np.abs(moment) / b.wheel_track_m, initial=np.inf))
+
+
+def near_ground_speeds(system: SkateSystem, t: np.ndarray, contact: np.ndarray, foot_pos: np.ndarray
+                       ) -> tuple[float, float]:
+    """The push foot's largest horizontal speed over the ground and largest descent speed [m/s]
+    on intervals in the air that reach within ``contact.near_ground_m`` of the ground (the lower
+    of the two knots' heights of the sphere's bottom)."""
+    c = system.contact
+    if c is None:
+        return 0.0, 0.0
+    p = system.push_index
+    airborne = (contact[:-1, p] == SWING) | (contact[1:, p] == SWING)
+    foot = foot_pos[:, p]
+    low = np.minimum(foot[:-1, 2], foot[1:, 2]) < c.near_ground_m - 1e-4  # a knot held at the band's edge is above it
+    v = np.diff(foot, axis=0) / np.diff(t)[:, None]
+    near = airborne & low
+    return (float(np.linalg.norm(v[near, :2], axis=1).max(initial=0.0)),
+            float((-v[near, 2]).max(initial=0.0)))

@@ -19,6 +19,7 @@ from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transc
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
 from skatelib.pipeline.quadruped.bounds import bound_terms
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.contact_terms import GentleContact, WheelLoads
 from skatelib.pipeline.quadruped.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
 from skatelib.pipeline.quadruped.guess import initial_guess
@@ -70,6 +71,7 @@ class PushoffProblem:
             PushFoot(system, self.schedule, config.stance, term.push_foot_height_m),
             FrictionCones(system, self.schedule, self.mode.board_legs, mu_plan, opt.friction_model),
             Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),
+            WheelLoads(system, board_legs), GentleContact(system, self.schedule, config.contact, opt.dt_s),
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,

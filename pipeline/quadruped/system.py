@@ -11,7 +11,7 @@ import numpy as np
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
 from skatelib.pipeline.quadruped.board import BoardModel
-from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.config import ContactConfig, QuadrupedConfig
 from skatelib.pipeline.quadruped.robot import DampedNewton, Quadruped, SingleRigidBody
 
 
@@ -49,6 +49,8 @@ class SkateSystem:
     joint_velocity_limit_radps: float
     push_leg: str
     extra: dict[str, float] = field(default_factory=dict)
+    contact: ContactConfig | None = None  # how gently the push foot meets the ground (the checks' limits)
+    end_push_foot_height_m: float = 0.0  # the push foot's least height at the end
 
     @property
     def push_index(self) -> int:
@@ -59,7 +61,9 @@ class SkateSystem:
         L = np.zeros((nx, nx))
         b = self.board
         L[26, 27] = 1.0
-        L[27, 26] = -b.roll_stiffness_Nm_per_rad / b.roll_inertia_kgm2
+        # the trucks' and the deck weight's torque at small rolls (the rest is in the nonlinear part)
+        upright = b.roll_stiffness_Nm_per_rad - b.deck_mass_kg * b.gravity_mps2 * b.roll_axis_depth_m
+        L[27, 26] = -upright / b.roll_inertia_kgm2
         L[27, 27] = -b.roll_damping_Nms_per_rad / b.roll_inertia_kgm2
         return L
 
@@ -90,6 +94,7 @@ class SkateSystem:
             robot=robot, srb=srb, board=board, stance=stance, gravity_mps2=cfg.robot.gravity_mps2,
             foot_radius_m=r, friction_mu=cfg.robot.friction_mu, torque_limit_Nm=cfg.robot.torque_limit_Nm,
             joint_velocity_limit_radps=cfg.robot.joint_velocity_limit_radps, push_leg=cfg.schedule.push_leg,
+            contact=cfg.contact, end_push_foot_height_m=cfg.terminal.push_foot_height_m,
         )
 
 

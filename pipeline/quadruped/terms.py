@@ -59,7 +59,9 @@ class FeetOnBoard:
         R_B = board_rotation(x[I_BOARD_ROLL], x[S_RPY][2])
         r = self.system.foot_radius_m
         cr = self.system.stance.cr
-        return ca.vertcat(*[centres[:, i] - board_origin(self.system, x) - R_B @ ca.DM([cr[0, i], cr[1, i], r])
+        board = self.system.board
+        return ca.vertcat(*[centres[:, i] - board_origin(self.system, x) - board.deck_point(R_B, cr[0, i], cr[1, i])
+                            - R_B @ ca.DM([0.0, 0.0, r])
                             for i in self.legs])
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:

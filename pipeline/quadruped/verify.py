@@ -27,8 +27,10 @@ from skatelib.pipeline.quadruped.measures import (
     defect,
     ground_slip,
     max_torque,
+    near_ground_speeds,
     riding_end,
     swing_clearance,
+    wheel_loads,
 )
 from skatelib.pipeline.quadruped.system import SkateSystem
 
@@ -51,6 +53,7 @@ class Tolerances:
     vertical_speed_mps: float = 0.02
     angular_speed_radps: float = 0.05
     clearance_m: float = 1e-4
+    near_ground_speed_mps: float = 0.005  # over the limit (the optimizer's bound eases off smoothly)
 
 
 @dataclass(frozen=True)
@@ -82,6 +85,11 @@ class PhysicsReport:
         final_relative_speed_mps: |robot COM horizontal velocity - board velocity| at the end [m/s].
         final_vertical_speed_mps: |vertical COM speed| at the end [m/s].
         final_angular_speed_radps: Largest |body angular velocity| component at the end [rad/s].
+        min_wheel_load_N: Least load the lighter side's wheels carry (below zero a wheel lifts) [N].
+        max_near_ground_speed_mps: The push foot's largest speed over the ground within the
+            near-ground height (``[contact]``) [m/s].
+        max_near_ground_descent_mps: Its largest descent speed there [m/s].
+        final_push_foot_height_m: The push foot's height above the ground at the end [m].
     """
 
     max_defect: float
@@ -104,6 +112,10 @@ class PhysicsReport:
     final_relative_speed_mps: float
     final_vertical_speed_mps: float
     final_angular_speed_radps: float
+    min_wheel_load_N: float
+    max_near_ground_speed_mps: float
+    max_near_ground_descent_mps: float
+    final_push_foot_height_m: float
 
     def as_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in asdict(self).items()}
@@ -141,8 +153,23 @@ class PhysicsReport:
              f"body moves vertically at {self.final_vertical_speed_mps:.3f} m/s at the end"),
             (self.final_angular_speed_radps > tol.angular_speed_radps,
              f"body turns at {self.final_angular_speed_radps:.3f} rad/s at the end"),
+            (self.min_wheel_load_N < -tol.force_N, f"a wheel lifts (its side's load {self.min_wheel_load_N:.2f} N)"),
+            (self.final_push_foot_height_m < system.end_push_foot_height_m - tol.clearance_m,
+             f"push foot {self.final_push_foot_height_m:.3f} m above the ground at the end "
+             f"(at least {system.end_push_foot_height_m})"),
+            *self._near_ground(system, tol),
         ]
         return [msg for bad, msg in checks if bad]
+
+    def _near_ground(self, system: SkateSystem, tol: Tolerances) -> list[tuple[bool, str]]:
+        c = system.contact
+        if c is None:
+            return []
+        where = f"within {c.near_ground_m * 100:.0f} cm of the ground"
+        return [(self.max_near_ground_speed_mps > c.near_ground_speed_mps + tol.near_ground_speed_mps,
+                 f"push foot moves {self.max_near_ground_speed_mps:.2f} m/s over the ground {where}"),
+                (self.max_near_ground_descent_mps > c.near_ground_descent_mps + tol.near_ground_speed_mps,
+                 f"push foot descends at {self.max_near_ground_descent_mps:.2f} m/s {where}")]
 
 
 @dataclass(frozen=True)
@@ -185,6 +212,7 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
     propulsion = np.einsum("kj,kj->k", heading, f[:, p, :2])[planted]
     q = state[:, S_Q]
     lim = float(max(np.max(system.robot.lower_limits - q), np.max(q - system.robot.upper_limits), 0.0))
+    near = near_ground_speeds(system, t, contact, foot_pos)
     return PhysicsReport(
         max_defect=defect(system, t, state, control, substeps),
         min_friction_margin_N=float(margins.min(initial=np.inf)),
@@ -199,6 +227,9 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
         max_joint_velocity_radps=float(np.abs(control[:, U_QD]).max()),
         max_board_roll_rad=float(np.abs(state[:, I_BOARD_ROLL]).max()),
         **riding_end(system, state[-1], target_velocity_mps),
+        min_wheel_load_N=wheel_loads(system, state, control, contact),
+        max_near_ground_speed_mps=near[0], max_near_ground_descent_mps=near[1],
+        final_push_foot_height_m=float(foot_pos[-1, p, 2]),
     )
 
 

@@ -1,0 +1,59 @@
+"""``skatelib model --twin``: the physical twin's MJCF from a library's ``/model`` or from a config
+(the same figures a build of it would store), written atomically."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from skatelib.library import schema
+from skatelib.library.atomic import atomic_path
+from skatelib.library.errors import SkatelibError
+
+
+def is_library(path: Path) -> bool:
+    """Whether ``path`` is an HDF5 file (a library), by its signature."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(8) == schema.HDF5_SIGNATURE
+    except OSError:
+        return False
+
+
+def twin_figures(source: Path | Any) -> Any:
+    """The twin's figures of a library file or of a loaded quadruped config."""
+    from skatelib.sim.figures import TwinFigures
+
+    if isinstance(source, Path):
+        from skatelib.runtime import MotionLibrary
+
+        lib = MotionLibrary.open(source)
+        if lib.kind != "quadruped":
+            raise SkatelibError(f"{source}: the twin is a quadruped's; this library is {lib.kind}")
+        return TwinFigures.from_library(lib)
+    if source.meta.kind != "quadruped":
+        raise SkatelibError(f"{source.path}: the twin is a quadruped's; this config is {source.meta.kind}")
+    from skatelib.pipeline.quadruped.entries import quadruped_model
+    from skatelib.pipeline.quadruped.system import SkateSystem
+
+    attrs, arrays = quadruped_model(source, SkateSystem.from_config(source))
+    return TwinFigures.from_model(attrs, arrays, source.urdf_path.read_text())
+
+
+def write_twin(source: Path | Any, out: Path) -> Path:
+    """Write the twin's MJCF for a library file or a config to ``out``.
+
+    Raises:
+        ImportError: MuJoCo is not installed (names the extra).
+    """
+    try:
+        from skatelib.sim.scene import twin_xml
+    except ImportError as e:
+        raise ImportError(f"the twin needs MuJoCo ({e}); pip install 'skatelib[sim]'") from e
+    from skatelib.pipeline.build.preflight import check_output
+
+    check_output(out, [source] if isinstance(source, Path) else [source.path], what="twin")
+    xml = twin_xml(twin_figures(source))
+    with atomic_path(out) as tmp:
+        tmp.write_text(xml)
+    return out

@@ -1,0 +1,46 @@
+"""The CyberDog2 from the URDF the library stores: MuJoCo compiles the URDF's links, joints and
+inertias; the trunk gets the free joint the URDF cannot say (MuJoCo welds a root link without one
+to the world); each joint a torque motor limited to the torque limit, the rotor's reflected
+inertia as armature and a small damping; each foot a sphere of the foot radius with the friction
+the optimizer assumed. Only the feet touch the deck; the trunk and legs touch the floor (a fall)."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from skatelib.sim.board import FLOOR_BIT, FOOT_BIT
+from skatelib.sim.figures import GEAR_RATIO, JOINT_DAMPING_NMS, ROTOR_INERTIA_KGM2, TwinFigures
+
+LEGS = ("FL", "FR", "RL", "RR")
+JOINTS = tuple(f"{leg}_{j}" for leg in LEGS for j in ("abad", "hip", "knee"))
+_IMPORT = ('<mujoco><compiler discardvisual="false" fusestatic="false" balanceinertia="false" '
+           'strippath="true" angle="radian"/></mujoco>')
+
+
+def robot_spec(f: TwinFigures) -> Any:
+    """The robot as an ``MjSpec`` (its world holds the trunk, now floating)."""
+    import mujoco
+
+    urdf = re.sub(r"(<robot[^>]*>)", r"\1" + _IMPORT, f.urdf, count=1)
+    spec = mujoco.MjSpec.from_string(urdf)
+    trunk = spec.body("trunk")
+    trunk.add_freejoint(name="trunk_free")
+    armature = ROTOR_INERTIA_KGM2 * GEAR_RATIO**2
+    for name in JOINTS:
+        j = spec.joint(name)
+        j.armature = armature
+        j.damping = [JOINT_DAMPING_NMS, 0, 0]
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.ctrllimited = True
+        act.ctrlrange = [-f.torque_limit_Nm, f.torque_limit_Nm]
+    for g in spec.geoms:
+        body = g.parent.name
+        if body.endswith("_foot"):
+            g.name = body
+            g.size = [f.foot_radius_m, 0, 0]
+            g.contype, g.conaffinity, g.condim = FOOT_BIT, FLOOR_BIT, 3
+            g.friction = [f.friction_mu, 0.005, 0.0001]
+        else:
+            g.contype, g.conaffinity = 0, FLOOR_BIT
+    return spec

@@ -1,0 +1,69 @@
+"""The twin's scene: floor, board and robot standing on the deck in the library's four-leg stance,
+with the simulation options that hold contact well (elliptic cones, implicit-fast integration,
+1 ms steps). ``twin_xml`` is what ``skatelib model --twin`` writes."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from skatelib.sim.board import FLOOR_BIT, add_board
+from skatelib.sim.figures import TIMESTEP_S, TwinFigures
+from skatelib.sim.robot import JOINTS, robot_spec
+
+
+def scene_spec(f: TwinFigures, with_robot: bool = True) -> Any:
+    """Floor, board and (``with_robot``) the robot, as an ``MjSpec``."""
+    import mujoco
+
+    spec = robot_spec(f) if with_robot else mujoco.MjSpec()
+    spec.modelname = "skatelib twin"
+    spec.option.timestep = TIMESTEP_S
+    spec.option.gravity = [0, 0, -f.gravity_mps2]
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = 10
+    spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
+                            contype=FLOOR_BIT, conaffinity=0, condim=3,
+                            friction=[f.friction_mu, 0.0, 0.0], rgba=[0.35, 0.4, 0.45, 1])
+    spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
+    add_board(spec, f.board, f.friction_mu)
+    if with_robot:
+        _place_robot(spec, f)
+    return spec
+
+
+def _place_robot(spec: Any, f: TwinFigures) -> None:
+    """The trunk over the deck at the height where the stance's feet touch it."""
+    import mujoco
+
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    for name, q in zip(JOINTS, f.stance_q_rad, strict=True):
+        d.qpos[m.joint(name).qposadr[0]] = q
+    mujoco.mj_kinematics(m, d)
+    trunk = m.body("trunk").id
+    feet = np.array([d.geom_xpos[m.geom(f"{leg}_foot").id] for leg in ("FL", "FR", "RL", "RR")])
+    below = d.xpos[trunk][2] - feet[:, 2].mean()  # trunk origin over the foot centres
+    xy = d.xpos[trunk][:2] - feet[:, :2].mean(axis=0) + f.deck_points_m.mean(axis=1)
+    body = spec.body("trunk")
+    body.pos = [xy[0], xy[1], f.board.deck_height_m + f.foot_radius_m + below]
+    key = spec.add_key(name="stance")
+    m2 = spec.compile()
+    qpos = m2.qpos0.copy()
+    for name, q in zip(JOINTS, f.stance_q_rad, strict=True):
+        qpos[m2.joint(name).qposadr[0]] = q
+    key.qpos = qpos.tolist()
+
+
+def twin_model(f: TwinFigures, with_robot: bool = True) -> Any:
+    """The compiled ``MjModel``."""
+    return scene_spec(f, with_robot).compile()
+
+
+def twin_xml(f: TwinFigures, with_robot: bool = True) -> str:
+    """The scene as MJCF text (``python -m mujoco.viewer --mjcf OUT.xml`` opens it)."""
+    spec = scene_spec(f, with_robot)
+    spec.compile()
+    text: str = spec.to_xml()
+    return text

@@ -1,0 +1,97 @@
+"""The physical twin (``skatelib.sim``) built from a config's figures: the same masses and limits as
+the optimizer's model, a robot that stands still on a board at rest, and ``skatelib model --twin``
+writing a model MuJoCo loads."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from skatelib.pipeline.config import load_config  # noqa: E402
+from skatelib.pipeline.quadruped.config import QuadrupedConfig  # noqa: E402
+from skatelib.pipeline.quadruped.system import SkateSystem  # noqa: E402
+from skatelib.pipeline.twin import twin_figures  # noqa: E402
+from skatelib.sim.robot import JOINTS  # noqa: E402
+from skatelib.sim.scene import twin_model  # noqa: E402
+from skatelib.sim.stand import StandController  # noqa: E402
+
+from tests.helpers import CLI  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def built():
+    cfg = load_config(None, QuadrupedConfig)
+    system = SkateSystem.from_config(cfg)
+    f = twin_figures(cfg)
+    return cfg, system, f, twin_model(f)
+
+
+def test_the_twin_has_the_models_masses_and_limits(built):
+    """Robot and board weigh what the optimizer's model says (pinocchio's sum of the URDF, the
+    board's mass), every leg joint has a motor limited to the torque limit, and the trunk floats."""
+    cfg, system, _, m = built
+    assert m.body_subtreemass[0] == pytest.approx(system.srb.mass_kg + system.board.mass_kg, rel=1e-9)
+    assert m.body_subtreemass[m.body("trunk").id] == pytest.approx(system.srb.mass_kg, rel=1e-9)
+    assert m.nu == 12 and np.allclose(m.actuator_ctrlrange, [-cfg.robot.torque_limit_Nm, cfg.robot.torque_limit_Nm])
+    assert m.jnt_type[m.joint("trunk_free").id] == mujoco.mjtJoint.mjJNT_FREE
+    assert [m.actuator(i).name for i in range(m.nu)] == list(JOINTS)
+
+
+def test_standing_on_the_deck_stays_put(built):
+    """The robot standing on the deck at rest (joint PD and its weight's torques) stays put over
+    10 s after a second of settling: trunk and deck drift less than 1 mm, the deck's roll creeps
+    less than 1 mrad; the feet stay on the deck. Negative control: without the weight's torques the
+    trunk sags by more than a centimetre."""
+    _, _, f, m = built
+
+    def run() -> tuple[np.ndarray, np.ndarray, float, int]:
+        d = mujoco.MjData(m)
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+        ctl = StandController(m, f.robot_mass_kg, f.gravity_mps2)
+        trunk, deck = m.body("trunk").id, m.body("deck").id
+        out = []
+        for k in range(11_000):
+            ctl(d)
+            mujoco.mj_step(m, d)
+            if k in (999, 10_999):
+                R = d.xmat[deck].reshape(3, 3)
+                out.append((d.xpos[trunk].copy(), d.xpos[deck].copy(), np.arctan2(R[2, 1], R[2, 2])))
+        names = [m.geom(d.contact[i].geom1).name + m.geom(d.contact[i].geom2).name for i in range(d.ncon)]
+        feet = sum("foot" in n and "deck" in n for n in names)
+        (t0, b0, r0), (t1, b1, r1) = out
+        return t1 - t0, b1 - b0, r1 - r0, feet
+
+    dt, db, dr, feet = run()
+    assert np.linalg.norm(dt) < 1e-3 and np.linalg.norm(db) < 1e-3 and abs(dr) < 1e-3, (dt, db, dr)
+    assert feet >= 4
+    d0 = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d0, 0)
+    mujoco.mj_forward(m, d0)
+    height0 = d0.xpos[m.body("trunk").id][2]
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    ctl = StandController(m, 0.0, f.gravity_mps2)
+    for _ in range(2000):
+        ctl(d)
+        mujoco.mj_step(m, d)
+    assert height0 - d.xpos[m.body("trunk").id][2] > 0.01
+
+
+def test_model_twin_writes_a_loadable_mjcf(tmp_path):
+    """`skatelib model --twin OUT.xml` writes MJCF that MuJoCo compiles to the same model as the
+    builder's; a second file where the first stands is refused unless it is MJCF."""
+    out = tmp_path / "twin.xml"
+    env = {**os.environ, "COLUMNS": "200"}
+    r = subprocess.run([*CLI, "model", "--twin", str(out)], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.nu == 12 and m.body("deck").id > 0 and m.joint("truck_front").id > 0
+    other = tmp_path / "notes.txt"
+    other.write_text("my notes")
+    r = subprocess.run([*CLI, "model", "--twin", str(other)], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 2 and "not a MuJoCo model" in r.stderr and other.read_text() == "my notes"
