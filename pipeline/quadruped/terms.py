@@ -29,6 +29,7 @@ from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import SkateSystem
 
 INF = np.inf
+END_BAND_M = 0.02  # the push foot ends at most this far above its least end height
 
 
 @dataclass(frozen=True)
@@ -112,8 +113,9 @@ class PushFoot:
             elif contact[k + 1] != GROUND and contact[k] != GROUND:
                 lo[k, self.HEIGHT] = r + lift[k + 1]
         lo[:, self.LATERAL] = self.system.board.deck_width_m / 2 + r + self.stance.push_clearance_m
-        if contact[n] != GROUND:
+        if contact[n] != GROUND:  # the end: lifted beside the deck, where the transfer starts
             lo[n - 1, self.HEIGHT] = max(lo[n - 1, self.HEIGHT], r + self.end_height_m)
+            hi[n - 1, self.HEIGHT] = r + self.end_height_m + END_BAND_M
         return lo, hi
 
 
