@@ -2,8 +2,9 @@
 
 Every command goes through this table (``load_config``, ``kind_of(config)``,
 ``kind_named(lib.kind)``, ``build``, ``validate``, ``inspect``, ``plot``), so a third robot is a
-new subpackage whose ``kind`` module defines ``KIND``, an object with the operations below, and
-one row of :data:`KINDS`; the command line does not change. Both kinds name their modules alike:
+new subpackage whose ``kind`` module defines ``KIND``, an object with the operations below (a
+:class:`SubpackageKind` over its modules), and one row of :data:`KINDS`; the command line does
+not change. Both kinds name their modules alike:
 ``config`` (the config class, ``from_toml``, ``from_json``), ``kind`` (``KIND``), ``builder``
 (its part of the build), ``tasks`` (``BuildTask``, ``EntryOutcome``), ``verify`` (the independent
 checks and ``judge``), ``entries`` (the library it writes), ``rerun`` and ``plots`` (its views).
@@ -88,6 +89,64 @@ class RobotKind(Protocol):
 
     def figures(self, lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
         """``skatelib plot``'s figures: {file stem: matplotlib figure}."""
+
+
+@dataclass(frozen=True)
+class SubpackageKind:
+    """A robot kind whose parts are the modules of one subpackage (``config``, ``builder``,
+    ``rerun``, ``plots``), imported when an operation needs them, with its model summary and its
+    library checks as functions."""
+
+    name: str
+    config_class: type
+    package: str
+    print_model_fn: Callable[[Any], None]
+    validate_fn: Callable[[MotionLibrary, ReportFn], int]
+
+    def _part(self, module: str) -> Any:
+        return importlib.import_module(f"{self.package}.{module}")
+
+    def from_toml(self, path: Path, data: dict[str, Any], text: str) -> Any:
+        return self._part("config").from_toml(path, data, text)
+
+    def from_json(self, data: dict[str, Any], origin: Path, urdf: Path | None) -> Any:
+        return self._part("config").from_json(data, origin, urdf)
+
+    def print_model(self, cfg: Any) -> None:
+        self.print_model_fn(cfg)
+
+    def validate_entries(self, lib: MotionLibrary, report: ReportFn) -> int:
+        return self.validate_fn(lib, report)
+
+    def check(self, cfg: Any, opts: BuildOptions) -> None:
+        self._part("builder").check(cfg, opts)
+
+    def announce(self, cfg: Any) -> None:
+        self._part("builder").announce(cfg)
+
+    def tasks(self, cfg: Any, ipopt: tuple[tuple[str, Any], ...] = ()) -> Sequence[BuildTask]:
+        tasks: Sequence[BuildTask] = self._part("builder").tasks(cfg, ipopt)
+        return tasks
+
+    def prepare(self, cfg: Any, opts: BuildOptions) -> None:
+        self._part("builder").prepare(cfg, opts)
+
+    def write(self, cfg: Any, out: Path, outcomes: Sequence[Outcome], opts: BuildOptions) -> Written:
+        written: Written = self._part("builder").write(cfg, out, outcomes, opts)
+        return written
+
+    def summary(self, written: Written) -> None:
+        self._part("builder").summary(written)
+
+    def rerun_panels(self) -> list[tuple[str, str]]:
+        return list(self._part("rerun").PANELS)
+
+    def rerun_logger(self, lib: MotionLibrary) -> Any:
+        return self._part("rerun").logger(lib)
+
+    def figures(self, lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
+        figures: dict[str, Any] = self._part("plots").figures(lib, plt, frontier_file)
+        return figures
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
@@ -14,13 +13,11 @@ from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.humanoid.config import HumanoidConfig
+from skatelib.pipeline.kinds import SubpackageKind
 from skatelib.pipeline.views.console import console, parameter_table
 from skatelib.runtime import MotionLibrary
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
-
-    from skatelib.pipeline.build.contract import BuildOptions, BuildTask, Outcome, Written
     from skatelib.pipeline.kinds import ReportFn
 
 
@@ -60,72 +57,4 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
     return bad
 
 
-class HumanoidKind:
-    """The humanoid's operations of :class:`skatelib.pipeline.kinds.RobotKind`."""
-
-    name = "humanoid"
-    config_class = HumanoidConfig
-
-    def from_toml(self, path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
-        from skatelib.pipeline.humanoid.config import from_toml
-
-        return from_toml(path, data, text)
-
-    def from_json(self, data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
-        from skatelib.pipeline.humanoid.config import from_json
-
-        return from_json(data, origin, urdf)
-
-    def print_model(self, cfg: HumanoidConfig) -> None:
-        print_model(cfg)
-
-    def validate_entries(self, lib: MotionLibrary, report: ReportFn) -> int:
-        return validate_entries(lib, report)
-
-    def check(self, cfg: HumanoidConfig, opts: BuildOptions) -> None:
-        from skatelib.pipeline.humanoid import builder
-
-        builder.check(cfg, opts)
-
-    def announce(self, cfg: HumanoidConfig) -> None:
-        from skatelib.pipeline.humanoid import builder
-
-        builder.announce(cfg)
-
-    def tasks(self, cfg: HumanoidConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> Sequence[BuildTask]:
-        from skatelib.pipeline.humanoid import builder
-
-        return builder.tasks(cfg, ipopt)
-
-    def prepare(self, cfg: HumanoidConfig, opts: BuildOptions) -> None:
-        from skatelib.pipeline.humanoid import builder
-
-        builder.prepare(cfg, opts)
-
-    def write(self, cfg: HumanoidConfig, out: Path, outcomes: Sequence[Outcome], opts: BuildOptions) -> Written:
-        from skatelib.pipeline.humanoid import builder
-
-        return builder.write(cfg, out, outcomes, opts)
-
-    def summary(self, written: Written) -> None:
-        from skatelib.pipeline.humanoid import builder
-
-        builder.summary(written)
-
-    def rerun_panels(self) -> list[tuple[str, str]]:
-        from skatelib.pipeline.humanoid import rerun
-
-        return list(rerun.PANELS)
-
-    def rerun_logger(self, lib: MotionLibrary) -> Any:
-        from skatelib.pipeline.humanoid import rerun
-
-        return rerun.logger(lib)
-
-    def figures(self, lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
-        from skatelib.pipeline.humanoid import plots
-
-        return plots.figures(lib, plt, frontier_file)
-
-
-KIND = HumanoidKind()
+KIND = SubpackageKind("humanoid", HumanoidConfig, "skatelib.pipeline.humanoid", print_model, validate_entries)

@@ -13,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
+from skatelib.pipeline.kinds import SubpackageKind
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.views.console import (
     console,
@@ -21,9 +22,6 @@ from skatelib.pipeline.views.console import (
 from skatelib.runtime import MotionLibrary
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
-
-    from skatelib.pipeline.build.contract import BuildOptions, BuildTask, Outcome, Written
     from skatelib.pipeline.kinds import ReportFn
 
 # Vendor single-rigid-body figures (docs/sources.md), printed beside ours for comparison.
@@ -109,72 +107,4 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
     return bad
 
 
-class QuadrupedKind:
-    """The quadruped's operations of :class:`skatelib.pipeline.kinds.RobotKind`."""
-
-    name = "quadruped"
-    config_class = QuadrupedConfig
-
-    def from_toml(self, path: Path, data: dict[str, Any], text: str) -> QuadrupedConfig:
-        from skatelib.pipeline.quadruped.config import from_toml
-
-        return from_toml(path, data, text)
-
-    def from_json(self, data: dict[str, Any], origin: Path, urdf: Path | None) -> QuadrupedConfig:
-        from skatelib.pipeline.quadruped.config import from_json
-
-        return from_json(data, origin, urdf)
-
-    def print_model(self, cfg: QuadrupedConfig) -> None:
-        print_model(cfg)
-
-    def validate_entries(self, lib: MotionLibrary, report: ReportFn) -> int:
-        return validate_entries(lib, report)
-
-    def check(self, cfg: QuadrupedConfig, opts: BuildOptions) -> None:
-        from skatelib.pipeline.quadruped import builder
-
-        builder.check(cfg, opts)
-
-    def announce(self, cfg: QuadrupedConfig) -> None:
-        from skatelib.pipeline.quadruped import builder
-
-        builder.announce(cfg)
-
-    def tasks(self, cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> Sequence[BuildTask]:
-        from skatelib.pipeline.quadruped import builder
-
-        return builder.tasks(cfg, ipopt)
-
-    def prepare(self, cfg: QuadrupedConfig, opts: BuildOptions) -> None:
-        from skatelib.pipeline.quadruped import builder
-
-        builder.prepare(cfg, opts)
-
-    def write(self, cfg: QuadrupedConfig, out: Path, outcomes: Sequence[Outcome], opts: BuildOptions) -> Written:
-        from skatelib.pipeline.quadruped import builder
-
-        return builder.write(cfg, out, outcomes, opts)
-
-    def summary(self, written: Written) -> None:
-        from skatelib.pipeline.quadruped import builder
-
-        builder.summary(written)
-
-    def rerun_panels(self) -> list[tuple[str, str]]:
-        from skatelib.pipeline.quadruped import rerun
-
-        return list(rerun.PANELS)
-
-    def rerun_logger(self, lib: MotionLibrary) -> Any:
-        from skatelib.pipeline.quadruped import rerun
-
-        return rerun.logger(lib)
-
-    def figures(self, lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[str, Any]:
-        from skatelib.pipeline.quadruped import plots
-
-        return plots.figures(lib, plt, frontier_file)
-
-
-KIND = QuadrupedKind()
+KIND = SubpackageKind("quadruped", QuadrupedConfig, "skatelib.pipeline.quadruped", print_model, validate_entries)
