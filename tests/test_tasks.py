@@ -1,5 +1,5 @@
-"""The quadruped's warm-start chains: solved from the middle speed outwards, and a failed entry
-passes its turn to the nearest success towards the middle."""
+"""The quadruped's warm-start chains: solved from a third of the way up the speeds outwards, and a
+failed entry passes its turn to the nearest success towards that start."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ from skatelib.pipeline.quadruped import tasks
 from tests.helpers import TINY
 
 
-def test_solve_order_starts_cold_in_the_middle_and_walks_outwards():
+def test_solve_order_starts_cold_a_third_of_the_way_up_and_walks_outwards():
     assert tasks.solve_order([1.0, 0.2, 0.85, 0.5, 0.3, 0.7]) == [
-        (0.5, None), (0.3, 0.5), (0.2, 0.3), (0.7, 0.5), (0.85, 0.7), (1.0, 0.85)]
+        (0.3, None), (0.2, 0.3), (0.5, 0.3), (0.7, 0.5), (0.85, 0.7), (1.0, 0.85)]
     assert tasks.solve_order([0.4]) == [(0.4, None)]
     assert tasks.solve_order([0.7, 0.4]) == [(0.4, None), (0.7, 0.4)]
     assert tasks.solve_order([]) == []
@@ -29,10 +29,10 @@ class _Result:
     warm: Any
 
 
-def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_middle(monkeypatch):
-    """0.3 and 0.7 fail: 0.2 starts from 0.5's solution, 0.85 too, 1.0 from 0.85's; every solve
-    is keyed on the entry that really warm-started it."""
-    failing = {0.3, 0.7}
+def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_start(monkeypatch):
+    """0.5 and 0.85 fail: 0.7 starts from 0.3's solution, 1.0 from 0.7's; every solve is keyed on
+    the entry that really warm-started it."""
+    failing = {0.5, 0.85}
     started_from: dict[float, Any] = {}
     keyed_on: dict[float, Any] = {}
 
@@ -51,8 +51,8 @@ def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_middle
     chain = tasks.BuildTask(load_config(TINY), 1, (0.2, 0.3, 0.5, 0.7, 0.85, 1.0))
     out = chain.run(use_cache=False, events=None)
 
-    assert [o.result.target_velocity_mps for o in out] == [0.5, 0.3, 0.2, 0.7, 0.85, 1.0]
-    assert started_from == {0.5: None, 0.3: "solution 0.5", 0.2: "solution 0.5", 0.7: "solution 0.5",
-                            0.85: "solution 0.5", 1.0: "solution 0.85"}
-    assert keyed_on == {0.5: None, 0.3: "key 0.5", 0.2: "key 0.5", 0.7: "key 0.5", 0.85: "key 0.5",
-                        1.0: "key 0.85"}
+    assert [o.result.target_velocity_mps for o in out] == [0.3, 0.2, 0.5, 0.7, 0.85, 1.0]
+    assert started_from == {0.3: None, 0.2: "solution 0.3", 0.5: "solution 0.3", 0.7: "solution 0.3",
+                            0.85: "solution 0.7", 1.0: "solution 0.7"}
+    assert keyed_on == {0.3: None, 0.2: "key 0.3", 0.5: "key 0.3", 0.7: "key 0.3", 0.85: "key 0.7",
+                        1.0: "key 0.7"}
