@@ -3,7 +3,7 @@
 * ``rk4``: classic Runge-Kutta, ``substeps`` equal steps per interval.
 * ``etdrk4``: the exponential time-differencing RK4 of Cox and Matthews (J. Comput. Phys. 176,
   2002) for ``dx/dt = L x + N(x, u)``. The stiff linear part ``L`` (here the deck's roll
-  spring-damper, Eq. 6-7, eigenvalues near -92 1/s) is integrated exactly through matrix
+  spring-damper, Eq. 6-7, eigenvalues near -64 1/s with the default board) is integrated exactly through matrix
   phi-functions; the rest is fourth order. Where ``L`` is zero it is exactly classic RK4, so it
   costs the same four evaluations of the dynamics per step.
 """
