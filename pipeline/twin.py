@@ -6,18 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import SkatelibError
-
-
-def is_library(path: Path) -> bool:
-    """Whether ``path`` is an HDF5 file (a library), by its signature."""
-    try:
-        with open(path, "rb") as f:
-            return f.read(8) == schema.HDF5_SIGNATURE
-    except OSError:
-        return False
 
 
 def twin_figures(source: Path | Any) -> Any:

@@ -27,13 +27,23 @@ from skatelib.pipeline.views.console import console, count
 
 @dataclass(frozen=True)
 class BuildReport:
-    """What a build produced: the file, its entries' outcomes (in the library's order), the wall
-    time and what else the kind found (the quadruped's frontier, when asked)."""
+    """What a build produced: what the kind wrote (the file, its entries' outcomes in the library's
+    order and what else it found: the quadruped's frontier, when asked) and the wall time."""
 
-    path: Path
-    outcomes: Sequence[Outcome]
+    written: Written
     wall_time_s: float
-    frontier: Any = None
+
+    @property
+    def path(self) -> Path:
+        return self.written.path
+
+    @property
+    def outcomes(self) -> Sequence[Outcome]:
+        return self.written.outcomes
+
+    @property
+    def frontier(self) -> Any:
+        return self.written.extra
 
     @property
     def failed(self) -> list[Outcome]:
@@ -56,8 +66,7 @@ def build_library(config: Any, out: Path | None = None, options: BuildOptions | 
     kind.prepare(config, options)
     outcomes = run_sweep(kind.tasks(config, ipopt), options, on_entry)
     written: Written = kind.write(config, out, outcomes, options)
-    return BuildReport(path=written.path, outcomes=written.outcomes, wall_time_s=time.perf_counter() - t0,
-                       frontier=written.extra)
+    return BuildReport(written, time.perf_counter() - t0)
 
 
 class _Progress:
@@ -125,7 +134,7 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
             kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
                     else "nothing is cached (--no-cache)")
             raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
-    kind.summary(Written(report.path, report.outcomes, report.frontier))
+    kind.summary(report.written)
     for o in report.outcomes:
         if o.note:
             console.print(f"[yellow]note:[/] {escape(o.note)}")

@@ -37,9 +37,10 @@ def model(
     figures; for a humanoid config, its point-mass model and the LIP/DCM time constant. With
     --twin, write the MuJoCo model of robot and board built from the same figures (open it with
     python -m mujoco.viewer --mjcf OUT.xml)."""
-    from skatelib.pipeline.twin import is_library, write_twin
+    from skatelib.pipeline.build.preflight import is_skatelib_library
+    from skatelib.pipeline.twin import write_twin
 
-    if config is not None and is_library(config):
+    if config is not None and is_skatelib_library(config):
         if twin is None:
             raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
                                      param_hint="CONFIG")
@@ -146,10 +147,9 @@ def solve(
     check_output(out, [cfg.path])
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
-    from skatelib.pipeline.build.contract import Written
     from skatelib.pipeline.quadruped.builder import summary
 
-    summary(Written(report.path, report.outcomes, report.frontier))
+    summary(report.written)
     console.print(f"wrote {escape(str(report.path))}")
     if report.failed:
         raise typer.Exit(1)

@@ -19,6 +19,7 @@ l_f / tan(lambda). Linear torsion springs in the trucks give the deck the roll t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -84,7 +85,7 @@ class BoardModel:
             rolling_friction_nominal_N=cfg.rolling_friction_coeff * total_weight)
         k_b = proto.calibrated_stiffness(robot_mass_kg * gravity_mps2, calibration_foot_y_m, cfg.calibration_roll_rad)
         b_b = 2.0 * cfg.roll_damping_ratio * math.sqrt(k_b * inertia)
-        return _replace(proto, roll_stiffness_Nm_per_rad=k_b, roll_damping_Nms_per_rad=b_b)
+        return dataclasses.replace(proto, roll_stiffness_Nm_per_rad=k_b, roll_damping_Nms_per_rad=b_b)
 
     def truck_torque(self, phi: Any) -> Any:
         """The trucks' spring torque on the deck at roll ``phi`` [N m] (negative for phi > 0)."""
@@ -132,9 +133,3 @@ class BoardModel:
     def moment_arm(self, R_B: Any, x: Any, y: Any) -> Any:
         """A point (x, y) of the deck's top relative to the roll axis, in the world (3,), Eq. (8)."""
         return R_B @ ca.vertcat(x, y, self.roll_axis_depth_m)
-
-
-def _replace(b: BoardModel, **changes: float) -> BoardModel:
-    import dataclasses
-
-    return dataclasses.replace(b, **changes)
