@@ -1,7 +1,8 @@
 """The skateboard from real joints: the deck a free body; per truck a hanger on a hinge about the
 pivot axis through the axle's centre, with the torsional spring and damper that give the deck the
 optimizer's roll stiffness and damping; per hanger two wheels on hinges, rolling on the floor with
-a rolling resistance proportional to their load.
+a rolling resistance proportional to their load (a torque on each wheel's hinge,
+:mod:`skatelib.sim.rolling`).
 
 Geometry (deck frame: origin on the deck's top surface at its centre, x forward, z up): the axles
 lie ``axle_below_deck_m`` under the top at x = +l_front and -l_rear; each pivot axis rises from the
@@ -19,6 +20,7 @@ import math
 from typing import Any
 
 from skatelib.sim.figures import DECK_INERTIA_KGM2, DECK_THICKNESS_M, HANGER_MASS_KG, BoardFigures
+from skatelib.sim.rolling import add_rolling_actuators
 
 # Collision bits (contype / conaffinity): the floor touches wheels, feet, deck and robot links; the
 # deck touches feet; nothing else touches anything.
@@ -62,6 +64,7 @@ def add_board(spec: Any, b: BoardFigures, friction_mu: float, pos: tuple[float, 
             wheel.add_joint(name=f"wheel_{name[0]}{side}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
             wheel.add_geom(name=f"wheel_{name[0]}{side}", type=mujoco.mjtGeom.mjGEOM_SPHERE,
                            size=[b.wheel_radius_m, 0, 0], mass=wheel_mass, contype=0, conaffinity=FLOOR_BIT,
-                           condim=6, friction=[1.0, 0.0, b.rolling_friction_coeff * b.wheel_radius_m],
+                           condim=3, friction=[1.0, 0.0, 0.0],
                            solref=[WHEEL_SOLREF_S, 1.0], solimp=list(WHEEL_SOLIMP), rgba=[0.9, 0.85, 0.6, 1])
+    add_rolling_actuators(spec)
     return deck

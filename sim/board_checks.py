@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from skatelib.sim.figures import TwinFigures
+from skatelib.sim.rolling import RollingResistance, step
 from skatelib.sim.scene import scene_spec
 
 WHEELS = ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")
@@ -29,7 +30,13 @@ class Steering:
         return -self.speed_mps * math.sin(roll_rad) / self.yaw_rate_radps
 
 
-def _board(f: TwinFigures, payload_kg: float = 0.0, payload_height_m: float = 0.1) -> tuple[Any, Any]:
+class _Board(NamedTuple):
+    m: Any
+    d: Any
+    rolling: RollingResistance
+
+
+def _board(f: TwinFigures, payload_kg: float = 0.0, payload_height_m: float = 0.1) -> _Board:
     """The board alone (with a payload welded on the deck's centre), compiled, and its data."""
     import mujoco
 
@@ -39,7 +46,7 @@ def _board(f: TwinFigures, payload_kg: float = 0.0, payload_height_m: float = 0.
         load.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.15, 0.08, 0.04], mass=payload_kg, contype=0,
                       conaffinity=0, rgba=[0.8, 0.3, 0.2, 1])
     m = spec.compile()
-    return m, mujoco.MjData(m)
+    return _Board(m, mujoco.MjData(m), RollingResistance(m, f.board.rolling_friction_coeff))
 
 
 def _deck(m: Any, d: Any) -> tuple[int, np.ndarray]:
@@ -65,7 +72,7 @@ def steering(f: TwinFigures, roll_rad: float, speed_mps: float = 0.5, duration_s
     (a rider leaning); the speed and yaw rate averaged over the last third."""
     import mujoco
 
-    m, d = _board(f, f.robot_mass_kg)
+    m, d, rolling = _board(f, f.robot_mass_kg)
     _launch(m, d, speed_mps)
     deck, _ = _deck(m, d)
     v, w = [], []
@@ -78,7 +85,7 @@ def steering(f: TwinFigures, roll_rad: float, speed_mps: float = 0.5, duration_s
         error = roll_rad - deck_roll(m, d)
         held += error * m.opt.timestep
         d.xfrc_applied[deck, 3:6] = R[:, 0] * (600.0 * error + 1500.0 * held - 60.0 * rate)
-        mujoco.mj_step(m, d)
+        step(m, d, rolling)
         if k >= 2 * n // 3:
             heading = R[:2, 0] / np.linalg.norm(R[:2, 0])
             v.append(float(heading @ d.qvel[m.joint("deck_free").dofadr[0]:][:2]))
@@ -89,13 +96,14 @@ def steering(f: TwinFigures, roll_rad: float, speed_mps: float = 0.5, duration_s
 def static_roll(f: TwinFigures, load_N: float, y_m: float, settle_s: float = 3.0) -> float:
     """The deck's roll under a vertical load ``load_N`` pressing on its top at (0, ``y_m``) [rad]
     (the load ramped up over the first second, as a bench test loads a board)."""
-    m, d = _board(f)
-    _press(m, d, load_N, y_m, settle_s)
+    m, d, rolling = _board(f)
+    _press(_Board(m, d, rolling), load_N, y_m, settle_s)
     return deck_roll(m, d)
 
 
-def _press(m: Any, d: Any, load_N: float, y_m: float, duration_s: float, ramp_s: float = 1.0) -> None:
+def _press(board: _Board, load_N: float, y_m: float, duration_s: float, ramp_s: float = 1.0) -> None:
     """Step the board with the vertical load at (0, ``y_m``) of the deck's top, ramped in over ``ramp_s``."""
+    m, d, rolling = board
     import mujoco
 
     deck, _ = _deck(m, d)
@@ -106,7 +114,7 @@ def _press(m: Any, d: Any, load_N: float, y_m: float, duration_s: float, ramp_s:
         share = min(1.0, (k + 1) * m.opt.timestep / ramp_s)
         d.qfrc_applied[:] = 0.0
         mujoco.mj_applyFT(m, d, np.array([0.0, 0.0, -share * load_N]), np.zeros(3), point, deck, d.qfrc_applied)
-        mujoco.mj_step(m, d)
+        step(m, d, rolling)
         if abs(deck_roll(m, d)) > 1.0:  # tipped over
             return
     mujoco.mj_forward(m, d)
@@ -116,15 +124,14 @@ def coast_deceleration(f: TwinFigures, payload_kg: float = 0.0, speed_mps: float
                        duration_s: float = 1.0) -> float:
     """The coasting board's deceleration [m/s^2] (a least-squares slope of its speed over time),
     carrying ``payload_kg`` welded on the deck."""
-    import mujoco
 
-    m, d = _board(f, payload_kg)
+    m, d, rolling = _board(f, payload_kg)
     _launch(m, d, speed_mps)
     t, v = [], []
     for _ in range(round(0.2 / m.opt.timestep)):  # settle on the contacts first
-        mujoco.mj_step(m, d)
+        step(m, d, rolling)
     for _ in range(round(duration_s / m.opt.timestep)):
-        mujoco.mj_step(m, d)
+        step(m, d, rolling)
         t.append(d.time)
         v.append(float(d.qvel[m.joint("deck_free").dofadr[0]]))
     return float(-np.polyfit(t, v, 1)[0])
@@ -160,8 +167,8 @@ def lifting_offset(f: TwinFigures, load_N: float, hi_m: float = 0.3, tol_m: floa
 
 
 def _settled_loads(f: TwinFigures, load_N: float, y_m: float, settle_s: float = 2.5) -> dict[str, float]:
-    m, d = _board(f)
-    _press(m, d, load_N, y_m, settle_s)
+    m, d, rolling = _board(f)
+    _press(_Board(m, d, rolling), load_N, y_m, settle_s)
     if abs(deck_roll(m, d)) > 1.0:
         return dict.fromkeys(WHEELS, 0.0)
     return wheel_loads(m, d)

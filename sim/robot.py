@@ -14,6 +14,11 @@ from skatelib.sim.figures import GEAR_RATIO, JOINT_DAMPING_NMS, ROTOR_INERTIA_KG
 
 LEGS = ("FL", "FR", "RL", "RR")
 JOINTS = tuple(f"{leg}_{j}" for leg in LEGS for j in ("abad", "hip", "knee"))
+# A rubber foot gives a millimetre or two under the robot's weight: a contact time constant of
+# 5 ms and a high impedance (MuJoCo's defaults let a pushing foot sink more than a centimetre,
+# until the calf touches the floor).
+FOOT_SOLREF_S = 0.005
+FOOT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 _IMPORT = ('<mujoco><compiler discardvisual="false" fusestatic="false" balanceinertia="false" '
            'strippath="true" angle="radian"/></mujoco>')
 
@@ -41,6 +46,8 @@ def robot_spec(f: TwinFigures) -> Any:
             g.size = [f.foot_radius_m, 0, 0]
             g.contype, g.conaffinity, g.condim = FOOT_BIT, FLOOR_BIT, 3
             g.friction = [f.friction_mu, 0.005, 0.0001]
+            g.solref = [FOOT_SOLREF_S, 1.0]
+            g.solimp = list(FOOT_SOLIMP)
         else:
             g.contype, g.conaffinity = 0, FLOOR_BIT
     return spec

@@ -24,7 +24,8 @@ class StandController:
         self.q_ref = np.array(m.key("stance").qpos[self.qadr] if q_ref is None else q_ref, dtype=np.float64)
         self.feet = [m.geom(f"{leg}_foot").id for leg in LEGS]
         self.weight = np.array([0.0, 0.0, mass_kg * gravity_mps2 / 4])
-        self.limit = m.actuator_ctrlrange[:, 1].copy()
+        self.actuators = np.array([m.actuator(n).id for n in JOINTS])
+        self.limit = m.actuator_ctrlrange[self.actuators, 1].copy()
         self._jac = np.zeros((3, m.nv))
 
     def __call__(self, d: Any) -> np.ndarray:
@@ -36,5 +37,5 @@ class StandController:
         for g in self.feet:
             mujoco.mj_jacGeom(self.m, d, self._jac, None, g)
             tau -= self._jac[:, self.dadr].T @ self.weight
-        d.ctrl[:] = np.clip(tau, -self.limit, self.limit)
-        return np.asarray(d.ctrl)
+        d.ctrl[self.actuators] = np.clip(tau, -self.limit, self.limit)
+        return np.asarray(d.ctrl[self.actuators])

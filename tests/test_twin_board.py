@@ -70,13 +70,15 @@ def test_roll_under_a_lateral_load(default):
 
 
 def test_coasting_deceleration(default):
-    """Coasting from 1 m/s bare and with the robot's mass on it, the twin slows down as the
-    model's rolling resistance (proportional to the wheels' load) says within 5 %; a constant
-    f_fri of the whole weight (Eq. 9b as written) is five times too much for the bare board."""
+    """Coasting from 1 m/s and from 0.2 m/s (for 0.5 s), bare and with the robot's mass on it, the
+    twin slows down as the model's rolling resistance (proportional to the wheels' load, nearly
+    independent of the speed) says within 5 %; a constant f_fri of the whole weight (Eq. 9b as
+    written) is five times too much for the bare board."""
     figures, board, _ = default
     for payload in (0.0, figures.robot_mass_kg):
-        measured = twin.coast_deceleration(figures, payload)
-        assert measured == pytest.approx(model.coast_deceleration(board, payload), rel=0.05), payload
+        for speed, duration in ((1.0, 1.0), (0.2, 0.5)):
+            measured = twin.coast_deceleration(figures, payload, speed, duration)
+            assert measured == pytest.approx(model.coast_deceleration(board, payload), rel=0.05), (payload, speed)
     constant = board.rolling_friction_nominal_N / board.mass_kg
     assert constant / twin.coast_deceleration(figures, 0.0) > 4.0
 
