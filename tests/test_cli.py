@@ -117,7 +117,8 @@ def test_every_help_shows_defaults_choices_and_units():
         if (p.default not in (None, False) and not p.is_flag) or (p.opts[0] == "-o" and name in ("build", "solve")):
             assert "[default: " in text, (name, p.opts, text)
         if "|" in names:  # a choice: all of them listed
-            assert any(c in names for c in ("daqp|proxqp|osqp", "loky|dask", "entries|steer", "png|svg")), names
+            assert any(c in names for c in ("daqp|proxqp|osqp", "loky|dask", "entries|steer", "png|svg",
+                                            "model|mujoco")), names
         if "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
             assert "m/s" in text, (name, p.opts, text)
     assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()

@@ -27,6 +27,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/views/figures.py", ("build", "plot")),
     ("pipeline/*/plots.py", ("build", "plot")),
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
+    ("pipeline/twin_track.py", ("build", "control", "sim")),  # track --plant mujoco
     ("pipeline/**/*.py", ("build",)),
     ("library/*.py", ()),
     ("runtime/*.py", ()),

@@ -28,6 +28,11 @@ class Maneuver(enum.StrEnum):
     steer = "steer"
 
 
+class PlantKind(enum.StrEnum):
+    model = "model"
+    mujoco = "mujoco"
+
+
 class FigureFormat(enum.StrEnum):
     png = "png"
     svg = "svg"
@@ -56,8 +61,9 @@ def info(
 
 
 PerturbOpt = Annotated[str, typer.Option(
-    help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute; keys mass inertia board_mass "
-         "kb bb rolling mu tanh com noise impulse impulse_t init). 'none' for the exact model.")]
+    help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
+         "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
+         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned.")]
 DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 
 
@@ -164,23 +170,38 @@ def track(
     maneuver: Annotated[Maneuver, typer.Option(
         help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
              "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
+    plant: Annotated[PlantKind, typer.Option(
+        help="model: the single-rigid-body plant of the MPC's family (the legs by inverse kinematics); mujoco: "
+             "the physical twin (skatelib.sim), the MPC over a 510 Hz whole-body controller.")] = PlantKind.model,
 ) -> None:
-    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a nonlinear plant
-    with model error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails)."""
+    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
+    error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
+    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller."""
     try:
         from skatelib.control.mpc import MpcConfig
         from skatelib.control.settings import TrackSettings
-        from skatelib.control.track import steer_jobs, track_jobs
+        from skatelib.control.track import steer_jobs
         from skatelib.pipeline.build.sweep import run_calls
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
+    if plant is PlantKind.mujoco:
+        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, maneuver, save)
+        return
     if maneuver is Maneuver.steer:
-        if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed)), jobs),
-                       perturb):
+        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed))
+        if steer_table(run_calls(steer, jobs), perturb):
             raise typer.Exit(1)
         return
+    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, save)
+
+
+def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
+                 jobs: int, save: Path | None) -> None:
+    from skatelib.control.track import track_jobs
+    from skatelib.pipeline.build.sweep import run_calls
+
     if save is not None:
         from skatelib.pipeline.build.preflight import check_output
 
@@ -189,8 +210,7 @@ def track(
         except ImportError as e:
             raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
         check_output(save, [library], what="recording")
-    runs = run_calls(track_jobs(library, entry, plant_error, mpc, TrackSettings(seed=seed), keep_runs=save is not None),
-                     jobs)
+    runs = run_calls(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None), jobs)
     results = [r for r, _ in runs]
     if save is not None:
         from skatelib.runtime import MotionLibrary
@@ -200,6 +220,23 @@ def track(
     failed = track_table(results, perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
+def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
+                jobs: int, maneuver: Maneuver, save: Path | None) -> None:
+    from skatelib.library.errors import SkatelibError
+    from skatelib.pipeline.build.sweep import run_calls
+    from skatelib.pipeline.twin_track import twin_jobs
+    from skatelib.pipeline.views.console import twin_table
+
+    if maneuver is not Maneuver.entries or save is not None:
+        raise SkatelibError("--plant mujoco rides the library's entries; the steering maneuver and --save run on "
+                            "the model plant (leave out --plant)")
+    results = [r for r, _ in run_calls(twin_jobs(library, entry, plant_error, mpc, settings), jobs)]
+    failed = twin_table(results, perturb)
+    if failed:
+        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
         raise typer.Exit(1)
 
 

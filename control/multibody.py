@@ -1,0 +1,97 @@
+"""The robot as the whole-body controller sees it: the URDF the library stores as a floating-base
+multibody (pinocchio), with the rotors' reflected inertia on the joints, and the quantities one
+whole-body update needs at the measured state: mass matrix, bias forces, and for the feet and the
+centre of mass (the whole robot's, legs included: the point whose acceleration is the contact
+forces' sum over the mass, as the library's channels define it) the Jacobians and J-dot v, all in
+the world frame.
+
+Conventions: pinocchio's free-flyer configuration (position, quaternion x y z w, the 12 joints in
+the library's channel order after a permutation) and velocity (the trunk's linear and angular
+velocity in the trunk frame, then the joints).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+# The twin's rotor inertia reflected through the 7.75:1 gearbox (docs/twin.md): part of what the
+# controller knows of its robot, as any model-based controller of a geared leg does.
+ROTOR_ARMATURE_KGM2 = 2.55e-5 * 7.75**2
+
+
+@dataclass
+class DynamicsTerms:
+    """One state's terms (nv = 18)."""
+
+    M: np.ndarray  # (18, 18)
+    h: np.ndarray  # (18,) Coriolis, centrifugal and gravity
+    J_feet: np.ndarray  # (4, 3, 18) foot centres' linear Jacobians, world axes
+    dJv_feet: np.ndarray  # (4, 3) their classical accelerations at zero joint acceleration
+    J_com: np.ndarray  # (3, 18) of the centre of mass
+    dJv_com: np.ndarray  # (3,)
+    feet: np.ndarray  # (3, 4) foot centres
+    com: np.ndarray  # (3,) the centre of mass
+    com_v: np.ndarray  # (3,) its velocity
+
+
+class RobotDynamics:
+    """Pinocchio's floating-base model of the library's robot."""
+
+    def __init__(self, urdf: str, joint_names: list[str], foot_frames: list[str],
+                 armature_kgm2: float = ROTOR_ARMATURE_KGM2):
+        self.model: Any = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+        model = self.model
+        joints = [model.getJointId(n) for n in joint_names]
+        self.q_index = np.array([model.joints[j].idx_q for j in joints])
+        self.v_index = np.array([model.joints[j].idx_v for j in joints])
+        model.armature[6:] = armature_kgm2
+        self.feet = [model.getFrameId(f) for f in foot_frames]
+        self.data: Any = model.createData()
+        self.mass_kg = float(pin.computeTotalMass(model))
+
+    @staticmethod
+    def from_library(lib: Any) -> RobotDynamics:
+        robot = json.loads(str(lib.attrs["config_resolved_json"]))["robot"]
+        return RobotDynamics(lib.urdf, robot["joint_names"], robot["foot_frames"])
+
+    def configuration(self, trunk_pos: np.ndarray, trunk_R: np.ndarray, q: np.ndarray,
+                      trunk_v_world: np.ndarray, trunk_omega: np.ndarray, qd: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """Pinocchio's (q, v) from a trunk pose, world-frame trunk velocity, trunk-frame angular
+        velocity and the joints in channel order."""
+        qp = np.zeros(self.model.nq)
+        qp[0:3] = trunk_pos
+        qp[3:7] = pin.Quaternion(trunk_R).coeffs()
+        qp[self.q_index] = q
+        vp = np.zeros(self.model.nv)
+        vp[0:3] = trunk_R.T @ trunk_v_world
+        vp[3:6] = trunk_omega
+        vp[self.v_index] = qd
+        return qp, vp
+
+    def terms(self, qp: np.ndarray, vp: np.ndarray) -> DynamicsTerms:
+        model, data = self.model, self.data
+        M = pin.crba(model, data, qp)
+        M = np.triu(M) + np.triu(M, 1).T
+        h = pin.nonLinearEffects(model, data, qp, vp)
+        pin.forwardKinematics(model, data, qp, vp, np.zeros(model.nv))
+        pin.computeJointJacobians(model, data, qp)
+        pin.updateFramePlacements(model, data)
+        world = pin.LOCAL_WORLD_ALIGNED
+        J_feet = np.array([pin.getFrameJacobian(model, data, f, world)[:3] for f in self.feet])
+        dJv = np.array([pin.getFrameClassicalAcceleration(model, data, f, world).linear for f in self.feet])
+        pin.centerOfMass(model, data, qp, vp, np.zeros(model.nv))
+        J_com = pin.jacobianCenterOfMass(model, data, qp)
+        return DynamicsTerms(
+            M=M.copy(), h=h.copy(), J_feet=J_feet, dJv_feet=dJv, J_com=J_com.copy(), dJv_com=data.acom[0].copy(),
+            feet=np.column_stack([data.oMf[f].translation for f in self.feet]), com=data.com[0].copy(),
+            com_v=data.vcom[0].copy())
+
+    def joint_columns(self) -> np.ndarray:
+        """Where the 12 joints (channel order) sit among the 18 velocities."""
+        return self.v_index

@@ -1,0 +1,186 @@
+"""The full-physics closed loop: the MPC at 30 Hz (fed from ``MotionLibrary.window()`` through the
+entry's reference, with the model loop's observers) and the whole-body controller at 510 Hz
+(:mod:`skatelib.control.wbc`, its tasks from :mod:`skatelib.control.wbc_tasks`) drive a
+multibody plant (the MuJoCo twin) stepping at its own timestep: 2 plant steps per whole-body tick
+and 17 ticks per MPC update (1/30 s) at the twin's 1/1020 s.
+
+Each update: the sensed state (:mod:`skatelib.control.twin_feedback`; the centre of mass from
+pinocchio's model of the library's robot at the measured joints), the observers, the horizon, one
+QP. Each tick: pinocchio's terms, the tasks on the measured board, one QP, the torques (clipped
+at the limit, as the motors do). The plant's true state feeds the measures
+(:mod:`skatelib.control.twin_metrics`) and the fall checks.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from skatelib.control.body_plan import BodyPlan
+from skatelib.control.kinematics import LegKinematics
+from skatelib.control.linear_model import Discretizer, Feedback
+from skatelib.control.mpc import Bias, MpcProblem, build_problem
+from skatelib.control.multibody import RobotDynamics
+from skatelib.control.observers import CoastObserver, DisturbanceObserver
+from skatelib.control.qp import QpSolveFailed, make_solver
+from skatelib.control.reference import EntryReference
+from skatelib.control.settings import ClosedLoop
+from skatelib.control.twin_feedback import MultibodyPlant, MultibodyState, SensedState, Sensors, mpc_state, quat_wxyz
+from skatelib.control.twin_metrics import Meter, TwinMeasures, planned_floor_near
+from skatelib.control.wbc import WbcOutput, WbcSettings, WholeBodyController
+from skatelib.control.wbc_tasks import ContactTable, TaskMaker
+from skatelib.library.channels import BOARD
+from skatelib.library.margins import forward_speed, momentum_speed
+from skatelib.library.rotations import board_rotations, rpy_matrices
+
+FALL_HEIGHT_M = 0.10  # trunk this close above the deck's top: fallen
+FALL_TILT_RAD = 0.6
+
+
+@dataclass(frozen=True)
+class TwinLoopSettings:
+    """Rates, sensors and the whole-body QP's settings of a full-physics run."""
+
+    steps_per_tick: int = 2  # plant steps per whole-body tick
+    ticks_per_update: int = 17  # whole-body ticks per MPC update
+    sensors: Sensors = field(default_factory=Sensors)
+    wbc: WbcSettings = field(default_factory=WbcSettings)
+
+
+@dataclass
+class TwinRun:
+    """One run's outcome: the measures, why it stopped early (``fall``), the controllers' times
+    and, for a kept run, the plant's configurations at each MPC update."""
+
+    measures: TwinMeasures
+    fall: str = ""
+    wbc_times_s: list[float] = field(default_factory=list)
+    mpc_times_s: list[float] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
+    qpos: list[np.ndarray] = field(default_factory=list)
+
+
+class TwinLoop:
+    """One entry ridden on a multibody plant."""
+
+    def __init__(self, lib: Any, key: str, loop: ClosedLoop, plant: MultibodyPlant,
+                 settings: TwinLoopSettings | None = None, keep: bool = False):
+        self.loop, self.plant, self.keep = loop, plant, keep
+        self.cfg = settings or TwinLoopSettings()
+        entry = lib[key]
+        self.p = p = loop.model
+        self.ref = EntryReference(lib, entry, p, loop.settings)
+        self.kin = LegKinematics.from_library(lib)
+        self.dyn = RobotDynamics.from_library(lib)
+        self.tick_s = plant.timestep_s * self.cfg.steps_per_tick
+        self.contacts = ContactTable(self.ref.contact, self.ref.t0, self.ref.t_stop, self.tick_s)
+        self.tasks = TaskMaker(BodyPlan(self.ref, self.kin.foot_radius_m), self.contacts, p, self.cfg.wbc)
+        self.wbc = WholeBodyController(self.dyn.v_index, self.kin.torque_limit_Nm, p.mu_plan, self.cfg.wbc)
+        self.dt = self.tick_s * self.cfg.ticks_per_update
+        self.disc = Discretizer(p, self.dt)
+        self.solver = make_solver(loop.mpc.solver)
+        self.observer = DisturbanceObserver(loop.mpc.disturbance_gain)
+        self.coast = CoastObserver(loop.mpc.coast_gain)
+        self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
+        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm)
+        self.run = TwinRun(self.meter.m)
+        self.forces = np.zeros((3, 4))  # the MPC's, held over an update
+        self._qp: MpcProblem | None = None
+        self._applied = np.zeros((3, 4))  # the whole-body QP's forces summed over this update's ticks
+        self._ticks = 0
+        self.board_end = np.asarray(entry.board_pos[-1], dtype=np.float64)
+        self._start(np.asarray(entry.state[0], dtype=np.float64), np.asarray(entry.board_pos[0], dtype=np.float64))
+
+    def _start(self, x0: np.ndarray, board0: np.ndarray) -> None:
+        """The plant at the entry's first knot at rest, its deck feet on the deck's top."""
+        R = rpy_matrices(x0[3:6])
+        self.plant.place(x0[0:3] - R @ self.p.com_offset_m, quat_wxyz(R), x0[12:24],
+                         np.array([board0[0], board0[1], board0[3]]))
+        on_deck = self.ref.contact(self.ref.t0) == BOARD
+        deck_top = float(self.plant.state().deck_pos[2])
+        low = float(np.mean(self.plant.foot_centres()[2, on_deck]))
+        self.plant.shift_robot(deck_top + self.kin.foot_radius_m - low)
+        self.t = self.ref.t0
+
+    def ride(self) -> TwinRun:
+        """The entry, the transfer and the ride; stops at a fall."""
+        for _ in range(round((self.ref.t_stop - self.ref.t0) / self.dt)):
+            try:
+                self.update()
+                for _tick in range(self.cfg.ticks_per_update):
+                    self.tick()
+                    if self.run.fall:
+                        break
+            except QpSolveFailed as e:
+                self.run.fall = f"a QP failed at t = {self.t:.2f} s ({e})"
+            if self.run.fall:
+                break
+        self.meter.finish()
+        return self.run
+
+    def update(self) -> None:
+        """One MPC update on the sensed state: the forces the next ticks aim at."""
+        st = self.sensed(self.plant.state())
+        T = self.dyn.terms(*self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd))
+        x = mpc_state(st, T.com, T.com_v)
+        t, ref, cfg = self.t, self.ref, self.loop.mpc
+        fb = Feedback(x=x, r_robot=np.array(st.contact_points) - x[0:3, None],
+                      r_board=self.p.moment_arms(board_rotations(x[5], x[26])),
+                      torque_maps=self.kin.torque_maps(x[12:24], rpy_matrices(x[3:6])))
+        v_ride = float(forward_speed(x))
+        if self._qp is not None and self._ticks:
+            # The observer compares the feedback with the model's prediction under the forces the
+            # whole-body QP applied, not the MPC's request: the board weighs 2 kg, and a newton
+            # of difference would read as a disturbance of 0.5 m/s^2.
+            self.observer.predict(self._qp, (self._applied / self._ticks).T.reshape(-1))
+        self._applied, self._ticks = np.zeros((3, 4)), 0
+        bias = self.observer.update(v_ride, self.dt, float(x[8]))
+        board_xy = st.deck_pos[0:2]
+        ref.observe(t, x, board_xy)
+        measured = self.coast.update(ref.coasting(t), float(momentum_speed(x, self.p.mass_kg, self.p.board_mass_kg)),
+                                     self.dt)
+        coast = ref.prior_coast_mps2(t) if measured is None else measured
+        horizon = ref.horizon(t, cfg.horizon, self.dt, board_xy, v_ride, coast if cfg.coast_compensation else None)
+        t0 = time.perf_counter()
+        self._qp = build_problem(self.p, cfg, self.disc, fb, horizon, Bias(bias, self.observer.vertical_mps2))
+        U = self.solver.solve(self._qp)
+        self.run.mpc_times_s.append(time.perf_counter() - t0)
+        self.forces = U[:12].reshape(4, 3).T
+        if self.keep:
+            self.run.times.append(t)
+            self.run.qpos.append(np.array(self.plant.qpos()))
+
+    def tick(self) -> None:
+        """One whole-body tick and its plant steps."""
+        st = self.sensed(self.plant.state())
+        t0 = time.perf_counter()
+        out = self.whole_body(st)
+        self.run.wbc_times_s.append(time.perf_counter() - t0)
+        self._applied += out.forces
+        self._ticks += 1
+        self.plant.step(np.clip(out.tau, -self.kin.torque_limit_Nm, self.kin.torque_limit_Nm), self.cfg.steps_per_tick)
+        self.t += self.tick_s
+        after = self.plant.state()
+        self.meter.tick(after, out.tau, planned_floor_near(self.contacts.at, self.t))
+        self.meter.speeds(after, self.t, self.ref.t_end, np.array([np.cos(after.deck_yaw), np.sin(after.deck_yaw)]))
+        self.meter.drift(after, self.t, self.ref.t_end, self.board_end)
+        self.run.fall = self._fall(after)
+
+    def whole_body(self, st: MultibodyState) -> WbcOutput:
+        qp, vp = self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
+        T = self.dyn.terms(qp, vp)
+        feet_v = np.einsum("kij,j->ik", T.J_feet, vp)
+        return self.wbc.solve(T, self.tasks(self.t, st, T, feet_v, self.forces))
+
+    def _fall(self, st: Any) -> str:
+        height = float(st.trunk_pos[2] - st.deck_pos[2])
+        tilt = float(np.arccos(np.clip(st.trunk_R[2, 2], -1.0, 1.0)))
+        if height < FALL_HEIGHT_M:
+            return f"trunk {height:.3f} m above the deck at t = {self.t:.2f} s"
+        if tilt > FALL_TILT_RAD:
+            return f"trunk tilted {tilt:.2f} rad at t = {self.t:.2f} s"
+        if st.floor_touches:
+            return f"{', '.join(st.floor_touches)} on the floor at t = {self.t:.2f} s"
+        return ""

@@ -1,0 +1,130 @@
+"""What a run on a multibody plant measures, tick by tick, from the plant's true state (not the
+controller's estimate): slip of every stance at its contact point, floor contacts the plan has no
+place for, wheels off the floor, torque saturation, the speeds the verdict needs.
+
+Slip is the contact point's material velocity relative to the surface under it (the foot sphere's
+centre velocity plus its spin times the lever to the contact, less the deck point's velocity),
+integrated over each stance: a rolling foot does not slip, a sliding one does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from skatelib.library.channels import GROUND
+
+WHEEL_LIFT_TICKS = 5  # a wheel without load for this many ticks in a row has lifted off
+ON_DECK, ON_FLOOR = 1, 2
+CONTACT_GRACE_S = 0.03  # a foot on the floor this close to a planned stance on the floor is not unplanned
+
+
+@dataclass
+class TwinMeasures:
+    """Running figures of one run."""
+
+    slips_m: list[float] = field(default_factory=list)  # one per finished stance
+    floor_touch_ticks: int = 0
+    floor_touch_first: str = ""
+    wheel_lift_ticks: int = 0
+    max_wheel_lift_ms: float = 0.0
+    min_wheel_load_N: float = float("inf")
+    saturated_ticks: int = 0
+    ticks: int = 0
+    max_torque_Nm: float = 0.0
+    max_deck_roll_rad: float = 0.0
+    friction_loss_Ns: float = 0.0
+    momentum_at_end_mps: float = float("nan")
+    momentum_after_1s_mps: float = float("nan")
+    heading_at_end_rad: float = float("nan")
+    lateral_at_end_m: float = float("nan")
+    heading_at_stop_rad: float = float("nan")
+    system_mass_kg: float = float("nan")
+
+    def max_slip_m(self) -> float:
+        return max(self.slips_m, default=0.0)
+
+
+class Meter:
+    """Updates :class:`TwinMeasures` from each tick's true state."""
+
+    def __init__(self, tick_s: float, torque_limit_Nm: float):
+        self.m = TwinMeasures()
+        self.tick_s = tick_s
+        self.limit = torque_limit_Nm
+        self.slip = np.zeros((3, 4))  # the open stances' integrated slip
+        self.slip_max = np.zeros(4)
+        self.touching = np.zeros(4, dtype=bool)
+        self.unloaded = np.zeros(4, dtype=int)
+
+    def tick(self, st: Any, tau_cmd: np.ndarray, planned_near: np.ndarray) -> None:
+        """One tick: ``planned_near`` (4,) whether each foot has a planned floor stance within the
+        grace time."""
+        m = self.m
+        m.ticks += 1
+        top = float(np.max(np.abs(tau_cmd)))
+        m.max_torque_Nm = max(m.max_torque_Nm, min(top, self.limit))
+        m.saturated_ticks += int(top >= self.limit * 0.999)
+        m.max_deck_roll_rad = max(m.max_deck_roll_rad, abs(st.deck_roll))
+        self._slips(st)
+        wrong_feet = [i for i in range(4) if st.foot_touch[i] == ON_FLOOR and not planned_near[i]]
+        if st.floor_touches or wrong_feet:
+            m.floor_touch_ticks += 1
+            if not m.floor_touch_first:
+                what = ", ".join(st.floor_touches) or f"foot {wrong_feet[0]}"
+                m.floor_touch_first = f"{what} at t = {st.t:.2f} s"
+        loads = st.wheel_load_N
+        m.min_wheel_load_N = min(m.min_wheel_load_N, float(np.min(loads)))
+        self.unloaded = np.where(loads <= 0.0, self.unloaded + 1, 0)
+        if np.any(self.unloaded >= WHEEL_LIFT_TICKS):
+            m.wheel_lift_ticks += 1
+        m.max_wheel_lift_ms = max(m.max_wheel_lift_ms, 1e3 * self.tick_s * float(np.max(self.unloaded)))
+
+    def _slips(self, st: Any) -> None:
+        touch = st.foot_touch > 0
+        for i in range(4):
+            if touch[i]:
+                p = st.contact_points[:, i]
+                v = st.foot_velocities[:, i] + np.cross(st.foot_spins[:, i], p - st.foot_centres[:, i])
+                if st.foot_touch[i] == ON_DECK:
+                    v = v - (st.deck_v + np.cross(st.deck_omega, p - st.deck_pos))
+                if not self.touching[i]:
+                    self.slip[:, i] = 0.0
+                    self.slip_max[i] = 0.0
+                self.slip[:, i] += v * self.tick_s
+                self.slip_max[i] = max(self.slip_max[i], float(np.linalg.norm(self.slip[:, i])))
+            elif self.touching[i]:
+                self.m.slips_m.append(float(self.slip_max[i]))
+        self.touching = touch
+
+    def finish(self) -> None:
+        self.m.slips_m += [float(s) for s, t in zip(self.slip_max, self.touching, strict=True) if t]
+
+    def speeds(self, st: Any, t: float, t_end: float, heading: np.ndarray) -> None:
+        """Momentum speed at the entry's end and one second later; rolling losses in between."""
+        m = self.m
+        m.system_mass_kg = st.system_mass_kg
+        if t_end <= t < t_end + 1.0:
+            m.friction_loss_Ns -= float(st.wheel_force_N[0:2] @ heading) * self.tick_s
+        if np.isnan(m.momentum_at_end_mps) and t >= t_end:
+            m.momentum_at_end_mps = float(st.system_v[0:2] @ heading)
+        if np.isnan(m.momentum_after_1s_mps) and t >= t_end + 1.0:
+            m.momentum_after_1s_mps = float(st.system_v[0:2] @ heading)
+
+
+    def drift(self, st: Any, t: float, t_end: float, board_end: np.ndarray) -> None:
+        """The board's heading and lateral position against the plan's (x, y, z, yaw at the
+        entry's end) when the entry ends, and the heading since."""
+        m = self.m
+        yaw_error = float(st.deck_yaw - board_end[3])
+        if np.isnan(m.heading_at_end_rad) and t >= t_end:
+            m.heading_at_end_rad = yaw_error
+            lateral = np.array([-np.sin(board_end[3]), np.cos(board_end[3])])
+            m.lateral_at_end_m = float((st.deck_pos[0:2] - board_end[0:2]) @ lateral)
+        m.heading_at_stop_rad = yaw_error
+
+
+def planned_floor_near(contact_at: Any, t: float) -> np.ndarray:
+    """(4,) whether each foot is planned on the floor at ``t`` or within the grace time."""
+    return np.any([contact_at(t + dt) == GROUND for dt in (-CONTACT_GRACE_S, 0.0, CONTACT_GRACE_S)], axis=0)

@@ -1,0 +1,91 @@
+"""The full-physics verdict on an entry ridden on a multibody plant (fails on any of):
+
+* speed: the speed delivered one second after the entry ends more than 5 % from the label
+  (the momentum speed of robot and board together, all their bodies', plus what the floor's
+  force on the wheels took in that second);
+* a fall (the trunk within 0.10 m of the deck, tilted beyond 0.6 rad, a link on the floor) or a
+  QP without solution;
+* a stance that slipped more than 1 cm at its contact point;
+* a floor contact the plan has no place for (a foot on the floor away from a planned stance
+  there, or any other geom);
+* a wheel off the floor for 5 ticks (10 ms) or more;
+* the board's heading at the entry's end more than 0.1 rad from the plan's.
+
+Reported besides: the lateral drift against the plan at the end, the heading when the run
+stops, torque saturation, the largest deck roll, the controllers' times.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from skatelib.control.twin_loop import TwinRun
+
+SPEED_TOLERANCE = 0.05
+SLIP_LIMIT_M = 0.01
+HEADING_LIMIT_RAD = 0.1
+
+
+@dataclass(frozen=True)
+class TwinResult:
+    """One entry's run on the twin (JSON-able numbers)."""
+
+    key: str
+    label_mps: float
+    momentum_at_end_mps: float
+    delivered_mps: float
+    speed_error: float
+    max_slip_m: float
+    touchdowns: int
+    floor_touch_ticks: int
+    wheel_lift_ticks: int
+    min_wheel_load_N: float
+    heading_error_rad: float
+    lateral_drift_m: float
+    heading_at_stop_rad: float
+    max_deck_roll_rad: float
+    max_torque_Nm: float
+    saturated_share: float
+    wbc_median_ms: float
+    mpc_median_ms: float
+    fall: str
+    passed: bool
+    reasons: str
+
+    def as_dict(self) -> dict[str, float | str | bool | int]:
+        return asdict(self)
+
+
+def _ms(times: list[float]) -> float:
+    return float(np.median(times) * 1e3) if times else float("nan")
+
+
+def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
+    """The verdict on one run (module docstring)."""
+    m = run.measures
+    delivered = m.momentum_after_1s_mps + m.friction_loss_Ns / m.system_mass_kg
+    err = (delivered - label) / label if label else float("nan")
+    slip = m.max_slip_m()
+    reasons = []
+    if not np.isfinite(err) or abs(err) > SPEED_TOLERANCE:
+        reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
+    if run.fall:
+        reasons.append(f"fall: {run.fall}")
+    if slip > SLIP_LIMIT_M:
+        reasons.append(f"a stance slipped {100 * slip:.1f} cm")
+    if m.floor_touch_ticks:
+        reasons.append(f"unplanned floor contact ({m.floor_touch_first}; {m.floor_touch_ticks} ticks)")
+    if m.wheel_lift_ticks:
+        reasons.append(f"a wheel left the floor for up to {m.max_wheel_lift_ms:.0f} ms")
+    if not abs(m.heading_at_end_rad) <= HEADING_LIMIT_RAD:
+        reasons.append(f"heading {m.heading_at_end_rad:+.3f} rad from the plan's at the entry's end")
+    return TwinResult(
+        key=key, label_mps=label, momentum_at_end_mps=m.momentum_at_end_mps, delivered_mps=delivered,
+        speed_error=err, max_slip_m=slip, touchdowns=len(m.slips_m), floor_touch_ticks=m.floor_touch_ticks,
+        wheel_lift_ticks=m.wheel_lift_ticks, min_wheel_load_N=m.min_wheel_load_N,
+        heading_error_rad=m.heading_at_end_rad, lateral_drift_m=m.lateral_at_end_m,
+        heading_at_stop_rad=m.heading_at_stop_rad, max_deck_roll_rad=m.max_deck_roll_rad,
+        max_torque_Nm=m.max_torque_Nm, saturated_share=m.saturated_ticks / max(m.ticks, 1),
+        wbc_median_ms=_ms(run.wbc_times_s), mpc_median_ms=_ms(run.mpc_times_s), fall=run.fall,
+        passed=not reasons, reasons="; ".join(reasons))

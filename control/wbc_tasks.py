@@ -1,0 +1,126 @@
+"""One whole-body tick's tasks (:class:`skatelib.control.wbc.WbcTargets`) from the body plan and
+the measured state, and the stance set they hold.
+
+* The centre of mass: the MPC's force sum over the mass plus PD to the plan, placed on the board's
+  frame that does not roll (its top centre as it would be with the deck level: a frame that rolls
+  with the deck would move the body sideways as the deck rolls, and the deck roll further).
+* The trunk's attitude: PD to the plan's, its yaw from the board's.
+* A swinging foot bound for the deck follows the deck (rolled with it); one bound for the floor is
+  placed in the level board frame but moves at the plan's speed over the floor, so that it lands
+  at rest on it whatever speed the board has (at the board's speed it would land sliding, and
+  brake). A foot planned down but not yet touching aims a little into its surface.
+* A stance foot accelerates with its deck point (or stays on the floor), with velocity feedback.
+* The stance set: planned and touching; a foot that lands shortly before its planned stance stays
+  down; one planned up leaves its surface.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from skatelib.control.body_plan import BodyPlan, BodyTargets, place, turn
+from skatelib.control.multibody import DynamicsTerms
+from skatelib.control.params import SkateParams
+from skatelib.control.twin_feedback import MultibodyState
+from skatelib.control.wbc import WbcSettings, WbcTargets
+from skatelib.library.channels import BOARD, SWING
+from skatelib.library.rotations import rpy_matrices
+
+TOUCHDOWN_REACH_M = 0.005  # a foot planned down but not touching aims this far into its surface
+EARLY_CONTACT_S = 0.1  # a swinging foot that lands this close before its planned stance stays down
+ON_FLOOR = 2  # a foot's touch code on the floor (1: on the deck)
+UP = np.array([0.0, 0.0, 1.0])
+
+
+class ContactTable:
+    """The planned contact codes on a grid of ``step_s`` from ``t0`` to ``t_stop`` (and
+    ``LOOKAHEAD_S`` beyond), and for each time the next contact each foot is planned to make: what
+    a tick asks of the schedule several times, looked up instead of sampled."""
+
+    LOOKAHEAD_S = 0.6
+
+    def __init__(self, contact_at: Callable[[float], np.ndarray], t0: float, t_stop: float, step_s: float):
+        self.t0, self.step = t0, step_s
+        n = math.ceil((t_stop + self.LOOKAHEAD_S - t0) / step_s) + 2
+        self.codes = np.array([contact_at(t0 + k * step_s) for k in range(n)], dtype=np.int8)
+        self.next = self.codes.copy()  # each foot's code now, or for a swinging one its next stance's
+        for k in range(n - 2, -1, -1):
+            later = self.next[k + 1]
+            fill = (self.codes[k] == SWING) & (later != SWING)
+            self.next[k, fill] = later[fill]
+
+    def _k(self, t: float) -> int:
+        return min(max(round((t - self.t0) / self.step), 0), len(self.codes) - 1)
+
+    def at(self, t: float) -> np.ndarray:
+        return self.codes[self._k(t)]
+
+    def next_contact(self, t: float) -> np.ndarray:
+        return self.next[self._k(t)]
+
+
+def _cross(w: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """w x each column of r (3, n)."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]) @ r
+
+
+@dataclass
+class TaskMaker:
+    """The tasks of each tick; keeps the stance set between ticks."""
+
+    plan: BodyPlan
+    contacts: ContactTable  # the planned contact codes
+    p: SkateParams
+    g: WbcSettings
+
+    def __post_init__(self) -> None:
+        self.stance = np.zeros(4, dtype=bool)
+        self.contact_at = self.contacts.at
+
+    def __call__(self, t: float, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray,
+                 forces: np.ndarray) -> WbcTargets:
+        g, bt = self.g, self.plan.at(t)
+        level = st.deck_pos + self.p.roll_axis_depth_m * (UP - st.deck_R[:, 2])
+        planned = self.contact_at(t) != SWING
+        touching = st.foot_touch > 0
+        early = touching & (self.contact_at(t + EARLY_CONTACT_S) != SWING)  # landed before its time
+        self.stance = (planned | early) & (touching | self.stance)
+        p_ref = place(level, st.deck_yaw, bt.com)
+        v_ref = np.r_[st.deck_v[0:2], 0.0] + turn(st.deck_yaw, bt.com_v)
+        com_acc = (forces[:, planned].sum(axis=1) / self.p.mass_kg - self.p.gravity_mps2 * UP
+                   + g.kp_com * (p_ref - T.com) + g.kd_com * (v_ref - T.com_v))
+        R = st.trunk_R
+        R_ref = rpy_matrices(bt.rpy + np.array([0.0, 0.0, st.deck_yaw]))
+        ang_acc = g.kp_attitude * (R.T @ pin.log3(R_ref @ R.T)) + g.kd_attitude * (bt.omega - st.trunk_omega)
+        swing_acc, normals = self._feet(t, st, T.feet, feet_v, bt, level)
+        r = T.feet - st.deck_pos[:, None]
+        spin = _cross(st.deck_omega, r)
+        deck_pt_v = st.deck_v[:, None] + spin
+        deck_pt_a = _cross(st.deck_omega, spin)
+        stance_acc = np.where((st.foot_touch == ON_FLOOR)[None, :], -g.stance_gain * feet_v,
+                              deck_pt_a + g.stance_gain * (deck_pt_v - feet_v))
+        posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
+        return WbcTargets(stance=self.stance.copy(), normals=normals, stance_acc=stance_acc, com_acc=com_acc,
+                          angular_acc=ang_acc, swing_acc=swing_acc, forces=forces, posture_acc=posture)
+
+    def _feet(self, t: float, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
+              level: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Swinging feet's accelerations and every foot's surface normal (module docstring)."""
+        g = self.g
+        bound_deck = self.contacts.next_contact(t) == BOARD
+        deck_n = st.deck_R[:, 2]
+        target = np.where(bound_deck[None, :], st.deck_pos[:, None] + st.deck_R @ bt.feet,
+                          place(level, st.deck_yaw, bt.feet))
+        normals = np.where(bound_deck[None, :], deck_n[:, None], UP[:, None])
+        on = st.foot_touch > 0
+        normals[:, on] = np.where((st.foot_touch[on] == ON_FLOOR)[None, :], UP[:, None], deck_n[:, None])
+        reach = (self.contact_at(t) != SWING) & ~self.stance
+        target[:, reach] -= TOUCHDOWN_REACH_M * normals[:, reach]
+        v_target = np.where(bound_deck[None, :], st.deck_v[:, None] + turn(st.deck_yaw, bt.feet_v),
+                            turn(st.deck_yaw, bt.feet_v + bt.board_v[:, None]))
+        acc = turn(st.deck_yaw, bt.feet_a) + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
+        return acc, normals

@@ -1,0 +1,95 @@
+"""Model errors of the twin (``skatelib track --plant mujoco --perturb``): what makes the physical
+robot and board differ from the figures the library was planned with, and the sensors' errors.
+
+Keys (``KEY=VALUE,...``; ``+10%`` relative, a plain number absolute):
+
+* ``mass``: every robot link's mass and inertia (``+10%``: 10 % heavier);
+* ``mu``: the floor's friction coefficient (the deck keeps the library's);
+* ``kb``, ``bb``: the trucks' roll stiffness and damping;
+* ``rolling``: the wheels' rolling resistance;
+* ``armature``: the rotors' reflected inertia;
+* ``payload`` [kg] at ``payload_x``, ``payload_y``, ``payload_z`` [m] in the trunk frame;
+* ``noise`` [m, rad; 5x per second for velocities] and ``delay`` [s]: the controller's state
+  feedback.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from skatelib.library.errors import SkatelibError
+
+
+class TwinPerturbationError(SkatelibError, ValueError):
+    """A ``--perturb`` item the twin does not know or cannot take."""
+
+
+@dataclass(frozen=True)
+class TwinErrors:
+    """Scale factors (1: as planned) and absolute figures of one twin run."""
+
+    mass_scale: float = 1.0
+    floor_mu: float | None = None  # None: the library's
+    kb_scale: float = 1.0
+    bb_scale: float = 1.0
+    rolling_scale: float = 1.0
+    armature_scale: float = 1.0
+    payload_kg: float = 0.0
+    payload_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    noise_std: float = 0.0
+    delay_s: float = 0.0
+
+
+_SCALES = {"mass": "mass_scale", "kb": "kb_scale", "bb": "bb_scale", "rolling": "rolling_scale",
+           "armature": "armature_scale"}
+_ABSOLUTE = {"mu": "floor_mu", "payload": "payload_kg", "noise": "noise_std", "delay": "delay_s"}
+_PAYLOAD_AXES = {"payload_x": 0, "payload_y": 1, "payload_z": 2}
+TWIN_KEYS = (*_SCALES, *_ABSOLUTE, *_PAYLOAD_AXES)
+# A default set of errors, the same physical ones as the model plant's default.
+DEFAULT_TWIN_PERTURBATION = "mass=+10%,mu=0.5,kb=-20%,rolling=+100%"
+
+
+def _number(item: str, value: str) -> tuple[float, bool]:
+    relative = value.endswith("%")
+    try:
+        number = float(value[:-1] if relative else value)
+    except ValueError:
+        raise TwinPerturbationError(f"--perturb {item!r}: {value!r} is not a number or a percentage") from None
+    if not math.isfinite(number):
+        raise TwinPerturbationError(f"--perturb {item!r}: must be finite")
+    return number, relative
+
+
+def parse_twin_perturbation(text: str, library_mu: float) -> TwinErrors:
+    """``KEY=VALUE,...`` (module docstring) as :class:`TwinErrors`.
+
+    Raises:
+        TwinPerturbationError: Naming the item and the valid keys.
+    """
+    changes: dict[str, float] = {}
+    payload_pos = [0.0, 0.0, 0.0]
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, value = (s.strip() for s in item.partition("="))
+        if not sep or key not in TWIN_KEYS:
+            raise TwinPerturbationError(
+                f"--perturb {item!r}: expected KEY=VALUE with KEY one of {', '.join(TWIN_KEYS)}")
+        number, relative = _number(item, value)
+        if key in _SCALES:
+            scale = 1.0 + number / 100.0 if relative else number
+            if scale <= 0:
+                raise TwinPerturbationError(f"--perturb {item!r}: the factor would be {scale:g}; it must stay positive")
+            changes[_SCALES[key]] = scale
+        elif key == "mu" and relative:
+            changes["floor_mu"] = library_mu * (1.0 + number / 100.0)
+        elif relative:
+            raise TwinPerturbationError(f"--perturb {item!r}: {key} takes an absolute value")
+        elif key in _PAYLOAD_AXES:
+            payload_pos[_PAYLOAD_AXES[key]] = number
+        elif number < 0 or (key == "mu" and number == 0):
+            raise TwinPerturbationError(f"--perturb {item!r}: {key} must be positive")
+        else:
+            changes[_ABSOLUTE[key]] = number
+    if changes.get("floor_mu", 1.0) <= 0:
+        raise TwinPerturbationError(f"--perturb {text!r}: mu must stay positive")
+    return replace(TwinErrors(), payload_pos_m=(payload_pos[0], payload_pos[1], payload_pos[2]), **changes)

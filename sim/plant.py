@@ -1,0 +1,227 @@
+"""The twin as a plant a controller drives: torques in, the robot's and board's state out, with
+what the verdict of a run needs to know that no estimator would tell the controller (which geoms
+touch the floor, how hard each wheel presses on it, where each foot's contact point is).
+
+The controller's side does not import this module: it reads a :class:`TwinState`'s fields, and
+``skatelib.pipeline`` hands it the plant.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from skatelib.sim.errors import TwinErrors
+from skatelib.sim.figures import TwinFigures
+from skatelib.sim.robot import JOINTS, LEGS
+from skatelib.sim.rolling import WHEELS, RollingResistance, step
+from skatelib.sim.scene import scene_spec
+
+TIMESTEP_S = 1.0 / 1020.0  # two steps per 510 Hz whole-body tick, 34 per 30 Hz MPC update
+NO_CONTACT, ON_DECK, ON_FLOOR = 0, 1, 2
+
+
+@dataclass
+class TwinState:
+    """One instant of the twin (world frame unless named otherwise).
+
+    Attributes:
+        trunk_omega: Angular velocity of the trunk in the trunk frame.
+        deck_omega: Angular velocity of the deck in the world frame.
+        foot_centres / foot_velocities: (3, 4) the foot spheres' centres and their velocities.
+        foot_touch: (4,) per foot NO_CONTACT, ON_DECK or ON_FLOOR.
+        contact_points: (3, 4) where each touching foot touches (its centre less a radius along
+            the surface normal otherwise).
+        foot_spins: (3, 4) the foot spheres' angular velocities (for the slip at the contact point).
+        wheel_load_N: (4,) normal force of each wheel on the floor.
+        wheel_force_N: (3,) the floor's force on all four wheels.
+        system_v: (3,) velocity of the centre of mass of robot and board together.
+        system_mass_kg: Their mass.
+        floor_touches: Names of the geoms other than feet and wheels that touch the floor.
+    """
+
+    t: float
+    trunk_pos: np.ndarray
+    trunk_R: np.ndarray
+    trunk_v: np.ndarray
+    trunk_omega: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    deck_pos: np.ndarray
+    deck_R: np.ndarray
+    deck_v: np.ndarray
+    deck_omega: np.ndarray
+    foot_centres: np.ndarray
+    foot_velocities: np.ndarray
+    foot_touch: np.ndarray
+    contact_points: np.ndarray
+    foot_spins: np.ndarray
+    wheel_load_N: np.ndarray
+    wheel_force_N: np.ndarray
+    system_v: np.ndarray
+    system_mass_kg: float
+    floor_touches: tuple[str, ...]
+
+    @property
+    def deck_yaw(self) -> float:
+        return float(np.arctan2(self.deck_R[1, 0], self.deck_R[0, 0]))
+
+    @property
+    def deck_roll(self) -> float:
+        """Roll about the deck's own x axis (Z-Y-X angles)."""
+        return float(np.arctan2(self.deck_R[2, 1], self.deck_R[2, 2]))
+
+
+def twin_spec(f: TwinFigures, errors: TwinErrors) -> Any:
+    """The scene with ``errors`` applied (links, floor, trucks, wheels, rotors, a payload)."""
+    import mujoco
+
+    spec = scene_spec(f)
+    spec.option.timestep = TIMESTEP_S
+    robot_bodies = {b.name for b in spec.body("trunk").find_all(mujoco.mjtObj.mjOBJ_BODY)} | {"trunk"}
+    for b in spec.bodies:
+        if b.name in robot_bodies and errors.mass_scale != 1.0:
+            b.mass *= errors.mass_scale
+            b.inertia = [errors.mass_scale * i for i in b.inertia]
+            b.fullinertia = [errors.mass_scale * i for i in b.fullinertia]
+    for name in JOINTS:
+        j = spec.joint(name)
+        j.armature *= errors.armature_scale
+    for name in ("truck_front", "truck_rear"):
+        j = spec.joint(name)
+        j.stiffness = [j.stiffness[0] * errors.kb_scale, 0, 0]
+        j.damping = [j.damping[0] * errors.bb_scale, 0, 0]
+    if errors.floor_mu is not None:  # MuJoCo takes the larger of two geoms' friction
+        spec.geom("floor").friction = [errors.floor_mu, 0, 0]
+        for leg in LEGS:
+            g = spec.geom(f"{leg}_foot")
+            g.friction = [errors.floor_mu, g.friction[1], g.friction[2]]
+        spec.geom("deck").friction = [f.friction_mu, 0.005, 0.0001]
+    if errors.payload_kg > 0:
+        load = spec.body("trunk").add_body(name="payload", pos=list(errors.payload_pos_m))
+        load.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.03, 0.03, 0.01], mass=errors.payload_kg,
+                      contype=0, conaffinity=0, rgba=[0.8, 0.3, 0.2, 1])
+    return spec
+
+
+class TwinPlant:
+    """The twin's ``MjModel`` and ``MjData``, stepped with joint torques."""
+
+    def __init__(self, f: TwinFigures, errors: TwinErrors | None = None):
+        import mujoco
+
+        self.f = f
+        self.errors = errors or TwinErrors()
+        self.m = twin_spec(f, self.errors).compile()
+        self.d = mujoco.MjData(self.m)
+        m = self.m
+        self.qadr = np.array([m.joint(n).qposadr[0] for n in JOINTS])
+        self.dadr = np.array([m.joint(n).dofadr[0] for n in JOINTS])
+        self.feet = np.array([m.geom(f"{leg}_foot").id for leg in LEGS])
+        self.wheels = np.array([m.geom(w).id for w in WHEELS])
+        self.floor = m.geom("floor").id
+        self.deck_geom = m.geom("deck").id
+        self.trunk = m.body("trunk").id
+        self.deck = m.body("deck").id
+        self.trunk_q = m.joint("trunk_free").qposadr[0]
+        self.trunk_v = m.joint("trunk_free").dofadr[0]
+        self.deck_q = m.joint("deck_free").qposadr[0]
+        self.deck_v = m.joint("deck_free").dofadr[0]
+        self.robot_actuators = np.array([m.actuator(n).id for n in JOINTS])
+        self.rolling = RollingResistance(m, f.board.rolling_friction_coeff * self.errors.rolling_scale)
+        self.mass_kg = float(sum(m.body_mass[b] for b in range(m.nbody) if self._is_robot(b)))
+        self._force = np.zeros(6)
+
+    @property
+    def timestep_s(self) -> float:
+        return float(self.m.opt.timestep)
+
+    def qpos(self) -> np.ndarray:
+        """The whole configuration (robot and board), as MuJoCo orders it."""
+        return np.array(self.d.qpos)
+
+    def _is_robot(self, body: int) -> bool:
+        root = self.m.body_rootid[body]
+        return bool(root == self.trunk)
+
+    def place(self, trunk_pos: np.ndarray, trunk_quat_wxyz: np.ndarray, q: np.ndarray, deck_pose: np.ndarray) -> None:
+        """Put the robot and board at rest: trunk pose, joint angles (12,), deck (x, y, yaw); the
+        deck's height from the stance keyframe."""
+        import mujoco
+
+        d = self.d
+        mujoco.mj_resetDataKeyframe(self.m, d, self.m.key("stance").id)
+        d.qvel[:] = 0.0
+        d.qpos[self.trunk_q:self.trunk_q + 3] = trunk_pos
+        d.qpos[self.trunk_q + 3:self.trunk_q + 7] = trunk_quat_wxyz
+        d.qpos[self.qadr] = q
+        x, y, yaw = deck_pose
+        d.qpos[self.deck_q:self.deck_q + 2] = x, y
+        d.qpos[self.deck_q + 3:self.deck_q + 7] = np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)
+        mujoco.mj_forward(self.m, d)
+
+    def foot_centres(self) -> np.ndarray:
+        return np.array(self.d.geom_xpos[self.feet].T)
+
+    def shift_robot(self, dz: float) -> None:
+        import mujoco
+
+        self.d.qpos[self.trunk_q + 2] += dz
+        mujoco.mj_forward(self.m, self.d)
+
+    def step(self, tau: np.ndarray, n: int = 1) -> None:
+        self.d.ctrl[self.robot_actuators] = tau
+        step(self.m, self.d, self.rolling, n)
+
+    def state(self) -> TwinState:
+        """What the twin is doing now (contact forces evaluated at the last step)."""
+        import mujoco
+
+        m, d = self.m, self.d
+        R = d.xmat[self.trunk].reshape(3, 3).copy()
+        R_deck = d.xmat[self.deck].reshape(3, 3).copy()
+        deck_pos = d.xpos[self.deck].copy()
+        deck_v = d.qvel[self.deck_v:self.deck_v + 3].copy()
+        deck_w = R_deck @ d.qvel[self.deck_v + 3:self.deck_v + 6]
+        centres = self.foot_centres()
+        vel = np.zeros((3, 4))
+        spins = np.zeros((3, 4))
+        v6 = np.zeros(6)
+        for i, g in enumerate(self.feet):
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, v6, 0)
+            vel[:, i] = v6[3:]
+            spins[:, i] = v6[:3]
+        wheel_force = np.zeros(3)
+        touch = np.zeros(4, dtype=np.int8)
+        points = centres - np.array([[0.0], [0.0], [self.f.foot_radius_m]])
+        loads = np.zeros(4)
+        others: set[str] = set()
+        for k in range(d.ncon):
+            c = d.contact[k]
+            g1, g2 = int(c.geom1), int(c.geom2)
+            pair = {g1, g2}
+            for i, g in enumerate(self.feet):
+                if g in pair:
+                    touch[i] = ON_DECK if self.deck_geom in pair else ON_FLOOR
+                    points[:, i] = c.pos
+            if self.floor in pair:
+                other = g2 if g1 == self.floor else g1
+                wheel = np.nonzero(self.wheels == other)[0]
+                if len(wheel):
+                    mujoco.mj_contactForce(m, d, k, v6)
+                    loads[wheel[0]] += v6[0]
+                    force = c.frame.reshape(3, 3).T @ v6[:3]  # on geom2 (the wheel, or the floor)
+                    wheel_force += force if g2 == other else -force
+                elif other not in self.feet:
+                    others.add(m.geom(other).name or f"geom {other} of body {m.body(m.geom_bodyid[other]).name}")
+        mujoco.mj_subtreeVel(m, d)
+        return TwinState(
+            t=float(d.time), trunk_pos=d.qpos[self.trunk_q:self.trunk_q + 3].copy(), trunk_R=R,
+            trunk_v=d.qvel[self.trunk_v:self.trunk_v + 3].copy(),
+            trunk_omega=d.qvel[self.trunk_v + 3:self.trunk_v + 6].copy(),
+            q=d.qpos[self.qadr].copy(), qd=d.qvel[self.dadr].copy(), deck_pos=deck_pos, deck_R=R_deck,
+            deck_v=deck_v, deck_omega=deck_w, foot_centres=centres, foot_velocities=vel, foot_touch=touch,
+            contact_points=points, foot_spins=spins, wheel_load_N=loads, wheel_force_N=wheel_force,
+            system_v=d.subtree_linvel[0].copy(), system_mass_kg=float(m.body_subtreemass[0]),
+            floor_touches=tuple(sorted(others)))

@@ -1,0 +1,132 @@
+"""The whole-body controller's parts against independent answers: pinocchio's floating-base model of
+the library's robot against MuJoCo's compile of the same URDF (the twin), and the whole-body QP
+against the physics it must respect (Newton-Euler of the floating base, Coulomb's pyramid, the
+torque limit), with a negative control for each row family."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pinocchio")
+mujoco = pytest.importorskip("mujoco")
+pytest.importorskip("daqp")
+
+from skatelib.control.multibody import RobotDynamics  # noqa: E402
+from skatelib.control.wbc import WbcSettings, WbcTargets, WholeBodyController, pyramid  # noqa: E402
+from skatelib.pipeline.config import load_config  # noqa: E402
+from skatelib.pipeline.quadruped.config import QuadrupedConfig  # noqa: E402
+from skatelib.pipeline.twin import twin_figures  # noqa: E402
+from skatelib.sim.plant import TwinPlant  # noqa: E402
+from skatelib.sim.robot import JOINTS  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def pair():
+    cfg = load_config(None, QuadrupedConfig)
+    f = twin_figures(cfg)
+    dyn = RobotDynamics(f.urdf, list(JOINTS), [f"{leg}_foot" for leg in ("FL", "FR", "RL", "RR")])
+    return f, TwinPlant(f), dyn
+
+
+def _random_state(plant, f, rng, height=0.4):
+    q = f.stance_q_rad + 0.1 * rng.normal(size=12)
+    quat = rng.normal(size=4)
+    plant.place(np.array([0.1, 0.2, height]), quat / np.linalg.norm(quat), q, np.zeros(3))
+    d = plant.d
+    d.qvel[plant.trunk_v:plant.trunk_v + 6] = rng.normal(size=6)
+    d.qvel[plant.dadr] = rng.normal(size=12)
+    mujoco.mj_forward(plant.m, d)
+    return plant.state()
+
+
+def test_pinocchio_model_is_the_twins_robot(pair):
+    """At random states: the same foot centres and foot velocities, kinetic energy, mass matrix of
+    the joints, gravity torques, and the same joint accelerations under random torques in flight
+    (ABA against MuJoCo's forward dynamics, joint damping included)."""
+    import pinocchio as pin
+
+    f, plant, dyn = pair
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        st = _random_state(plant, f, rng, height=2.0)
+        qp, vp = dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
+        T = dyn.terms(qp, vp)
+        assert np.allclose(T.feet, st.foot_centres, atol=1e-12)
+        assert np.allclose(np.einsum("kij,j->ik", T.J_feet, vp), st.foot_velocities, atol=1e-12)
+        M = np.zeros((plant.m.nv, plant.m.nv))
+        mujoco.mj_fullM(plant.m, plant.d, M)
+        idx = np.r_[plant.trunk_v:plant.trunk_v + 6, plant.dadr]
+        v_mj = plant.d.qvel[idx]
+        assert 0.5 * v_mj @ M[np.ix_(idx, idx)] @ v_mj == pytest.approx(0.5 * vp @ T.M @ vp, rel=1e-10)
+        assert np.allclose(M[np.ix_(plant.dadr, plant.dadr)], T.M[np.ix_(dyn.v_index, dyn.v_index)], atol=1e-12)
+        assert T.com == pytest.approx(plant.d.subtree_com[plant.trunk], abs=1e-12)
+        tau = rng.normal(size=12)
+        plant.d.ctrl[plant.robot_actuators] = tau
+        mujoco.mj_forward(plant.m, plant.d)
+        gen = np.zeros(18)
+        gen[dyn.v_index] = tau - 0.01 * st.qd  # the twin's joint damping
+        a = pin.aba(dyn.model, dyn.data, qp, vp, gen)
+        assert np.allclose(a[dyn.v_index], plant.d.qacc[plant.dadr], rtol=1e-8, atol=1e-8)
+    st = _random_state(plant, f, rng)
+    plant.d.qvel[:] = 0.0
+    mujoco.mj_forward(plant.m, plant.d)
+    st = plant.state()
+    T = dyn.terms(*dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd))
+    assert np.allclose(T.h[dyn.v_index], plant.d.qfrc_bias[plant.dadr], atol=1e-12)
+
+
+MU = 0.2  # low, so that friction binds before the torque limit
+
+
+def _standing(pair, **wbc):
+    """The robot standing on four feet on the floor, at rest, and a whole-body QP whose force task
+    hardly counts (the tests ask for accelerations, not forces)."""
+    f, _, dyn = pair
+    qp, vp = dyn.configuration(np.array([0.0, 0.0, 0.27]), np.eye(3), f.stance_q_rad, np.zeros(3), np.zeros(3),
+                               np.zeros(12))
+    T = dyn.terms(qp, vp)
+    ctl = WholeBodyController(dyn.v_index, f.torque_limit_Nm, MU, WbcSettings(w_force=1e-6, **wbc))
+    return T, ctl, dyn
+
+
+def _targets(com_acc, forces=None):
+    up = np.tile([[0.0], [0.0], [1.0]], (1, 4))
+    return WbcTargets(stance=np.ones(4, dtype=bool), normals=up, stance_acc=np.zeros((3, 4)),
+                      com_acc=np.asarray(com_acc, dtype=float), angular_acc=np.zeros(3), swing_acc=np.zeros((3, 4)),
+                      forces=np.zeros((3, 4)) if forces is None else forces, posture_acc=np.zeros(12))
+
+
+def test_wbc_holds_newton_euler_and_the_friction_pyramid(pair):
+    """Standing still: the QP's forces carry the weight (sum f = m g) and its torques are
+    M qdd + h - J^T f on the joints. Asked for a sideways acceleration of 3 m/s^2 (more than
+    mu = 0.2 gives), its forces stay inside the pyramid and the acceleration falls short;
+    negative control: without the friction rows it pushes harder, with forces outside the cone."""
+    T, ctl, dyn = _standing(pair)
+    out = ctl.solve(T, _targets([0.0, 0.0, 0.0]))
+    weight = dyn.mass_kg * 9.81
+    assert out.forces.sum(axis=1) == pytest.approx([0.0, 0.0, weight], abs=1e-4 * weight)
+    Jc = T.J_feet.reshape(12, 18)
+    gen = T.M @ out.qdd + T.h - Jc.T @ out.forces.T.reshape(-1)
+    assert np.allclose(gen[:6], 0.0, atol=1e-6) and np.allclose(gen[dyn.v_index], out.tau, atol=1e-9)
+    ask = [0.0, 3.0, 0.0]
+    inside = ctl.solve(T, _targets(ask))
+    rows = pyramid(np.array([0.0, 0.0, 1.0]), MU)
+    assert np.max(rows @ inside.forces) <= 1e-7
+    assert inside.forces[1].sum() <= MU * inside.forces[2].sum() + 1e-6
+    assert inside.forces[1].sum() / dyn.mass_kg < 2.5
+    T2, free, _ = _standing(pair, friction_rows=False)
+    outside = free.solve(T2, _targets(ask))
+    assert outside.forces[1].sum() > inside.forces[1].sum() + 0.3
+    assert np.max(rows @ outside.forces) > 1.0
+
+
+def test_wbc_holds_the_torque_limit(pair):
+    """Asked to accelerate the body upward at 6 g, the QP's torques stay within the limit (the
+    acceleration falls short); negative control: with a limit of 1000 N m it asks for more."""
+    T, ctl, _ = _standing(pair)
+    out = ctl.solve(T, _targets([0.0, 0.0, 6 * 9.81]))
+    assert np.max(np.abs(out.tau)) <= ctl.tau_max + 1e-6
+    ctl.tau_max = 1000.0
+    free = ctl.solve(T, _targets([0.0, 0.0, 6 * 9.81]))
+    assert np.max(np.abs(free.tau)) > 12.0
