@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
 BUILD_STAMP := $(VENV)/.skatelib-build-installed
 # make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
-ALL_EXTRAS := build,viz,plot,control,sim,dask,dev
+ALL_EXTRAS := build,viz,plot,control,sim,video,dask,dev
 CONFIG ?=
 OUT    ?=
 
@@ -82,6 +82,7 @@ figures: venv
 	mkdir -p build/figures
 	$(BIN)/skatelib inspect $(LIB) --entry v0.50_s2 --entry v1.00_s4 --save build/figures/inspect.rrd --force
 	tools/rrd-screenshot build/figures/inspect.rrd docs/inspect.png 1400x850
+	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.gif
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache

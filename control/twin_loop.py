@@ -35,6 +35,7 @@ from skatelib.library.channels import BOARD
 from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
 
+PRELOAD_M = 2e-4  # the deck feet start this far into the deck (a foot above it would start in the air)
 FALL_HEIGHT_M = 0.10  # trunk this close above the deck's top: fallen
 FALL_TILT_RAD = 0.6
 
@@ -49,6 +50,28 @@ class TwinLoopSettings:
     wbc: WbcSettings = field(default_factory=WbcSettings)
 
 
+@dataclass(frozen=True)
+class Ride:
+    """What a run follows: the MPC's reference, the whole-body controller's body plan, where the
+    plant starts (the model state, the board's x, y, z, yaw; ``speed_mps`` forward) and the plan's
+    board at the end (for the drift)."""
+
+    ref: Any  # a skatelib.control.reference.Reference
+    plan: Any  # has .at(t) -> BodyTargets
+    x0: np.ndarray
+    board0: np.ndarray
+    board_end: np.ndarray
+    speed_mps: float = 0.0
+
+
+def entry_ride(lib: Any, key: str, loop: ClosedLoop, foot_radius_m: float) -> Ride:
+    """An entry, its transfer and the ride after it."""
+    entry = lib[key]
+    ref = EntryReference(lib, entry, loop.model, loop.settings)
+    return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64),
+                np.asarray(entry.board_pos[0], dtype=np.float64), np.asarray(entry.board_pos[-1], dtype=np.float64))
+
+
 @dataclass
 class TwinRun:
     """One run's outcome: the measures, why it stopped early (``fall``), the controllers' times
@@ -60,23 +83,26 @@ class TwinRun:
     mpc_times_s: list[float] = field(default_factory=list)
     times: list[float] = field(default_factory=list)
     qpos: list[np.ndarray] = field(default_factory=list)
+    # Per tick: t, deck roll, the trunk's offset from the deck's centre line, feet touching, the
+    # smallest foot normal force.
+    ticks: list[tuple[float, float, float, int, float]] = field(default_factory=list)
 
 
 class TwinLoop:
-    """One entry ridden on a multibody plant."""
+    """One ride (an entry's by default: ``key``; or ``ride``) on a multibody plant."""
 
-    def __init__(self, lib: Any, key: str, loop: ClosedLoop, plant: MultibodyPlant,
+    def __init__(self, lib: Any, key: str | Ride, loop: ClosedLoop, plant: MultibodyPlant,
                  settings: TwinLoopSettings | None = None, keep: bool = False):
         self.loop, self.plant, self.keep = loop, plant, keep
         self.cfg = settings or TwinLoopSettings()
-        entry = lib[key]
         self.p = p = loop.model
-        self.ref = EntryReference(lib, entry, p, loop.settings)
         self.kin = LegKinematics.from_library(lib)
+        ride = key if isinstance(key, Ride) else entry_ride(lib, key, loop, self.kin.foot_radius_m)
+        self.ref = ride.ref
         self.dyn = RobotDynamics.from_library(lib)
         self.tick_s = plant.timestep_s * self.cfg.steps_per_tick
         self.contacts = ContactTable(self.ref.contact, self.ref.t0, self.ref.t_stop, self.tick_s)
-        self.tasks = TaskMaker(BodyPlan(self.ref, self.kin.foot_radius_m), self.contacts, p, self.cfg.wbc)
+        self.tasks = TaskMaker(ride.plan, self.contacts, p, self.cfg.wbc)
         self.wbc = WholeBodyController(self.dyn.v_index, self.kin.torque_limit_Nm, p.mu_plan, self.cfg.wbc)
         self.dt = self.tick_s * self.cfg.ticks_per_update
         self.disc = Discretizer(p, self.dt)
@@ -90,18 +116,21 @@ class TwinLoop:
         self._qp: MpcProblem | None = None
         self._applied = np.zeros((3, 4))  # the whole-body QP's forces summed over this update's ticks
         self._ticks = 0
-        self.board_end = np.asarray(entry.board_pos[-1], dtype=np.float64)
-        self._start(np.asarray(entry.state[0], dtype=np.float64), np.asarray(entry.board_pos[0], dtype=np.float64))
+        self.board_end = ride.board_end
+        self._start(ride)
 
-    def _start(self, x0: np.ndarray, board0: np.ndarray) -> None:
-        """The plant at the entry's first knot at rest, its deck feet on the deck's top."""
+    def _start(self, ride: Ride) -> None:
+        """The plant at the ride's first state, its deck feet on the deck's top, rolling at its speed."""
+        x0, board0 = ride.x0, ride.board0
         R = rpy_matrices(x0[3:6])
         self.plant.place(x0[0:3] - R @ self.p.com_offset_m, quat_wxyz(R), x0[12:24],
                          np.array([board0[0], board0[1], board0[3]]))
+        if ride.speed_mps:
+            self.plant.launch(ride.speed_mps)
         on_deck = self.ref.contact(self.ref.t0) == BOARD
         deck_top = float(self.plant.state().deck_pos[2])
-        low = float(np.mean(self.plant.foot_centres()[2, on_deck]))
-        self.plant.shift_robot(deck_top + self.kin.foot_radius_m - low)
+        high = float(np.max(self.plant.foot_centres()[2, on_deck]))  # every deck foot touching, 0.2 mm pressed
+        self.plant.shift_robot(deck_top + self.kin.foot_radius_m - high - PRELOAD_M)
         self.t = self.ref.t0
 
     def ride(self) -> TwinRun:
@@ -166,6 +195,9 @@ class TwinLoop:
         self.meter.tick(after, out.tau, planned_floor_near(self.contacts.at, self.t))
         self.meter.speeds(after, self.t, self.ref.t_end, np.array([np.cos(after.deck_yaw), np.sin(after.deck_yaw)]))
         self.meter.drift(after, self.t, self.ref.t_end, self.board_end)
+        side = np.array([-np.sin(after.deck_yaw), np.cos(after.deck_yaw)])
+        self.run.ticks.append((self.t, after.deck_roll, float(side @ (after.trunk_pos[0:2] - after.deck_pos[0:2])),
+                               int(np.sum(after.foot_touch > 0)), float(np.min(after.foot_load_N))))
         self.run.fall = self._fall(after)
 
     def whole_body(self, st: MultibodyState) -> WbcOutput:

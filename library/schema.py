@@ -95,6 +95,7 @@ D_NODES_CONTROL: Final = "nodes_control"  # humanoid: per step, the controls at 
 D_NODES_CONTACT_POINT: Final = "nodes_contact_point"  # humanoid: per step, the contact point at the nodes
 A_PHYSICS: Final = "physics_json"  # an entry's independent physics figures
 A_CLOSED_LOOP: Final = "closed_loop_json"  # an entry's closed-loop verdict (validate --closed-loop)
+A_CLOSED_LOOP_TWIN: Final = "closed_loop_twin_json"  # its verdict on the twin (validate --closed-loop --plant mujoco)
 A_CACHE_KEY: Final = "cache_key"  # the build cache's key of the entry
 A_PLAN: Final = "plan_json"  # humanoid: the steps the entry was solved for
 A_STEPS: Final = "steps_json"  # humanoid: each step's status, iterations and time

@@ -18,14 +18,14 @@ from skatelib.runtime import MotionLibrary
 @dataclass(frozen=True)
 class TwinJob:
     """One entry on the twin with ``perturb``'s errors (:mod:`skatelib.sim.errors`); with
-    ``keep_run`` the plant's configurations at the MPC's rate (for a recording or a video)."""
+    ``video`` the run rendered to that file (:mod:`skatelib.sim.video`)."""
 
     path: str
     key: str
     perturb: str
     mpc: Any
     settings: Any
-    keep_run: bool = False
+    video: str | None = None
 
     def __call__(self) -> tuple[Any, Any]:
         from skatelib.control.params import SkateParams
@@ -34,38 +34,65 @@ class TwinJob:
         from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings
         from skatelib.control.twin_verdict import twin_result
         from skatelib.library import schema
-        from skatelib.sim.errors import parse_twin_perturbation
-        from skatelib.sim.figures import TwinFigures
-        from skatelib.sim.plant import TwinPlant
 
         lib = MotionLibrary.open(self.path)
         nominal = SkateParams.from_library(lib)
-        errors = parse_twin_perturbation(self.perturb, nominal.mu)
-        plant = TwinPlant(TwinFigures.from_library(lib), errors)
+        plant, errors = _plant(lib, self.perturb, nominal.mu)
         loop_settings = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s))
         loop = TwinLoop(lib, self.key, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
-                        loop_settings, keep=self.keep_run)
+                        loop_settings, keep=self.video is not None)
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(limits=1, user_api="blas"):
             run = loop.ride()
         label = float(lib[self.key].attrs[schema.A_TARGET_VELOCITY])
         result = twin_result(self.key, label, run)
-        return result, (run.times, run.qpos) if self.keep_run else None
+        if self.video is None:
+            return result, None
+        from skatelib.sim.video import write_run
+
+        return result, str(write_run(plant.m, run.qpos, Path(self.video), fps=1.0 / loop.dt))
 
 
-def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = None, settings: Any = None,
-              keep_runs: bool = False) -> list[TwinJob]:
-    """One twin job per chosen entry (all successful ones by default).
+@dataclass(frozen=True)
+class TwinSteerJob:
+    """The steering maneuver at ``speed_mps`` on the twin (:mod:`skatelib.control.twin_steer`)."""
 
-    Raises:
-        SkatelibError: A library that is not a quadruped one, a bad perturbation, an unknown
-            entry key (naming the valid ones), or MuJoCo missing, before any work.
-    """
-    try:
-        from skatelib.control.mpc import MpcConfig
+    path: str
+    speed_mps: float
+    perturb: str
+    mpc: Any
+    settings: Any
+
+    def __call__(self) -> Any:
         from skatelib.control.params import SkateParams
-        from skatelib.control.settings import TrackSettings
+        from skatelib.control.settings import ClosedLoop
+        from skatelib.control.twin_feedback import Sensors
+        from skatelib.control.twin_loop import TwinLoopSettings
+        from skatelib.control.twin_steer import SteerRun, steer_twin
+        from threadpoolctl import threadpool_limits
+
+        lib = MotionLibrary.open(self.path)
+        nominal = SkateParams.from_library(lib)
+        plant, errors = _plant(lib, self.perturb, nominal.mu)
+        sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s))
+        with threadpool_limits(limits=1, user_api="blas"):
+            return steer_twin(lib, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
+                              self.speed_mps, SteerRun(loop=sensors))
+
+
+def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[Any, Any]:
+    from skatelib.sim.errors import parse_twin_perturbation
+    from skatelib.sim.figures import TwinFigures
+    from skatelib.sim.plant import TwinPlant
+
+    errors = parse_twin_perturbation(perturb, mu)
+    return TwinPlant(TwinFigures.from_library(lib), errors), errors
+
+
+def _check(path: Path, perturb: str) -> MotionLibrary:
+    try:
+        from skatelib.control.params import SkateParams
         from skatelib.sim.errors import parse_twin_perturbation
     except ImportError as e:
         raise SkatelibError(f"the twin needs MuJoCo and the controller ({e}); pip install 'skatelib[control,sim]'"
@@ -74,9 +101,42 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = N
     if lib.kind != "quadruped":
         raise SkatelibError(f"{path}: the twin is a quadruped's; this library is {lib.kind}")
     parse_twin_perturbation(perturb, SkateParams.from_library(lib).mu)  # refuse a bad --perturb before any work
+    return lib
+
+
+def twin_steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: Any, settings: Any) -> list[TwinSteerJob]:
+    """One steering job per speed on the twin."""
+    _check(path, perturb)
+    return [TwinSteerJob(str(path), v, perturb, mpc, settings) for v in speeds]
+
+
+def video_path(video: Path, key: str, several: bool) -> Path:
+    """Where an entry's video goes: ``video`` itself, or with several entries ``NAME-<key>.EXT``."""
+    return video.with_name(f"{video.stem}-{key}{video.suffix}") if several else video
+
+
+def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = None, settings: Any = None,
+              video: Path | None = None) -> list[TwinJob]:
+    """One twin job per chosen entry (all successful ones by default); with ``video`` each run
+    rendered (:func:`video_path`).
+
+    Raises:
+        SkatelibError: A library that is not a quadruped one, a bad perturbation, an unknown
+            entry key (naming the valid ones), or MuJoCo missing, before any work.
+    """
+    lib = _check(path, perturb)
+    from skatelib.control.mpc import MpcConfig
+    from skatelib.control.settings import TrackSettings
+
     chosen = list(keys) if keys else [e.key for e in lib if e.success]
     for k in chosen:
         lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
     mpc = mpc or MpcConfig()
     settings = settings or TrackSettings()
-    return [TwinJob(str(path), k, perturb, replace(mpc), settings, keep_runs) for k in chosen]
+    if video is not None:
+        from skatelib.sim.video import FORMATS
+
+        if video.suffix.lower() not in FORMATS:
+            raise SkatelibError(f"--video {video}: give a file ending in {' or '.join(FORMATS)}")
+    return [TwinJob(str(path), k, perturb, replace(mpc), settings,
+                    None if video is None else str(video_path(video, k, len(chosen) > 1))) for k in chosen]

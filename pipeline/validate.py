@@ -21,23 +21,34 @@ def validate_library(path: Path | str, report: ReportFn) -> int:
     return kind_named(lib.kind, lib.path).validate_entries(lib, report)
 
 
-def closed_loop_verdicts(path: Path, perturb: str, jobs: int) -> list[Any]:
-    """Track every successful entry in closed loop against the plant ``perturb`` ('none': exact) and
-    store each verdict in the library (entry attribute ``closed_loop_json``); returns the verdicts.
+def closed_loop_verdicts(path: Path, perturb: str, jobs: int, plant: str = "model") -> list[Any]:
+    """Track every successful entry in closed loop against the plant ``perturb`` ('none': as
+    planned), on the model plant or (``plant="mujoco"``) the twin, and store each verdict in the
+    library (entry attribute ``closed_loop_json``, or ``closed_loop_twin_json``); returns the verdicts.
 
     Raises:
         ImportError: When the controller's packages are missing (names the extra).
     """
     from skatelib.library.amend import amend_library
 
+    errors = "" if perturb == "none" else perturb
     try:
-        from skatelib.control.track import track_jobs
+        if plant == "mujoco":
+            from skatelib.pipeline.twin_track import twin_jobs
+
+            calls: list[Any] = twin_jobs(path, None, errors)
+        else:
+            from skatelib.control.track import track_jobs
+
+            calls = track_jobs(path, None, errors)
     except ImportError as e:
-        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control,sim]'") from e
     from skatelib.pipeline.build.sweep import run_calls
 
-    results = [r for r, _ in run_calls(track_jobs(path, None, "" if perturb == "none" else perturb), jobs)]
-    amend_library(path, {"closed_loop_plant": perturb,
-                         "closed_loop_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
-                  {r.key: {schema.A_CLOSED_LOOP: json.dumps(r.as_dict(), sort_keys=True)} for r in results})
+    results = [r for r, _ in run_calls(calls, jobs)]
+    prefix, attr = ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN) if plant == "mujoco" else (
+        "closed_loop", schema.A_CLOSED_LOOP)
+    amend_library(path, {f"{prefix}_plant": perturb,
+                         f"{prefix}_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")},
+                  {r.key: {attr: json.dumps(r.as_dict(), sort_keys=True)} for r in results})
     return results

@@ -34,6 +34,7 @@ class TwinState:
         contact_points: (3, 4) where each touching foot touches (its centre less a radius along
             the surface normal otherwise).
         foot_spins: (3, 4) the foot spheres' angular velocities (for the slip at the contact point).
+        foot_load_N: (4,) each foot's normal force on what it touches.
         wheel_load_N: (4,) normal force of each wheel on the floor.
         wheel_force_N: (3,) the floor's force on all four wheels.
         system_v: (3,) velocity of the centre of mass of robot and board together.
@@ -57,6 +58,7 @@ class TwinState:
     foot_touch: np.ndarray
     contact_points: np.ndarray
     foot_spins: np.ndarray
+    foot_load_N: np.ndarray
     wheel_load_N: np.ndarray
     wheel_force_N: np.ndarray
     system_v: np.ndarray
@@ -161,6 +163,19 @@ class TwinPlant:
         d.qpos[self.deck_q + 3:self.deck_q + 7] = np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)
         mujoco.mj_forward(self.m, d)
 
+    def launch(self, speed_mps: float) -> None:
+        """Robot and board moving forward along the deck's heading at ``speed_mps``, wheels rolling."""
+        import mujoco
+
+        d = self.d
+        R = d.xmat[self.deck].reshape(3, 3)
+        v = speed_mps * R[:, 0]
+        d.qvel[self.trunk_v:self.trunk_v + 3] = v
+        d.qvel[self.deck_v:self.deck_v + 3] = v
+        for dof, r in zip(self.rolling.dofs, self.rolling.radius, strict=True):
+            d.qvel[dof] = speed_mps / r
+        mujoco.mj_forward(self.m, d)
+
     def foot_centres(self) -> np.ndarray:
         return np.array(self.d.geom_xpos[self.feet].T)
 
@@ -196,6 +211,7 @@ class TwinPlant:
         touch = np.zeros(4, dtype=np.int8)
         points = centres - np.array([[0.0], [0.0], [self.f.foot_radius_m]])
         loads = np.zeros(4)
+        foot_loads = np.zeros(4)
         others: set[str] = set()
         for k in range(d.ncon):
             c = d.contact[k]
@@ -205,6 +221,8 @@ class TwinPlant:
                 if g in pair:
                     touch[i] = ON_DECK if self.deck_geom in pair else ON_FLOOR
                     points[:, i] = c.pos
+                    mujoco.mj_contactForce(m, d, k, v6)
+                    foot_loads[i] += v6[0]
             if self.floor in pair:
                 other = g2 if g1 == self.floor else g1
                 wheel = np.nonzero(self.wheels == other)[0]
@@ -222,6 +240,7 @@ class TwinPlant:
             trunk_omega=d.qvel[self.trunk_v + 3:self.trunk_v + 6].copy(),
             q=d.qpos[self.qadr].copy(), qd=d.qvel[self.dadr].copy(), deck_pos=deck_pos, deck_R=R_deck,
             deck_v=deck_v, deck_omega=deck_w, foot_centres=centres, foot_velocities=vel, foot_touch=touch,
-            contact_points=points, foot_spins=spins, wheel_load_N=loads, wheel_force_N=wheel_force,
+            contact_points=points, foot_spins=spins, foot_load_N=foot_loads, wheel_load_N=loads,
+            wheel_force_N=wheel_force,
             system_v=d.subtree_linvel[0].copy(), system_mass_kg=float(m.body_subtreemass[0]),
             floor_touches=tuple(sorted(others)))

@@ -23,10 +23,16 @@ def scene_spec(f: TwinFigures, with_robot: bool = True) -> Any:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = 10
+    spec.add_texture(name="floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+                     rgb1=[0.3, 0.33, 0.38], rgb2=[0.42, 0.45, 0.5], width=256, height=256)
+    grid = spec.add_material(name="floor", texrepeat=[4, 4], texuniform=True)  # 0.5 m squares: the motion shows
+    grid.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
                             contype=FLOOR_BIT, conaffinity=0, condim=3,
-                            friction=[f.friction_mu, 0.0, 0.0], rgba=[0.35, 0.4, 0.45, 1])
+                            friction=[f.friction_mu, 0.0, 0.0], material="floor")
     spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
+    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]  # lit wherever the board rides
+    spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
     add_board(spec, f.board, f.friction_mu)
     if with_robot:
         _place_robot(spec, f)

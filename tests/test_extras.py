@@ -21,6 +21,7 @@ IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distri
 # matching group counts. Rerun and matplotlib views are commands of the pipeline: build comes too.
 GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("control/**/*.py", ("control",)),
+    ("sim/video.py", ("sim", "video")),
     ("sim/*.py", ("sim",)),
     ("pipeline/views/rerun_*.py", ("build", "viz")),
     ("pipeline/*/rerun.py", ("build", "viz")),

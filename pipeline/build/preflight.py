@@ -43,7 +43,7 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
 
     Args:
         what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
-            ``"twin"`` (a MuJoCo MJCF file).
+            ``"twin"`` (a MuJoCo MJCF file) or ``"video"`` (an MP4 or a GIF).
 
     Raises:
         OutputError: Saying what to do.
@@ -116,9 +116,20 @@ def is_mjcf(path: Path) -> bool:
         return False
 
 
+def is_video(path: Path) -> bool:
+    """Whether ``path`` starts like an MP4 (an ``ftyp`` box) or a GIF."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(12)
+    except OSError:
+        return False
+    return head[4:8] == b"ftyp" or head[:6] in (b"GIF87a", b"GIF89a")
+
+
 # what -> (an example file name, whether an existing file is of that kind, what it is called)
 _OUTPUTS = {
     "library": ("library.h5", is_skatelib_library, "skatelib library"),
     "recording": ("recording.rrd", is_rerun_recording, "Rerun recording"),
     "twin": ("twin.xml", is_mjcf, "MuJoCo model"),
+    "video": ("run.mp4", is_video, "video"),
 }

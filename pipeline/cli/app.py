@@ -1,5 +1,5 @@
 """The ``skatelib`` command line: the app, its commands (:mod:`.build_commands`,
-:mod:`.library_commands`) and the entry point that turns errors into messages and exit codes."""
+:mod:`.library_commands`, :mod:`.track_commands`) and the entry point that turns errors into messages and exit codes."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.cli import build_commands, library_commands
+from skatelib.pipeline.cli import build_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
-for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS):
+for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *track_commands.COMMANDS):
     app.command()(_command)
 
 __all__ = ["app", "main"]

@@ -1,5 +1,6 @@
-"""The commands that read a library: ``info``, ``validate``, ``inspect``, ``plot``, ``track``. Each
-parses its options, calls one library function and prints."""
+"""The commands that read a library: ``info``, ``validate``, ``inspect``, ``plot`` (``track`` is
+in :mod:`.track_commands`), and the option types they share. Each parses its options, calls one
+library function and prints."""
 
 from __future__ import annotations
 
@@ -16,8 +17,8 @@ from skatelib.pipeline.views.console import (
     jsonable,
     library_json,
     library_summary,
-    steer_table,
     track_table,
+    twin_table,
 )
 
 LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
@@ -75,6 +76,9 @@ def validate(
     perturb: PerturbOpt = DEFAULT_PERTURB,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries tracked in parallel.")] = 2,
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
+    plant: Annotated[PlantKind, typer.Option(
+        help="With --closed-loop: model (the verdicts in closed_loop_json) or mujoco (the twin under the "
+             "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
     from skatelib.pipeline.validate import validate_library
@@ -95,14 +99,16 @@ def validate(
     if closed_loop:
         from skatelib.pipeline.validate import closed_loop_verdicts
 
-        results = closed_loop_verdicts(library, perturb, jobs)
-        failed = sum(not r.passed for r in results) if as_json else track_table(results, perturb)
+        results = closed_loop_verdicts(library, perturb, jobs, plant.value)
+        table = twin_table if plant is PlantKind.mujoco else track_table
+        failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
         if not as_json:
             console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
     if as_json:
         doc = {"library": str(library), "valid": not problems, "entries": verdicts}
         if closed_loop:
-            doc["closed_loop"] = {"plant": perturb, "failed": failed, "entries": [r.as_dict() for r in results]}
+            doc["closed_loop"] = {"plant": perturb, "simulator": plant.value, "failed": failed,
+                                  "entries": [r.as_dict() for r in results]}
         print(json.dumps(doc, indent=1, default=jsonable))
     if problems or failed:
         raise typer.Exit(1)
@@ -152,92 +158,4 @@ def plot(
         console.print(escape(str(p)))
 
 
-def track(
-    library: LibArg,
-    entry: Annotated[list[str] | None,
-                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
-                     ] = None,
-    perturb: PerturbOpt = DEFAULT_PERTURB,
-    solver: Annotated[QpSolver, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
-                      ] = QpSolver.daqp,
-    mpc_mu: Annotated[float | None, typer.Option(
-        help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
-             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
-    save: Annotated[Path | None, typer.Option(
-        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run.")] = None,
-    maneuver: Annotated[Maneuver, typer.Option(
-        help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
-             "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
-    plant: Annotated[PlantKind, typer.Option(
-        help="model: the single-rigid-body plant of the MPC's family (the legs by inverse kinematics); mujoco: "
-             "the physical twin (skatelib.sim), the MPC over a 510 Hz whole-body controller.")] = PlantKind.model,
-) -> None:
-    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
-    error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
-    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller."""
-    try:
-        from skatelib.control.mpc import MpcConfig
-        from skatelib.control.settings import TrackSettings
-        from skatelib.control.track import steer_jobs
-        from skatelib.pipeline.build.sweep import run_calls
-    except ImportError as e:
-        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    plant_error = "" if perturb == "none" else perturb
-    mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
-    if plant is PlantKind.mujoco:
-        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, maneuver, save)
-        return
-    if maneuver is Maneuver.steer:
-        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed))
-        if steer_table(run_calls(steer, jobs), perturb):
-            raise typer.Exit(1)
-        return
-    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, save)
-
-
-def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                 jobs: int, save: Path | None) -> None:
-    from skatelib.control.track import track_jobs
-    from skatelib.pipeline.build.sweep import run_calls
-
-    if save is not None:
-        from skatelib.pipeline.build.preflight import check_output
-
-        try:  # before the runs, not after them
-            from skatelib.pipeline.views.rerun_inspect import save_closed_loop
-        except ImportError as e:
-            raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
-        check_output(save, [library], what="recording")
-    runs = run_calls(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None), jobs)
-    results = [r for r, _ in runs]
-    if save is not None:
-        from skatelib.runtime import MotionLibrary
-
-        save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
-        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
-    failed = track_table(results, perturb)
-    if failed:
-        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
-        raise typer.Exit(1)
-
-
-def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                jobs: int, maneuver: Maneuver, save: Path | None) -> None:
-    from skatelib.library.errors import SkatelibError
-    from skatelib.pipeline.build.sweep import run_calls
-    from skatelib.pipeline.twin_track import twin_jobs
-    from skatelib.pipeline.views.console import twin_table
-
-    if maneuver is not Maneuver.entries or save is not None:
-        raise SkatelibError("--plant mujoco rides the library's entries; the steering maneuver and --save run on "
-                            "the model plant (leave out --plant)")
-    results = [r for r, _ in run_calls(twin_jobs(library, entry, plant_error, mpc, settings), jobs)]
-    failed = twin_table(results, perturb)
-    if failed:
-        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
-        raise typer.Exit(1)
-
-
-COMMANDS = (info, validate, inspect, plot, track)
+COMMANDS = (info, validate, inspect, plot)

@@ -1,0 +1,130 @@
+"""The closed-loop command ``track``: a library's entries (or the steering maneuver) on the model
+plant or, with ``--plant mujoco``, on the physical twin under the whole-body controller."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.cli.library_commands import (
+    DEFAULT_PERTURB,
+    LibArg,
+    Maneuver,
+    PerturbOpt,
+    PlantKind,
+    QpSolver,
+)
+from skatelib.pipeline.views.console import console, count, steer_table, track_table, twin_table
+
+
+def track(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
+                     ] = None,
+    perturb: PerturbOpt = DEFAULT_PERTURB,
+    solver: Annotated[QpSolver, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
+                      ] = QpSolver.daqp,
+    mpc_mu: Annotated[float | None, typer.Option(
+        help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
+             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+    save: Annotated[Path | None, typer.Option(
+        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run.")] = None,
+    maneuver: Annotated[Maneuver, typer.Option(
+        help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
+             "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
+    video: Annotated[Path | None, typer.Option(
+        help="With --plant mujoco: render each run to OUT.mp4 or OUT.gif (several entries: OUT-<key>.mp4); "
+             "MUJOCO_GL=egl renders without a display.")] = None,
+    plant: Annotated[PlantKind, typer.Option(
+        help="model: the single-rigid-body plant of the MPC's family (the legs by inverse kinematics); mujoco: "
+             "the physical twin (skatelib.sim), the MPC over a 510 Hz whole-body controller.")] = PlantKind.model,
+) -> None:
+    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
+    error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
+    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller."""
+    try:
+        from skatelib.control.mpc import MpcConfig
+        from skatelib.control.settings import TrackSettings
+        from skatelib.control.track import steer_jobs
+        from skatelib.pipeline.build.sweep import run_calls
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    plant_error = "" if perturb == "none" else perturb
+    mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
+    if plant is PlantKind.mujoco:
+        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, maneuver,
+                    (save, video))
+        return
+    if video is not None:
+        raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
+    if maneuver is Maneuver.steer:
+        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed))
+        if steer_table(run_calls(steer, jobs), perturb):
+            raise typer.Exit(1)
+        return
+    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, save)
+
+
+def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
+                 jobs: int, save: Path | None) -> None:
+    from skatelib.control.track import track_jobs
+    from skatelib.pipeline.build.sweep import run_calls
+
+    if save is not None:
+        from skatelib.pipeline.build.preflight import check_output
+
+        try:  # before the runs, not after them
+            from skatelib.pipeline.views.rerun_inspect import save_closed_loop
+        except ImportError as e:
+            raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
+        check_output(save, [library], what="recording")
+    runs = run_calls(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None), jobs)
+    results = [r for r, _ in runs]
+    if save is not None:
+        from skatelib.runtime import MotionLibrary
+
+        save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
+        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
+    failed = track_table(results, perturb)
+    if failed:
+        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
+        raise typer.Exit(1)
+
+
+def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
+                jobs: int, maneuver: Maneuver, outputs: tuple[Path | None, Path | None]) -> None:
+    from skatelib.pipeline.build.sweep import run_calls
+    from skatelib.pipeline.twin_track import twin_jobs, twin_steer_jobs
+
+    save, video = outputs
+    if save is not None:
+        raise SkatelibError("--save records the model plant's runs (leave out --plant); --video records the twin's")
+    if maneuver is Maneuver.steer:
+        if steer_table(run_calls(twin_steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs),
+                       f"{perturb} (MuJoCo twin, whole-body controller)"):
+            raise typer.Exit(1)
+        return
+    if video is not None:
+        from skatelib.pipeline.build.preflight import check_output
+
+        check_output(video, [library], what="video")
+        os.environ.setdefault("MUJOCO_GL", "egl" if not os.environ.get("DISPLAY") else "glfw")  # the workers'
+    runs = run_calls(twin_jobs(library, entry, plant_error, mpc, settings, video), jobs)
+    results = [r for r, _ in runs]
+    for _, written in runs:
+        if written:
+            console.print(escape(f"wrote {written}"))
+    failed = twin_table(results, perturb)
+    if failed:
+        console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
+        raise typer.Exit(1)
+
+
+COMMANDS = (track,)
