@@ -125,17 +125,18 @@ class BodyPlan:
                            board_v=self.board_v[-1])
 
 
-def _yaw_matrix(yaw: float) -> np.ndarray:
+def yaw_matrix(yaw: float) -> np.ndarray:
+    """Rz(yaw)."""
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def place(board_origin: np.ndarray, board_yaw: float, rel: np.ndarray) -> np.ndarray:
     """Board-frame vectors (3,) or (3, n) turned by the measured yaw and put on the measured origin."""
-    out = _yaw_matrix(board_yaw) @ rel
+    out = yaw_matrix(board_yaw) @ rel
     return np.asarray(out + (board_origin if rel.ndim == 1 else board_origin[:, None]))
 
 
 def turn(board_yaw: float, rel: np.ndarray) -> np.ndarray:
     """Board-frame directions turned into the world."""
-    return np.asarray(_yaw_matrix(board_yaw) @ rel)
+    return np.asarray(yaw_matrix(board_yaw) @ rel)

@@ -17,6 +17,7 @@ QP is DAQP's (dense dual active set), chosen in ``make bench`` against the other
 
 from __future__ import annotations
 
+import math
 from ctypes import c_int
 from dataclasses import dataclass
 
@@ -92,11 +93,14 @@ class WbcOutput:
 
 
 def pyramid(normal: np.ndarray, mu: float) -> np.ndarray:
-    """(4, 3) rows r with r . f <= 0 inside the 4-facet pyramid of ``mu`` about ``normal``."""
-    t1 = np.cross(normal, [0.0, 1.0, 0.0]) if abs(normal[1]) < 0.9 else np.cross(normal, [1.0, 0.0, 0.0])
-    t1 /= np.linalg.norm(t1)
-    t2 = np.cross(normal, t1)
-    return np.array([t1 - mu * normal, -t1 - mu * normal, t2 - mu * normal, -t2 - mu * normal])
+    """(4, 3) rows r with r . f <= 0 inside the 4-facet pyramid of ``mu`` about ``normal`` (a unit
+    vector away from the y axis: a floor's or a deck's)."""
+    x, y, z = (float(c) for c in normal)
+    s = math.hypot(x, z)  # t1 = normal x e_y / |..| = (-z, 0, x) / s; t2 = normal x t1
+    t1 = np.array([-z / s, 0.0, x / s])
+    t2 = np.array([y * x / s, -(z * z + x * x) / s, y * z / s])
+    n = np.asarray(normal, dtype=float)
+    return np.array([t1 - mu * n, -t1 - mu * n, t2 - mu * n, -t2 - mu * n])
 
 
 class WholeBodyController:

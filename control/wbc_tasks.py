@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from skatelib.control.body_plan import BodyPlan, BodyTargets, place, turn
+from skatelib.control.body_plan import BodyPlan, BodyTargets, yaw_matrix
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
 from skatelib.control.twin_feedback import MultibodyState
@@ -84,43 +84,47 @@ class TaskMaker:
     def __call__(self, t: float, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray,
                  forces: np.ndarray) -> WbcTargets:
         g, bt = self.g, self.plan.at(t)
+        yaw = st.deck_yaw
+        Ry = yaw_matrix(yaw)
         level = st.deck_pos + self.p.roll_axis_depth_m * (UP - st.deck_R[:, 2])
         planned = self.contact_at(t) != SWING
         touching = st.foot_touch > 0
         early = touching & (self.contact_at(t + EARLY_CONTACT_S) != SWING)  # landed before its time
         self.stance = (planned | early) & (touching | self.stance)
-        p_ref = place(level, st.deck_yaw, bt.com)
-        v_ref = np.r_[st.deck_v[0:2], 0.0] + turn(st.deck_yaw, bt.com_v)
+        v_ref = Ry @ bt.com_v
+        v_ref[0:2] += st.deck_v[0:2]
         com_acc = (forces[:, planned].sum(axis=1) / self.p.mass_kg - self.p.gravity_mps2 * UP
-                   + g.kp_com * (p_ref - T.com) + g.kd_com * (v_ref - T.com_v))
+                   + g.kp_com * (level + Ry @ bt.com - T.com) + g.kd_com * (v_ref - T.com_v))
         R = st.trunk_R
-        R_ref = rpy_matrices(bt.rpy + np.array([0.0, 0.0, st.deck_yaw]))
-        ang_acc = g.kp_attitude * (R.T @ pin.log3(R_ref @ R.T)) + g.kd_attitude * (bt.omega - st.trunk_omega)
-        swing_acc, normals = self._feet(t, st, T.feet, feet_v, bt, level)
-        r = T.feet - st.deck_pos[:, None]
-        spin = _cross(st.deck_omega, r)
-        deck_pt_v = st.deck_v[:, None] + spin
-        deck_pt_a = _cross(st.deck_omega, spin)
-        stance_acc = np.where((st.foot_touch == ON_FLOOR)[None, :], -g.stance_gain * feet_v,
-                              deck_pt_a + g.stance_gain * (deck_pt_v - feet_v))
+        rpy = bt.rpy.copy()
+        rpy[2] += yaw
+        ang_acc = g.kp_attitude * (R.T @ pin.log3(rpy_matrices(rpy) @ R.T)) + g.kd_attitude * (bt.omega - st.trunk_omega)
+        swing_acc, normals = self._feet(t, st, T.feet, feet_v, bt, (level, Ry))
+        spin = _cross(st.deck_omega, T.feet - st.deck_pos[:, None])
+        stance_acc = _cross(st.deck_omega, spin) + g.stance_gain * (st.deck_v[:, None] + spin - feet_v)
+        floor = st.foot_touch == ON_FLOOR
+        stance_acc[:, floor] = -g.stance_gain * feet_v[:, floor]
         posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
         return WbcTargets(stance=self.stance.copy(), normals=normals, stance_acc=stance_acc, com_acc=com_acc,
                           angular_acc=ang_acc, swing_acc=swing_acc, forces=forces, posture_acc=posture)
 
     def _feet(self, t: float, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
-              level: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Swinging feet's accelerations and every foot's surface normal (module docstring)."""
+              frame: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Swinging feet's accelerations and every foot's surface normal (module docstring);
+        ``frame``: the level board frame's origin and yaw rotation."""
         g = self.g
-        bound_deck = self.contacts.next_contact(t) == BOARD
+        level, Ry = frame
+        deck = self.contacts.next_contact(t) == BOARD
         deck_n = st.deck_R[:, 2]
-        target = np.where(bound_deck[None, :], st.deck_pos[:, None] + st.deck_R @ bt.feet,
-                          place(level, st.deck_yaw, bt.feet))
-        normals = np.where(bound_deck[None, :], deck_n[:, None], UP[:, None])
-        on = st.foot_touch > 0
-        normals[:, on] = np.where((st.foot_touch[on] == ON_FLOOR)[None, :], UP[:, None], deck_n[:, None])
+        target = level[:, None] + Ry @ bt.feet
+        target[:, deck] = st.deck_pos[:, None] + st.deck_R @ bt.feet[:, deck]
+        v_target = Ry @ (bt.feet_v + bt.board_v[:, None])
+        v_target[:, deck] = st.deck_v[:, None] + Ry @ bt.feet_v[:, deck]
+        normals = np.empty((3, 4))
+        normals[:] = UP[:, None]
+        on_deck = np.where(st.foot_touch > 0, st.foot_touch != ON_FLOOR, deck)
+        normals[:, on_deck] = deck_n[:, None]
         reach = (self.contact_at(t) != SWING) & ~self.stance
         target[:, reach] -= TOUCHDOWN_REACH_M * normals[:, reach]
-        v_target = np.where(bound_deck[None, :], st.deck_v[:, None] + turn(st.deck_yaw, bt.feet_v),
-                            turn(st.deck_yaw, bt.feet_v + bt.board_v[:, None]))
-        acc = turn(st.deck_yaw, bt.feet_a) + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
+        acc = Ry @ bt.feet_a + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
         return acc, normals

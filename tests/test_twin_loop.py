@@ -165,3 +165,45 @@ def test_video_and_stored_verdicts(libs, tmp_path):
     stored = MotionLibrary.open(copy)  # verifies the checksum
     verdict = json.loads(str(stored[stored.keys()[0]].attrs[schema.A_CLOSED_LOOP_TWIN]))
     assert verdict["passed"] and verdict["max_slip_m"] < SLIP_LIMIT_M
+
+
+@pytest.fixture(scope="module")
+def shove_lib(tmp_path_factory):
+    """The old terminal shove (only the board's final speed constrained, no riding end state; see
+    tests/test_physics_checks.py) solved and written as a library, in this process."""
+    import numpy as np
+    from skatelib.pipeline.build.contract import BuildOptions
+    from skatelib.pipeline.build.orchestrate import build_library
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.quadruped import problem, pushoff
+    from skatelib.pipeline.quadruped.bounds import bound_terms
+    from skatelib.pipeline.quadruped.terms import FinalSpeed
+
+    def board_only(self, n):
+        lo, hi = np.full((n, 3), -np.inf), np.full((n, 3), np.inf)
+        lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
+        return lo, hi
+
+    cfg = load_config(TINY)
+    cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.3,), strides=(1,)))
+    out = tmp_path_factory.mktemp("shove") / "shove.h5"
+    mp = pytest.MonkeyPatch()
+    try:
+        mp.setattr(FinalSpeed, "bounds", board_only)
+        mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
+        mp.setattr(pushoff, "_PROBLEMS", {})
+        build_library(cfg, out, BuildOptions(jobs=1, cache=False, progress=False))
+    finally:
+        mp.undo()
+    return out
+
+
+def test_the_terminal_shove_fails_in_physics(shove_lib):
+    """The shove's board reaches the label and its robot does not; the physics checks refuse the
+    entry, and ridden on the twin robot and board together are far from the label when the entry
+    ends (and the robot falls after it): the run fails on its speed."""
+    lib = MotionLibrary.open(shove_lib)
+    assert not lib[lib.keys()[0]].success  # refused by the independent checks
+    res = _ride(shove_lib)
+    assert not res.passed and "delivered speed" in res.reasons, res
+    assert res.momentum_at_end_mps < 0.95 * res.label_mps, res
