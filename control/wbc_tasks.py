@@ -98,7 +98,8 @@ class TaskMaker:
         R = st.trunk_R
         rpy = bt.rpy.copy()
         rpy[2] += yaw
-        ang_acc = g.kp_attitude * (R.T @ pin.log3(rpy_matrices(rpy) @ R.T)) + g.kd_attitude * (bt.omega - st.trunk_omega)
+        ang_acc = (g.kp_attitude * (R.T @ pin.log3(rpy_matrices(rpy) @ R.T))
+                   + g.kd_attitude * (bt.omega - st.trunk_omega))
         swing_acc, normals = self._feet(t, st, T.feet, feet_v, bt, (level, Ry))
         spin = _cross(st.deck_omega, T.feet - st.deck_pos[:, None])
         stance_acc = _cross(st.deck_omega, spin) + g.stance_gain * (st.deck_v[:, None] + spin - feet_v)
