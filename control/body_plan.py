@@ -10,6 +10,7 @@ measured yaw's rotation of the plan's relative vector.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
@@ -17,6 +18,7 @@ import numpy as np
 from skatelib.control.reference import EntryReference
 from skatelib.library.channels import BOARD
 
+AFTER_STEP_S = 0.005  # the table's step over the transfer
 TRANSFER_APEX_M = 0.04  # how high over its deck point the push foot crosses the deck's edge
 
 
@@ -59,6 +61,7 @@ class BodyPlan:
         Rt = np.swapaxes(_rz(board[:, 3]), -1, -2)  # world to board frame
         origin = board[:, 0:3]
         self.t = t
+        self._entry_times = t.tolist()
         self.t_end = float(t[-1])
         self.transfer_end = ref.transfer_end
         self.com = np.einsum("kij,kj->ki", Rt, x[:, 0:3] - origin)
@@ -78,20 +81,25 @@ class BodyPlan:
         feet_v = np.gradient(self.feet, t, axis=0)  # the feet's path between knots: its rates at the knots
         feet_a = np.gradient(feet_v, t, axis=0)
         K = len(t)
-        self._rows = np.hstack([self.com, self.com_v, self.rpy, self.omega, self.q, self.board_v,
-                                self.feet.reshape(K, 12), feet_v.reshape(K, 12), feet_a.reshape(K, 12)])
+        rows = np.hstack([self.com, self.com_v, self.rpy, self.omega, self.q, self.board_v,
+                          self.feet.reshape(K, 12), feet_v.reshape(K, 12), feet_a.reshape(K, 12)])
+        # The transfer and the ride sampled every 5 ms (then held): every tick one interpolation.
+        after = self.t_end + np.arange(1, round((self.transfer_end + 0.1 - self.t_end) / AFTER_STEP_S) + 1) * AFTER_STEP_S
+        self._entry_times = t.tolist()
+        self._times = np.r_[t, after].tolist()
+        self._rows = np.vstack([rows, *(self._after_row(tau) for tau in after)])
 
-    def _interp(self, tau: float, rows: np.ndarray) -> np.ndarray:
-        t = self.t
-        tau = min(max(tau, float(t[0])), float(t[-1]))
-        i = int(np.clip(np.searchsorted(t, tau, side="right") - 1, 0, len(t) - 2))
+    @staticmethod
+    def _interp(tau: float, t: list[float], rows: np.ndarray) -> np.ndarray:
+        tau = min(max(tau, t[0]), t[-1])
+        i = min(max(bisect.bisect_right(t, tau) - 1, 0), len(t) - 2)
         a = (tau - t[i]) / (t[i + 1] - t[i])
         return np.asarray(rows[i] + a * (rows[i + 1] - rows[i]))
 
     def feet_at(self, tau: float) -> np.ndarray:
         """(3, 4) foot centres relative to the board at ``tau``."""
         if tau <= self.t_end:
-            return self._interp(tau, self.feet)
+            return self._interp(tau, self._entry_times, self.feet)
         out = self.feet[-1].copy()
         board_feet = self.contact[-1] == BOARD
         out[:, board_feet] = self.deck_feet[:, board_feet]
@@ -107,22 +115,21 @@ class BodyPlan:
         return out
 
     def at(self, tau: float) -> BodyTargets:
-        """The plan at ``tau`` (during the entry one interpolation of every channel at once)."""
-        if tau <= self.t_end:
-            r = self._interp(tau, self._rows)
-            return BodyTargets(com=r[0:3], com_v=r[3:6], rpy=r[6:9], omega=r[9:12], q=r[12:24], board_v=r[24:27],
-                               feet=r[27:39].reshape(3, 4), feet_v=r[39:51].reshape(3, 4),
-                               feet_a=r[51:63].reshape(3, 4))
-        h = 0.01
+        """The plan at ``tau``: one interpolation of every channel at once."""
+        r = self._interp(tau, self._times, self._rows)
+        return BodyTargets(com=r[0:3], com_v=r[3:6], rpy=r[6:9], omega=r[9:12], q=r[12:24], board_v=r[24:27],
+                           feet=r[27:39].reshape(3, 4), feet_v=r[39:51].reshape(3, 4), feet_a=r[51:63].reshape(3, 4))
+
+    def _after_row(self, tau: float) -> np.ndarray:
+        """The transfer or the ride at ``tau`` (after the entry) as a row of the table."""
+        h = 0.005
         p0, pm, pp = self.feet_at(tau), self.feet_at(tau - h), self.feet_at(tau + h)
-        feet_v = (pp - pm) / (2 * h)
-        feet_a = (pp - 2 * p0 + pm) / (h * h)
         w = min((tau - self.t_end) / max(self.transfer_end - self.t_end, 1e-9), 1.0)
         rpy = self.rpy[-1].copy()
         rpy[0:2] = 0.0
-        return BodyTargets(com=self.com[-1], com_v=np.zeros(3), rpy=rpy, omega=np.zeros(3), feet=p0,
-                           feet_v=feet_v, feet_a=feet_a, q=(1 - w) * self.q[-1] + w * self.q_board,
-                           board_v=self.board_v[-1])
+        q = (1 - w) * self.q[-1] + w * self.q_board
+        return np.concatenate([self.com[-1], np.zeros(3), rpy, np.zeros(3), q, self.board_v[-1], p0.ravel(),
+                               ((pp - pm) / (2 * h)).ravel(), ((pp - 2 * p0 + pm) / (h * h)).ravel()])
 
 
 def yaw_matrix(yaw: float) -> np.ndarray:
