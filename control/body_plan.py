@@ -84,7 +84,8 @@ class BodyPlan:
         rows = np.hstack([self.com, self.com_v, self.rpy, self.omega, self.q, self.board_v,
                           self.feet.reshape(K, 12), feet_v.reshape(K, 12), feet_a.reshape(K, 12)])
         # The transfer and the ride sampled every 5 ms (then held): every tick one interpolation.
-        after = self.t_end + np.arange(1, round((self.transfer_end + 0.1 - self.t_end) / AFTER_STEP_S) + 1) * AFTER_STEP_S
+        steps = round((self.transfer_end + 0.1 - self.t_end) / AFTER_STEP_S)
+        after = self.t_end + np.arange(1, steps + 1) * AFTER_STEP_S
         self._entry_times = t.tolist()
         self._times = np.r_[t, after].tolist()
         self._rows = np.vstack([rows, *(self._after_row(tau) for tau in after)])
