@@ -29,6 +29,7 @@ from skatelib.control.reference import EntryReference
 from skatelib.control.settings import ClosedLoop
 from skatelib.control.twin_feedback import MultibodyPlant, MultibodyState, SensedState, Sensors, mpc_state, quat_wxyz
 from skatelib.control.twin_metrics import Meter, TwinMeasures, planned_floor_near
+from skatelib.control.twin_record import TwinRecord
 from skatelib.control.wbc import WbcOutput, WbcSettings, WholeBodyController
 from skatelib.control.wbc_tasks import ContactTable, TaskMaker
 from skatelib.library.channels import BOARD
@@ -83,6 +84,7 @@ class TwinRun:
     mpc_times_s: list[float] = field(default_factory=list)
     times: list[float] = field(default_factory=list)
     qpos: list[np.ndarray] = field(default_factory=list)
+    record: TwinRecord = field(default_factory=TwinRecord)
     # Per tick: t, deck roll, the trunk's offset from the deck's centre line, feet touching, the
     # smallest foot normal force.
     ticks: list[tuple[float, float, float, int, float]] = field(default_factory=list)
@@ -164,6 +166,8 @@ class TwinLoop:
             # whole-body QP applied, not the MPC's request: the board weighs 2 kg, and a newton
             # of difference would read as a disturbance of 0.5 m/s^2.
             self.observer.predict(self._qp, (self._applied / self._ticks).T.reshape(-1))
+            if self.keep:
+                self.run.record.applied(self._applied / self._ticks)
         self._applied, self._ticks = np.zeros((3, 4)), 0
         bias = self.observer.update(v_ride, self.dt, float(x[8]))
         board_xy = st.deck_pos[0:2]
@@ -180,6 +184,7 @@ class TwinLoop:
         if self.keep:
             self.run.times.append(t)
             self.run.qpos.append(np.array(self.plant.qpos()))
+            self.run.record.add(t, x, st)
 
     def tick(self) -> None:
         """One whole-body tick and its plant steps."""

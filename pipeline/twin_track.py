@@ -18,7 +18,9 @@ from skatelib.runtime import MotionLibrary
 @dataclass(frozen=True)
 class TwinJob:
     """One entry on the twin with ``perturb``'s errors (:mod:`skatelib.sim.errors`); with
-    ``video`` the run rendered to that file (:mod:`skatelib.sim.video`)."""
+    ``video`` the run rendered to that file (:mod:`skatelib.sim.video`); with ``keep_run`` the run
+    as an entry for a recording (:mod:`skatelib.control.twin_record`). Returns (the verdict, the
+    video's path or None, the entry or None)."""
 
     path: str
     key: str
@@ -26,8 +28,9 @@ class TwinJob:
     mpc: Any
     settings: Any
     video: str | None = None
+    keep_run: bool = False
 
-    def __call__(self) -> tuple[Any, Any]:
+    def __call__(self) -> tuple[Any, str | None, Any]:
         from skatelib.control.params import SkateParams
         from skatelib.control.settings import ClosedLoop
         from skatelib.control.twin_feedback import Sensors
@@ -40,18 +43,19 @@ class TwinJob:
         plant, errors = _plant(lib, self.perturb, nominal.mu)
         loop_settings = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s))
         loop = TwinLoop(lib, self.key, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
-                        loop_settings, keep=self.video is not None)
+                        loop_settings, keep=self.video is not None or self.keep_run)
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(limits=1, user_api="blas"):
             run = loop.ride()
         label = float(lib[self.key].attrs[schema.A_TARGET_VELOCITY])
         result = twin_result(self.key, label, run)
+        entry = run.record.as_entry(self.key, label) if self.keep_run and len(run.record.forces) > 1 else None
         if self.video is None:
-            return result, None
+            return result, None, entry
         from skatelib.sim.video import write_run
 
-        return result, str(write_run(plant.m, run.qpos, Path(self.video), fps=1.0 / loop.dt))
+        return result, str(write_run(plant.m, run.qpos, Path(self.video), fps=1.0 / loop.dt)), entry
 
 
 @dataclass(frozen=True)
@@ -116,14 +120,15 @@ def video_path(video: Path, key: str, several: bool) -> Path:
 
 
 def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = None, settings: Any = None,
-              video: Path | None = None) -> list[TwinJob]:
-    """One twin job per chosen entry (all successful ones by default); with ``video`` each run
-    rendered (:func:`video_path`).
+              outputs: tuple[Path | None, bool] = (None, False)) -> list[TwinJob]:
+    """One twin job per chosen entry (all successful ones by default); ``outputs``: a video to
+    render each run to (:func:`video_path`), and whether to keep the runs for a recording.
 
     Raises:
         SkatelibError: A library that is not a quadruped one, a bad perturbation, an unknown
             entry key (naming the valid ones), or MuJoCo missing, before any work.
     """
+    video, keep_runs = outputs
     lib = _check(path, perturb)
     from skatelib.control.mpc import MpcConfig
     from skatelib.control.settings import TrackSettings
@@ -139,4 +144,4 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = N
         if video.suffix.lower() not in FORMATS:
             raise SkatelibError(f"--video {video}: give a file ending in {' or '.join(FORMATS)}")
     return [TwinJob(str(path), k, perturb, replace(mpc), settings,
-                    None if video is None else str(video_path(video, k, len(chosen) > 1))) for k in chosen]
+                    None if video is None else str(video_path(video, k, len(chosen) > 1)), keep_runs) for k in chosen]

@@ -45,7 +45,7 @@ def closed_loop_verdicts(path: Path, perturb: str, jobs: int, plant: str = "mode
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control,sim]'") from e
     from skatelib.pipeline.build.sweep import run_calls
 
-    results = [r for r, _ in run_calls(calls, jobs)]
+    results = [out[0] for out in run_calls(calls, jobs)]
     prefix, attr = ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN) if plant == "mujoco" else (
         "closed_loop", schema.A_CLOSED_LOOP)
     amend_library(path, {f"{prefix}_plant": perturb,

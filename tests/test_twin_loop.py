@@ -139,16 +139,19 @@ def test_the_steering_maneuver_in_physics(libs):
 
 
 def test_video_and_stored_verdicts(libs, tmp_path):
-    """`track --plant mujoco --video OUT.gif` renders the run (one frame per two MPC updates) and
-    `validate --closed-loop --plant mujoco` stores the verdict in the file (checksum still valid);
-    --video without the twin, or of an unknown format, is refused before any run."""
+    """`track --plant mujoco --video OUT.gif --save OUT.rrd` renders the run (one frame per two MPC
+    updates) and records it beside the plan in Rerun; `validate --closed-loop --plant mujoco`
+    stores the verdict in the file (checksum still valid); --video without the twin, or of an
+    unknown format, is refused before any run."""
     from PIL import Image
+    from skatelib.pipeline.build.preflight import is_rerun_recording
 
     env = {**os.environ, "COLUMNS": "250"}
-    gif = tmp_path / "run.gif"
-    r = subprocess.run([*CLI, "track", str(libs["one"]), "--plant", "mujoco", "--perturb", "none", "--video", str(gif)],
-                       capture_output=True, text=True, env=env, timeout=600)
+    gif, rrd = tmp_path / "run.gif", tmp_path / "run.rrd"
+    r = subprocess.run([*CLI, "track", str(libs["one"]), "--plant", "mujoco", "--perturb", "none", "--video", str(gif),
+                        "--save", str(rrd)], capture_output=True, text=True, env=env, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
+    assert is_rerun_recording(rrd) and rrd.stat().st_size > 10_000
     lib = MotionLibrary.open(libs["one"])
     ref_duration = float(lib[lib.keys()[0]].t[-1]) + 0.4 + 1.5
     assert Image.open(gif).n_frames == pytest.approx(ref_duration * 30 / 2, abs=2)

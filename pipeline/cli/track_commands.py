@@ -35,7 +35,8 @@ def track(
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
     save: Annotated[Path | None, typer.Option(
-        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run.")] = None,
+        help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run (either plant)."
+    )] = None,
     maneuver: Annotated[Maneuver, typer.Option(
         help="entries: track the library's entries; steer: four-leg deck-roll tracking (0.1 rad, 3 s period, "
              "9 s) at rest and at 0.5 m/s.")] = Maneuver.entries,
@@ -72,22 +73,29 @@ def track(
     _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, save)
 
 
+def _recording(library: Path, save: Path | None) -> Any:
+    """``save_closed_loop`` when a recording is asked for, its output checked before the runs."""
+    if save is None:
+        return None
+    from skatelib.pipeline.build.preflight import check_output
+
+    try:
+        from skatelib.pipeline.views.rerun_inspect import save_closed_loop
+    except ImportError as e:
+        raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
+    check_output(save, [library], what="recording")
+    return save_closed_loop
+
+
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
                  jobs: int, save: Path | None) -> None:
     from skatelib.control.track import track_jobs
     from skatelib.pipeline.build.sweep import run_calls
 
-    if save is not None:
-        from skatelib.pipeline.build.preflight import check_output
-
-        try:  # before the runs, not after them
-            from skatelib.pipeline.views.rerun_inspect import save_closed_loop
-        except ImportError as e:
-            raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
-        check_output(save, [library], what="recording")
+    save_closed_loop = _recording(library, save)
     runs = run_calls(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None), jobs)
     results = [r for r, _ in runs]
-    if save is not None:
+    if save is not None and save_closed_loop is not None:
         from skatelib.runtime import MotionLibrary
 
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
@@ -104,23 +112,29 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
     from skatelib.pipeline.twin_track import twin_jobs, twin_steer_jobs
 
     save, video = outputs
-    if save is not None:
-        raise SkatelibError("--save records the model plant's runs (leave out --plant); --video records the twin's")
     if maneuver is Maneuver.steer:
+        if save is not None or video is not None:
+            raise SkatelibError("--save and --video record the entries' runs, not the steering maneuver")
         if steer_table(run_calls(twin_steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs),
                        f"{perturb} (MuJoCo twin, whole-body controller)"):
             raise typer.Exit(1)
         return
+    save_closed_loop = _recording(library, save)
     if video is not None:
         from skatelib.pipeline.build.preflight import check_output
 
         check_output(video, [library], what="video")
         os.environ.setdefault("MUJOCO_GL", "egl" if not os.environ.get("DISPLAY") else "glfw")  # the workers'
-    runs = run_calls(twin_jobs(library, entry, plant_error, mpc, settings, video), jobs)
-    results = [r for r, _ in runs]
-    for _, written in runs:
+    runs = run_calls(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)), jobs)
+    results = [r for r, _, _ in runs]
+    for _, written, _ in runs:
         if written:
             console.print(escape(f"wrote {written}"))
+    if save is not None and save_closed_loop is not None:
+        from skatelib.runtime import MotionLibrary
+
+        save_closed_loop(MotionLibrary.open(library), [(r.key, e) for r, _, e in runs if e is not None], save)
+        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
     failed = twin_table(results, perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
