@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # A distribution's import names, where they differ from its name.
 # dask[distributed]: the backend imports dask.distributed as `distributed`.
-IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distributed",)}
+IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distributed",), "pillow": ("PIL",)}
 
 # Module groups (globs under the repository) -> the extras a user has who runs them. The first
 # matching group counts. Rerun and matplotlib views are commands of the pipeline: build comes too.
