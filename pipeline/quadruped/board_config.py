@@ -48,6 +48,7 @@ class ContactConfig:
     near_ground_speed_mps: float = _f(0.0, 5.0, "Its largest horizontal speed over the ground there [m/s].")
     near_ground_descent_mps: float = _f(0.0, 5.0, "Its largest descent speed there [m/s].")
     min_deck_load_fraction: float = _f(
-        0.0, 0.24, "Each foot on the deck carries at least this share of the robot's weight [-]: the centre of mass "
-        "stays inside the feet's support with a margin (0: a foot may unload, leaving the body balanced on an edge).",
+        0.0, 0.24, "Each foot on the deck pushes down with at least this share of the robot's weight [-]: the centre "
+        "of mass stays inside the feet's support with a margin (0: a foot may unload, leaving the body balanced on an "
+        "edge).",
         default=0.0)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from skatelib.library.channels import SWING
+from skatelib.library.channels import BOARD, SWING
 from skatelib.pipeline.ocp.terms import INF, BoundTerm, Box
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.knots import NXA, columns
@@ -40,6 +40,29 @@ class SwingForces:
         return np.where(swing, 0.0, -INF), np.where(swing, 0.0, INF)
 
 
+@dataclass(frozen=True)
+class DeckSupport:
+    """Each foot on the deck pushes down on it with at least ``fraction`` of the robot's weight
+    (its vertical force: a bound on the variable, no constraint row). Without it an optimum may
+    balance the body on the line between two feet with the third nearly unloaded: a state the
+    single rigid body holds and a robot with swinging legs tips over."""
+
+    schedule: KnotSchedule
+    min_force_N: float
+    name: str = "deck_support"
+
+    @property
+    def columns(self) -> slice:
+        return FORCES
+
+    def bounds(self, n_knots: int) -> tuple[np.ndarray, np.ndarray]:
+        lo = np.full((n_knots, 12), -INF)
+        on_deck = self.schedule.contact[:n_knots] == BOARD
+        lo[:, 2::3] = np.where(on_deck, self.min_force_N, -INF)
+        lo[-1] = -INF  # the placeholder control of the last knot
+        return lo, np.full((n_knots, 12), INF)
+
+
 def bound_terms(config: QuadrupedConfig, system: SkateSystem, schedule: KnotSchedule,
                 x0: np.ndarray) -> list[BoundTerm]:
     """Every bound of the push-off NLP: boxes on the trunk, joints, deck and controls, the initial
@@ -58,6 +81,7 @@ def bound_terms(config: QuadrupedConfig, system: SkateSystem, schedule: KnotSche
         Box("force_box", FORCES, -fmax, fmax),
         Box("joint_speed", JOINT_SPEEDS, -qd_max, qd_max),
         SwingForces(schedule),
+        DeckSupport(schedule, config.contact.min_deck_load_fraction * system.srb.mass_kg * system.gravity_mps2),
         Box("initial_state", slice(0, NXA), x0, x0, knots=slice(0, 1)),
         Box("placeholder_control", CONTROLS, 0.0, 0.0, knots=LAST),  # u_N enters no term
         Box("end_height", columns("base_z"), z0 - term.height_tol_m, z0 + term.height_tol_m, knots=LAST),

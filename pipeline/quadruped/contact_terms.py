@@ -1,7 +1,6 @@
 """Constraint terms that keep the plan physical where the twin showed it was not: the wheels keep
 a load (the deck loads' roll moment within what the wheel track holds), and the push foot lands
-and lifts off instead of skimming the floor, and the feet on the deck keep the body inside their
-support (``DeckSupport``).
+and lifts off instead of skimming the floor.
 
 ``WheelLoads``: at every knot, with M the moment the feet on the deck exert about its roll axis
 (deck x) and N the wheels' load (the board's weight and the feet's vertical forces),
@@ -22,7 +21,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import BOARD, I_BOARD_ROLL, NX, S_RPY, SWING
+from skatelib.library.channels import I_BOARD_ROLL, NX, S_RPY, SWING
 from skatelib.pipeline.ocp.terms import Stage
 from skatelib.pipeline.quadruped.board_config import ContactConfig
 from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world
@@ -63,30 +62,6 @@ class WheelLoads:
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros((n, 2)), np.full((n, 2), INF)
-
-
-@dataclass(frozen=True)
-class DeckSupport:
-    """Each foot on the deck presses on it with at least ``fraction`` of the robot's weight (along
-    the deck normal). Without it an optimum may balance the body on the line between two feet with
-    the third nearly unloaded: a state the single rigid body holds and a robot with swinging legs
-    tips over."""
-
-    system: SkateSystem
-    schedule: KnotSchedule
-    legs: tuple[int, ...]
-    fraction: float
-    name: str = "deck_support"
-
-    def rows(self, s: Stage) -> Any:
-        R_B = board_rotation(s.x[I_BOARD_ROLL], s.x[S_RPY][2])
-        return ca.vertcat(*[(R_B.T @ s.u[3 * i:3 * i + 3])[2] for i in self.legs])
-
-    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        weight = self.system.srb.mass_kg * self.system.gravity_mps2
-        contact = self.schedule.contact[:n][:, list(self.legs)]
-        lo = np.where(contact == BOARD, self.fraction * weight, -INF)
-        return lo, np.full(lo.shape, INF)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transc
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
 from skatelib.pipeline.quadruped.bounds import bound_terms
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.contact_terms import DeckSupport, GentleContact, WheelLoads
+from skatelib.pipeline.quadruped.contact_terms import GentleContact, WheelLoads
 from skatelib.pipeline.quadruped.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
 from skatelib.pipeline.quadruped.guess import initial_guess
@@ -74,9 +74,6 @@ class PushoffProblem:
             WheelLoads(system, board_legs), GentleContact(system, self.schedule, config.contact, opt.dt_s),
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
         ]
-        support = config.contact.min_deck_load_fraction
-        if support > 0:
-            self.constraints.append(DeckSupport(system, self.schedule, board_legs, support))
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
                                           self.constraints,
                                           compile_dir=cache_dir() if opt.compile else None)
