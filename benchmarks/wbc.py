@@ -40,7 +40,7 @@ def measure(path: Path) -> list[Measured]:
     wbc, mpc = statistics.median(run.wbc_times_s) * 1e3, statistics.median(run.mpc_times_s) * 1e3
     jobs = twin_jobs(Path(path), None, "", MpcConfig(), TrackSettings())
     t0 = time.perf_counter()
-    results = [r for r, _ in run_calls(jobs, 2)]
+    results = [out[0] for out in run_calls(jobs, 2)]
     t_two = time.perf_counter() - t0
     t0 = time.perf_counter()
     run_calls(jobs[:2], 1)
