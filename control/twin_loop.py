@@ -4,10 +4,11 @@ entry's reference, with the model loop's observers) and the whole-body controlle
 multibody plant (the MuJoCo twin) stepping at its own timestep: 2 plant steps per whole-body tick
 and 17 ticks per MPC update (1/30 s) at the twin's 1/1020 s.
 
-Each update: the sensed state (:mod:`skatelib.control.twin_feedback`; the centre of mass from
-pinocchio's model of the library's robot at the measured joints), the observers, the horizon, one
-QP. Each tick: pinocchio's terms, the tasks on the measured board, one QP, the torques (clipped
-at the limit, as the motors do). The plant's true state feeds the measures
+Each tick: the sensed state (:mod:`skatelib.control.twin_feedback`), pinocchio's terms of the
+library's robot at it; on the first tick of each update the MPC's update on the same state and
+terms (the centre of mass is the whole robot's), the observers, the horizon, one QP; then the
+tasks on the measured board, one whole-body QP, the torques (clipped at the limit, as the motors
+do). The plant's true state feeds the measures
 (:mod:`skatelib.control.twin_metrics`) and the fall checks.
 """
 
@@ -22,7 +23,7 @@ from skatelib.control.body_plan import BodyPlan
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Discretizer, Feedback
 from skatelib.control.mpc import Bias, MpcProblem, build_problem
-from skatelib.control.multibody import RobotDynamics
+from skatelib.control.multibody import DynamicsTerms, RobotDynamics
 from skatelib.control.observers import CoastObserver, DisturbanceObserver
 from skatelib.control.qp import QpSolveFailed, make_solver
 from skatelib.control.reference import EntryReference
@@ -30,7 +31,7 @@ from skatelib.control.settings import ClosedLoop
 from skatelib.control.twin_feedback import MultibodyPlant, MultibodyState, SensedState, Sensors, mpc_state, quat_wxyz
 from skatelib.control.twin_metrics import Meter, TwinMeasures, planned_floor_near
 from skatelib.control.twin_record import TwinRecord
-from skatelib.control.wbc import WbcOutput, WbcSettings, WholeBodyController
+from skatelib.control.wbc import WbcSettings, WholeBodyController
 from skatelib.control.wbc_tasks import ContactTable, TaskMaker
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import forward_speed, momentum_speed
@@ -76,13 +77,12 @@ def entry_ride(lib: Any, key: str, loop: ClosedLoop, foot_radius_m: float) -> Ri
 @dataclass
 class TwinRun:
     """One run's outcome: the measures, why it stopped early (``fall``), the controllers' times
-    and, for a kept run, the plant's configurations at each MPC update."""
+    and, for a kept run, the plant's configurations and the record at each MPC update."""
 
     measures: TwinMeasures
     fall: str = ""
     wbc_times_s: list[float] = field(default_factory=list)
     mpc_times_s: list[float] = field(default_factory=list)
-    times: list[float] = field(default_factory=list)
     qpos: list[np.ndarray] = field(default_factory=list)
     record: TwinRecord = field(default_factory=TwinRecord)
     # Per tick: t, deck roll, the trunk's offset from the deck's centre line, feet touching, the
@@ -134,14 +134,14 @@ class TwinLoop:
         high = float(np.max(self.plant.foot_centres()[2, on_deck]))  # every deck foot touching, 0.2 mm pressed
         self.plant.shift_robot(deck_top + self.kin.foot_radius_m - high - PRELOAD_M)
         self.t = self.ref.t0
+        self._true = self.plant.state()  # the plant now; each tick reads it and leaves the next
 
     def ride(self) -> TwinRun:
         """The entry, the transfer and the ride; stops at a fall."""
         for _ in range(round((self.ref.t_stop - self.ref.t0) / self.dt)):
             try:
-                self.update()
-                for _tick in range(self.cfg.ticks_per_update):
-                    self.tick()
+                for k in range(self.cfg.ticks_per_update):
+                    self.tick(update=k == 0)
                     if self.run.fall:
                         break
             except QpSolveFailed as e:
@@ -151,10 +151,9 @@ class TwinLoop:
         self.meter.finish()
         return self.run
 
-    def update(self) -> None:
-        """One MPC update on the sensed state: the forces the next ticks aim at."""
-        st = self.sensed(self.plant.state())
-        T = self.dyn.terms(*self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd))
+    def update(self, st: MultibodyState, T: DynamicsTerms) -> None:
+        """One MPC update on the sensed state (and pinocchio's terms at it): the forces the next
+        ticks aim at."""
         x = mpc_state(st, T.com, T.com_v)
         t, ref, cfg = self.t, self.ref, self.loop.mpc
         fb = Feedback(x=x, r_robot=np.array(st.contact_points) - x[0:3, None],
@@ -182,21 +181,27 @@ class TwinLoop:
         self.run.mpc_times_s.append(time.perf_counter() - t0)
         self.forces = U[:12].reshape(4, 3).T
         if self.keep:
-            self.run.times.append(t)
             self.run.qpos.append(np.array(self.plant.qpos()))
             self.run.record.add(t, x, st)
 
-    def tick(self) -> None:
-        """One whole-body tick and its plant steps."""
-        st = self.sensed(self.plant.state())
+    def tick(self, update: bool = False) -> None:
+        """One whole-body tick (after the MPC's ``update`` on its first) and its plant steps."""
+        st = self.sensed(self._true)
         t0 = time.perf_counter()
-        out = self.whole_body(st)
-        self.run.wbc_times_s.append(time.perf_counter() - t0)
+        qp, vp = self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
+        T = self.dyn.terms(qp, vp)
+        t_terms = time.perf_counter() - t0
+        if update:
+            self.update(st, T)
+        t1 = time.perf_counter()
+        feet_v = np.einsum("kij,j->ik", T.J_feet, vp)
+        out = self.wbc.solve(T, self.tasks(self.t, st, T, feet_v, self.forces))
+        self.run.wbc_times_s.append(t_terms + time.perf_counter() - t1)
         self._applied += out.forces
         self._ticks += 1
         self.plant.step(np.clip(out.tau, -self.kin.torque_limit_Nm, self.kin.torque_limit_Nm), self.cfg.steps_per_tick)
         self.t += self.tick_s
-        after = self.plant.state()
+        after = self._true = self.plant.state()
         self.meter.tick(after, out.tau, planned_floor_near(self.contacts.at, self.t))
         self.meter.speeds(after, self.t, self.ref.t_end, np.array([np.cos(after.deck_yaw), np.sin(after.deck_yaw)]))
         self.meter.drift(after, self.t, self.ref.t_end, self.board_end)
@@ -204,12 +209,6 @@ class TwinLoop:
         self.run.ticks.append((self.t, after.deck_roll, float(side @ (after.trunk_pos[0:2] - after.deck_pos[0:2])),
                                int(np.sum(after.foot_touch > 0)), float(np.min(after.foot_load_N))))
         self.run.fall = self._fall(after)
-
-    def whole_body(self, st: MultibodyState) -> WbcOutput:
-        qp, vp = self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
-        T = self.dyn.terms(qp, vp)
-        feet_v = np.einsum("kij,j->ik", T.J_feet, vp)
-        return self.wbc.solve(T, self.tasks(self.t, st, T, feet_v, self.forces))
 
     def _fall(self, st: Any) -> str:
         height = float(st.trunk_pos[2] - st.deck_pos[2])
