@@ -132,8 +132,6 @@ class TwinPlant:
         self.deck_v = m.joint("deck_free").dofadr[0]
         self.robot_actuators = np.array([m.actuator(n).id for n in JOINTS])
         self.rolling = RollingResistance(m, f.board.rolling_friction_coeff * self.errors.rolling_scale)
-        self.mass_kg = float(sum(m.body_mass[b] for b in range(m.nbody) if self._is_robot(b)))
-        self._force = np.zeros(6)
 
     @property
     def timestep_s(self) -> float:
@@ -142,10 +140,6 @@ class TwinPlant:
     def qpos(self) -> np.ndarray:
         """The whole configuration (robot and board), as MuJoCo orders it."""
         return np.array(self.d.qpos)
-
-    def _is_robot(self, body: int) -> bool:
-        root = self.m.body_rootid[body]
-        return bool(root == self.trunk)
 
     def place(self, trunk_pos: np.ndarray, trunk_quat_wxyz: np.ndarray, q: np.ndarray, deck_pose: np.ndarray) -> None:
         """Put the robot and board at rest: trunk pose, joint angles (12,), deck (x, y, yaw); the
@@ -207,10 +201,9 @@ class TwinPlant:
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, v6, 0)
             vel[:, i] = v6[3:]
             spins[:, i] = v6[:3]
-        wheel_force = np.zeros(3)
         touch = np.zeros(4, dtype=np.int8)
         points = centres - np.array([[0.0], [0.0], [self.f.foot_radius_m]])
-        loads = np.zeros(4)
+        loads, wheel_force = self.rolling.floor_forces(d)
         foot_loads = np.zeros(4)
         others: set[str] = set()
         for k in range(d.ncon):
@@ -225,13 +218,7 @@ class TwinPlant:
                     foot_loads[i] += v6[0]
             if self.floor in pair:
                 other = g2 if g1 == self.floor else g1
-                wheel = np.nonzero(self.wheels == other)[0]
-                if len(wheel):
-                    mujoco.mj_contactForce(m, d, k, v6)
-                    loads[wheel[0]] += v6[0]
-                    force = c.frame.reshape(3, 3).T @ v6[:3]  # on geom2 (the wheel, or the floor)
-                    wheel_force += force if g2 == other else -force
-                elif other not in self.feet:
+                if other not in self.wheels and other not in self.feet:
                     others.add(m.geom(other).name or f"geom {other} of body {m.body(m.geom_bodyid[other]).name}")
         mujoco.mj_subtreeVel(m, d)
         return TwinState(

@@ -34,11 +34,12 @@ class RollingResistance:
         self.floor = m.geom("floor").id
         self._force = np.zeros(6)
 
-    def loads(self, d: Any) -> np.ndarray:
-        """(4,) each wheel's normal force on the floor [N] (contacts of the last step)."""
+    def floor_forces(self, d: Any) -> tuple[np.ndarray, np.ndarray]:
+        """(4,) each wheel's normal force on the floor [N] and (3,) the floor's force on all four
+        wheels, world frame (contacts of the last step)."""
         import mujoco
 
-        out = np.zeros(4)
+        loads, total = np.zeros(4), np.zeros(3)
         for k in range(d.ncon):
             c = d.contact[k]
             if c.geom1 != self.floor and c.geom2 != self.floor:
@@ -46,12 +47,15 @@ class RollingResistance:
             hit = np.nonzero((self.geoms == c.geom1) | (self.geoms == c.geom2))[0]
             if len(hit):
                 mujoco.mj_contactForce(self.m, d, k, self._force)
-                out[hit[0]] += self._force[0]
-        return out
+                loads[hit[0]] += self._force[0]
+                force = c.frame.reshape(3, 3).T @ self._force[:3]  # on geom2 (the wheel, or the floor)
+                total += force if c.geom2 == self.geoms[hit[0]] else -force
+        return loads, total
 
     def apply(self, d: Any) -> None:
         v = d.qvel[self.dofs] * self.radius
-        d.ctrl[self.actuators] = -self.coefficient * self.radius * self.loads(d) * np.tanh(v / SMOOTHING_MPS)
+        loads, _ = self.floor_forces(d)
+        d.ctrl[self.actuators] = -self.coefficient * self.radius * loads * np.tanh(v / SMOOTHING_MPS)
 
 
 def add_rolling_actuators(spec: Any) -> None:
