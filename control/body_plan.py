@@ -61,7 +61,6 @@ class BodyPlan:
         Rt = np.swapaxes(_rz(board[:, 3]), -1, -2)  # world to board frame
         origin = board[:, 0:3]
         self.t = t
-        self._entry_times = t.tolist()
         self.t_end = float(t[-1])
         self.transfer_end = ref.transfer_end
         self.com = np.einsum("kij,kj->ki", Rt, x[:, 0:3] - origin)

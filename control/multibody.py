@@ -91,7 +91,3 @@ class RobotDynamics:
             M=M.copy(), h=h.copy(), J_feet=J_feet, dJv_feet=dJv, J_com=J_com.copy(), dJv_com=data.acom[0].copy(),
             feet=np.column_stack([data.oMf[f].translation for f in self.feet]), com=data.com[0].copy(),
             com_v=data.vcom[0].copy())
-
-    def joint_columns(self) -> np.ndarray:
-        """Where the 12 joints (channel order) sit among the 18 velocities."""
-        return self.v_index

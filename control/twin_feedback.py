@@ -18,6 +18,9 @@ from typing import Any, Protocol
 import numpy as np
 from skatelib.library.channels import NX
 
+# A foot's touch code in ``MultibodyState.foot_touch`` (0: touching nothing).
+ON_DECK, ON_FLOOR = 1, 2
+
 
 class MultibodyState(Protocol):
     """The fields of one plant instant the controller reads (world frame; see the twin's state)."""

@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from skatelib.control.twin_feedback import ON_DECK, ON_FLOOR
 from skatelib.library.channels import GROUND
 
 WHEEL_LIFT_TICKS = 5  # a wheel without load for this many ticks in a row has lifted off
-ON_DECK, ON_FLOOR = 1, 2
 CONTACT_GRACE_S = 0.03  # a foot on the floor this close to a planned stance on the floor is not unplanned
 
 

@@ -25,14 +25,13 @@ import pinocchio as pin
 from skatelib.control.body_plan import BodyPlan, BodyTargets, yaw_matrix
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
-from skatelib.control.twin_feedback import MultibodyState
+from skatelib.control.twin_feedback import ON_FLOOR, MultibodyState
 from skatelib.control.wbc import WbcSettings, WbcTargets
 from skatelib.library.channels import BOARD, SWING
 from skatelib.library.rotations import rpy_matrices
 
 TOUCHDOWN_REACH_M = 0.005  # a foot planned down but not touching aims this far into its surface
 EARLY_CONTACT_S = 0.1  # a swinging foot that lands this close before its planned stance stays down
-ON_FLOOR = 2  # a foot's touch code on the floor (1: on the deck)
 UP = np.array([0.0, 0.0, 1.0])
 
 

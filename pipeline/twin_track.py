@@ -7,7 +7,7 @@ model plant's (:mod:`skatelib.control.track`)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -143,5 +143,5 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = N
 
         if video.suffix.lower() not in FORMATS:
             raise SkatelibError(f"--video {video}: give a file ending in {' or '.join(FORMATS)}")
-    return [TwinJob(str(path), k, perturb, replace(mpc), settings,
+    return [TwinJob(str(path), k, perturb, mpc, settings,
                     None if video is None else str(video_path(video, k, len(chosen) > 1)), keep_runs) for k in chosen]

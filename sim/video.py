@@ -2,20 +2,16 @@
 rendered offscreen by MuJoCo, a camera following the deck from the side and behind, written as
 an MP4 (``imageio-ffmpeg``) or an animated GIF (``pillow``): extra ``[video]``.
 
-Rendering needs an OpenGL context: with no display, ``MUJOCO_GL=egl`` renders through Mesa (set
-here when neither it nor ``DISPLAY`` is, before MuJoCo is first imported)."""
+Rendering needs an OpenGL context: with no display, ``MUJOCO_GL=egl`` renders through Mesa (the
+package sets it, :mod:`skatelib.sim`)."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-    os.environ["MUJOCO_GL"] = "egl"
 
 FORMATS = (".mp4", ".gif")
 

@@ -3,7 +3,6 @@ plant or, with ``--plant mujoco``, on the physical twin under the whole-body con
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -124,7 +123,6 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         from skatelib.pipeline.build.preflight import check_output
 
         check_output(video, [library], what="video")
-        os.environ.setdefault("MUJOCO_GL", "egl" if not os.environ.get("DISPLAY") else "glfw")  # the workers'
     runs = run_calls(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)), jobs)
     results = [r for r, _, _ in runs]
     for _, written, _ in runs:
