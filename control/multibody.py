@@ -53,6 +53,7 @@ class RobotDynamics:
         self.feet = [model.getFrameId(f) for f in foot_frames]
         self.data: Any = model.createData()
         self.mass_kg = float(pin.computeTotalMass(model))
+        self._lower = np.tril_indices(model.nv, -1)
 
     @staticmethod
     def from_library(lib: Any) -> RobotDynamics:
@@ -76,18 +77,17 @@ class RobotDynamics:
 
     def terms(self, qp: np.ndarray, vp: np.ndarray) -> DynamicsTerms:
         model, data = self.model, self.data
-        M = pin.crba(model, data, qp)
-        M = np.triu(M) + np.triu(M, 1).T
-        h = pin.nonLinearEffects(model, data, qp, vp)
-        pin.forwardKinematics(model, data, qp, vp, np.zeros(model.nv))
-        pin.computeJointJacobians(model, data, qp)
+        # M (its upper triangle), h, the joint Jacobians, the COM and its Jacobian; its bias pass
+        # (the recursive Newton-Euler at zero qdd) leaves the bodies' accelerations at zero qdd in
+        # data.a, from which J-dot v follows (a test holds them to a forward pass at zero qdd).
+        pin.computeAllTerms(model, data, qp, vp)
+        M = data.M.copy()
+        M[self._lower] = M.T[self._lower]
+        h, J_com, com, com_v = data.nle.copy(), data.Jcom.copy(), data.com[0].copy(), data.vcom[0].copy()
         pin.updateFramePlacements(model, data)
         world = pin.LOCAL_WORLD_ALIGNED
         J_feet = np.array([pin.getFrameJacobian(model, data, f, world)[:3] for f in self.feet])
         dJv = np.array([pin.getFrameClassicalAcceleration(model, data, f, world).linear for f in self.feet])
-        pin.centerOfMass(model, data, qp, vp, np.zeros(model.nv))
-        J_com = pin.jacobianCenterOfMass(model, data, qp)
-        return DynamicsTerms(
-            M=M.copy(), h=h.copy(), J_feet=J_feet, dJv_feet=dJv, J_com=J_com.copy(), dJv_com=data.acom[0].copy(),
-            feet=np.column_stack([data.oMf[f].translation for f in self.feet]), com=data.com[0].copy(),
-            com_v=data.vcom[0].copy())
+        pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
+        return DynamicsTerms(M=M, h=h, J_feet=J_feet, dJv_feet=dJv, J_com=J_com, dJv_com=data.acom[0].copy(),
+                             feet=np.array([data.oMf[f].translation for f in self.feet]).T, com=com, com_v=com_v)

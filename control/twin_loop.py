@@ -194,7 +194,7 @@ class TwinLoop:
         if update:
             self.update(st, T)
         t1 = time.perf_counter()
-        feet_v = np.einsum("kij,j->ik", T.J_feet, vp)
+        feet_v = (T.J_feet @ vp).T
         out = self.wbc.solve(T, self.tasks(self.t, st, T, feet_v, self.forces))
         self.run.wbc_times_s.append(t_terms + time.perf_counter() - t1)
         self._applied += out.forces

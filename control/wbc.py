@@ -18,7 +18,6 @@ QP is DAQP's (dense dual active set), chosen in ``make bench`` against the other
 from __future__ import annotations
 
 import math
-from ctypes import c_int
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,15 +91,52 @@ class WbcOutput:
     iterations: int
 
 
-def pyramid(normal: np.ndarray, mu: float) -> np.ndarray:
+def pyramid(normal: np.ndarray | list[float], mu: float) -> list[list[float]]:
     """(4, 3) rows r with r . f <= 0 inside the 4-facet pyramid of ``mu`` about ``normal`` (a unit
-    vector away from the y axis: a floor's or a deck's)."""
+    vector away from the y axis: a floor's or a deck's), as nested lists (one tick builds a few)."""
     x, y, z = (float(c) for c in normal)
     s = math.hypot(x, z)  # t1 = normal x e_y / |..| = (-z, 0, x) / s; t2 = normal x t1
-    t1 = np.array([-z / s, 0.0, x / s])
-    t2 = np.array([y * x / s, -(z * z + x * x) / s, y * z / s])
-    n = np.asarray(normal, dtype=float)
-    return np.array([t1 - mu * n, -t1 - mu * n, t2 - mu * n, -t2 - mu * n])
+    t1x, t1z = -z / s, x / s
+    t2x, t2y, t2z = y * x / s, -(z * z + x * x) / s, y * z / s
+    a, b, c = mu * x, mu * y, mu * z
+    return [[t1x - a, -b, t1z - c], [-t1x - a, -b, -t1z - c],
+            [t2x - a, t2y - b, t2z - c], [-t2x - a, -t2y - b, -t2z - c]]
+
+
+class _Layout:
+    """The QP's arrays for one stance set, their fixed parts filled once: the cost's diagonal
+    (regularization, attitude, posture and force weights), the constraint matrix's zeros, the
+    bounds of the normal, friction and equality rows, and where each stance foot's surface rows go."""
+
+    def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings):
+        self.legs, self.swing = legs, np.setdiff1d(np.arange(4), legs)
+        nf = 3 * len(legs)
+        self.n = n = NV + nf
+        self.q_diag = np.full(NV, s.regularization)
+        self.q_diag[3:6] += s.w_attitude
+        self.q_diag[joints] += s.w_posture
+        self.H = np.diag(np.r_[self.q_diag, np.full(nf, s.regularization + s.w_force)])
+        self.g = np.zeros(n)
+        self.A, self.b = np.zeros((3 + 3 * len(self.swing), NV)), np.zeros(3 + 3 * len(self.swing))  # task rows
+        self.w = np.sqrt([s.w_com] * 3 + [s.w_swing] * 3 * len(self.swing))  # their square-root weights
+        per_leg = 1 + 4 * s.friction_rows
+        self.surface = 6 + nf  # the first normal row
+        self.torque = self.surface + per_leg * len(legs)  # the first torque row
+        m = self.torque + 12
+        self.rows = np.zeros((m, n))
+        self.up, self.lo = np.full(m, 1e30), np.full(m, -1e30)
+        self.sense = np.zeros(m, dtype=np.intc)
+        self.sense[:self.surface] = EQUALITY
+        k = np.arange(len(legs))
+        r = self.surface + per_leg * k  # each leg's normal row, then its facets
+        self.up[r], self.lo[r] = s.normal_max_N, s.normal_min_N
+        for facet in range(1, per_leg):
+            self.up[r + facet] = 0.0
+        # Where (k, per_leg, 3) blocks go in rows.ravel(): each foot's normal, then its facets.
+        r_idx = r[:, None, None] + np.arange(per_leg)[None, :, None] + np.zeros((1, 1, 3), dtype=int)
+        c_idx = NV + 3 * k[:, None, None] + np.zeros((1, per_leg, 1), dtype=int) + np.arange(3)
+        self.blocks = np.zeros((len(legs), per_leg, 3))
+        self.flat = np.ravel_multi_index((r_idx.ravel(), c_idx.ravel()), self.rows.shape)
 
 
 class WholeBodyController:
@@ -110,9 +146,11 @@ class WholeBodyController:
                  settings: WbcSettings | None = None):
         self.s = settings or WbcSettings()
         self.joints = np.asarray(joint_columns)
+        contiguous = np.array_equal(self.joints, np.arange(6, NV))  # pinocchio's order: views, not copies
+        self._j: slice | np.ndarray = slice(6, NV) if contiguous else self.joints
         self.tau_max = torque_limit_Nm
         self.mu = mu
-        self._pyramids: dict[bytes, np.ndarray] = {}
+        self._layouts: dict[bytes, _Layout] = {}
 
     def solve(self, T: DynamicsTerms, tg: WbcTargets) -> WbcOutput:
         """Torques of this tick.
@@ -122,76 +160,65 @@ class WholeBodyController:
         """
         import daqp
 
-        s = self.s
-        legs = np.nonzero(tg.stance)[0]
-        nf = 3 * len(legs)
-        n = NV + nf
-        Jc = T.J_feet[legs].reshape(nf, NV)  # stacked stance Jacobians
-        # Cost: weighted least squares over x = (qdd, f), block by block.
-        H = s.regularization * np.eye(n)
-        g = np.zeros(n)
-        Hq, gq = H[:NV, :NV], g[:NV]
-        Hq += s.w_com * (T.J_com.T @ T.J_com)
-        gq -= s.w_com * (T.J_com.T @ (tg.com_acc - T.dJv_com))
-        Hq[3:6, 3:6] += s.w_attitude * np.eye(3)
-        gq[3:6] -= s.w_attitude * tg.angular_acc
-        j = self.joints
-        Hq[j, j] += s.w_posture
-        gq[j] -= s.w_posture * tg.posture_acc
-        swing = np.nonzero(~tg.stance)[0]
-        if len(swing):
-            Js = T.J_feet[swing].reshape(-1, NV)
-            Hq += s.w_swing * (Js.T @ Js)
-            gq -= s.w_swing * (Js.T @ (tg.swing_acc[:, swing] - T.dJv_feet[swing].T).T.reshape(-1))
-        if nf:
-            H[NV:, NV:] += s.w_force * np.eye(nf)
-            g[NV:] -= s.w_force * tg.forces[:, legs].T.reshape(-1)
-        rows, upper, lower, sense = self._constraints(T, tg, legs, Jc, n)
-        x, _, flag, info = daqp.solve(H, g, rows, upper, lower, sense)
+        L = self._layout(tg.stance)
+        legs, swing, s, j = L.legs, L.swing, self.s, self._j
+        Jc = T.J_feet[legs].reshape(-1, NV)  # stacked stance Jacobians
+        JcT = Jc.T
+        # Cost: the COM and swing-foot tasks as weighted rows A x = b over qdd, the rest diagonal.
+        A, b, w = L.A, L.b, L.w
+        A[:3] = T.J_com
+        A[3:] = T.J_feet[swing].reshape(-1, NV)
+        b[:3] = tg.com_acc - T.dJv_com
+        b[3:] = (tg.swing_acc[:, swing] - T.dJv_feet[swing].T).T.ravel()
+        A *= w[:, None]
+        Hq = A.T @ A
+        Hq.flat[::NV + 1] += L.q_diag
+        L.H[:NV, :NV] = Hq
+        g = L.g
+        g[:NV] = -(A.T @ (w * b))
+        g[3:6] -= s.w_attitude * tg.angular_acc
+        g[j] -= s.w_posture * tg.posture_acc
+        g[NV:] = -s.w_force * tg.forces[:, legs].T.ravel()
+        self._constraints(L, T, tg, JcT)
+        x, _, flag, info = daqp.solve(L.H, g, L.rows, L.up, L.lo, L.sense)
         if flag != 1:
             raise QpSolveFailed(f"whole-body QP: DAQP exit flag {flag}")
         qdd, f = x[:NV], x[NV:]
-        tau = (T.M[j] @ qdd + T.h[j] - Jc[:, j].T @ f)
+        tau = T.M[j] @ qdd + T.h[j] - JcT[j] @ f
         forces = np.zeros((3, 4))
         forces[:, legs] = f.reshape(-1, 3).T
         return WbcOutput(tau=tau, forces=forces, qdd=qdd, iterations=int(info["iterations"]))
 
-    def _constraints(self, T: DynamicsTerms, tg: WbcTargets, legs: np.ndarray, Jc: np.ndarray, n: int
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        s, nf, j = self.s, Jc.shape[0], self.joints
-        per_leg = 1 + 4 * s.friction_rows
-        m = 6 + nf + per_leg * len(legs) + 12
-        rows = np.zeros((m, n))
-        up = np.full(m, 1e30)
-        lo = np.full(m, -1e30)
+    def _layout(self, stance: np.ndarray) -> _Layout:
+        key = np.asarray(stance, dtype=bool).tobytes()
+        out = self._layouts.get(key)
+        if out is None:
+            out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s)
+        return out
+
+    def _constraints(self, L: _Layout, T: DynamicsTerms, tg: WbcTargets, JcT: np.ndarray) -> None:
+        """This tick's rows and bounds into ``L``'s arrays (``JcT``: the stance feet's stacked
+        Jacobians, transposed)."""
+        rows, up, lo, j, legs = L.rows, L.up, L.lo, self._j, L.legs
+        nf, r = JcT.shape[1], L.torque
         rows[:6, :NV] = T.M[:6]  # floating base: M qdd + h - Jc^T f = 0
-        rows[:6, NV:] = -Jc[:, :6].T
+        rows[:6, NV:] = -JcT[:6]
         up[:6] = lo[:6] = -T.h[:6]
-        rows[6:6 + nf, :NV] = Jc  # stance feet
-        up[6:6 + nf] = lo[6:6 + nf] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.reshape(-1)
-        r = 6 + nf
-        for k, leg in enumerate(legs):
-            cols = slice(NV + 3 * k, NV + 3 * k + 3)
-            nrm = tg.normals[:, leg]
-            rows[r, cols] = nrm
-            up[r], lo[r] = s.normal_max_N, s.normal_min_N
-            if s.friction_rows:
-                rows[r + 1:r + 5, cols] = self._pyramid(nrm)
-                up[r + 1:r + 5] = 0.0
-            r += per_leg
+        rows[6:6 + nf, :NV] = JcT.T  # stance feet
+        up[6:6 + nf] = lo[6:6 + nf] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
+        if len(legs):
+            blocks = L.blocks
+            surfaces: dict[bytes, np.ndarray] = {}  # feet on one surface share its rows
+            for i, leg in enumerate(legs):
+                normal = tg.normals[:, leg]
+                key = normal.tobytes()
+                block = surfaces.get(key)
+                if block is None:
+                    rows_ = [normal.tolist(), *(pyramid(normal, self.mu) if self.s.friction_rows else [])]
+                    block = surfaces[key] = np.array(rows_)
+                blocks[i] = block
+            rows.reshape(-1)[L.flat] = blocks.ravel()
         rows[r:, :NV] = T.M[j]  # joint torques within the limit
-        rows[r:, NV:] = -Jc[:, j].T
+        rows[r:, NV:] = -JcT[j]
         up[r:] = self.tau_max - T.h[j]
         lo[r:] = -self.tau_max - T.h[j]
-        sense = np.zeros(m, dtype=c_int)
-        sense[:6 + nf] = EQUALITY
-        return rows, up, lo, sense
-
-    def _pyramid(self, normal: np.ndarray) -> np.ndarray:
-        key = normal.tobytes()
-        out = self._pyramids.get(key)
-        if out is None:
-            if len(self._pyramids) > 64:  # the deck's normal changes every tick: keep the floor's
-                self._pyramids.clear()
-            out = self._pyramids[key] = pyramid(normal, self.mu)
-        return out

@@ -25,10 +25,9 @@ import pinocchio as pin
 from skatelib.control.body_plan import BodyPlan, BodyTargets, yaw_matrix
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
-from skatelib.control.twin_feedback import ON_FLOOR, MultibodyState
+from skatelib.control.twin_feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.wbc import WbcSettings, WbcTargets
 from skatelib.library.channels import BOARD, SWING
-from skatelib.library.rotations import rpy_matrices
 
 TOUCHDOWN_REACH_M = 0.005  # a foot planned down but not touching aims this far into its surface
 EARLY_CONTACT_S = 0.1  # a swinging foot that lands this close before its planned stance stays down
@@ -52,19 +51,18 @@ class ContactTable:
             fill = (self.codes[k] == SWING) & (later != SWING)
             self.next[k, fill] = later[fill]
 
-    def _k(self, t: float) -> int:
+        self.planned = self.codes != SWING  # (n, 4) planned down
+        self.deck_next = self.next == BOARD  # (n, 4) now or next on the deck
+
+    def index(self, t: float) -> int:
+        """The grid row of ``t`` (clamped)."""
         return min(max(round((t - self.t0) / self.step), 0), len(self.codes) - 1)
 
     def at(self, t: float) -> np.ndarray:
-        return self.codes[self._k(t)]
+        return self.codes[self.index(t)]
 
     def next_contact(self, t: float) -> np.ndarray:
-        return self.next[self._k(t)]
-
-
-def _cross(w: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """w x each column of r (3, n)."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]) @ r
+        return self.next[self.index(t)]
 
 
 @dataclass
@@ -78,53 +76,51 @@ class TaskMaker:
 
     def __post_init__(self) -> None:
         self.stance = np.zeros(4, dtype=bool)
-        self.contact_at = self.contacts.at
+        self._gravity = self.p.gravity_mps2 * UP
 
     def __call__(self, t: float, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray,
                  forces: np.ndarray) -> WbcTargets:
-        g, bt = self.g, self.plan.at(t)
-        yaw = st.deck_yaw
-        Ry = yaw_matrix(yaw)
-        level = st.deck_pos + self.p.roll_axis_depth_m * (UP - st.deck_R[:, 2])
-        planned = self.contact_at(t) != SWING
+        g, table, bt = self.g, self.contacts, self.plan.at(t)  # (a plan may adapt while it runs)
+        k = table.index(t)
+        Ry = yaw_matrix(st.deck_yaw)
+        deck_R = st.deck_R
+        level = st.deck_pos + self.p.roll_axis_depth_m * (UP - deck_R[:, 2])
+        planned = table.planned[k]
         touching = st.foot_touch > 0
-        early = touching & (self.contact_at(t + EARLY_CONTACT_S) != SWING)  # landed before its time
+        early = touching & table.planned[table.index(t + EARLY_CONTACT_S)]  # landed before its time
         self.stance = (planned | early) & (touching | self.stance)
         v_ref = Ry @ bt.com_v
         v_ref[0:2] += st.deck_v[0:2]
-        com_acc = (forces[:, planned].sum(axis=1) / self.p.mass_kg - self.p.gravity_mps2 * UP
+        com_acc = (forces @ planned / self.p.mass_kg - self._gravity
                    + g.kp_com * (level + Ry @ bt.com - T.com) + g.kd_com * (v_ref - T.com_v))
         R = st.trunk_R
         rpy = bt.rpy.copy()
-        rpy[2] += yaw
-        ang_acc = (g.kp_attitude * (R.T @ pin.log3(rpy_matrices(rpy) @ R.T))
+        rpy[2] += st.deck_yaw
+        ang_acc = (g.kp_attitude * (R.T @ pin.log3(pin.rpy.rpyToMatrix(rpy) @ R.T))
                    + g.kd_attitude * (bt.omega - st.trunk_omega))
-        swing_acc, normals = self._feet(t, st, T.feet, feet_v, bt, (level, Ry))
-        spin = _cross(st.deck_omega, T.feet - st.deck_pos[:, None])
-        stance_acc = _cross(st.deck_omega, spin) + g.stance_gain * (st.deck_v[:, None] + spin - feet_v)
-        floor = st.foot_touch == ON_FLOOR
-        stance_acc[:, floor] = -g.stance_gain * feet_v[:, floor]
+        swing_acc, normals = self._feet(k, st, T.feet, feet_v, bt, (level, Ry))
+        W = pin.skew(st.deck_omega)
+        spin = W @ (T.feet - st.deck_pos[:, None])  # the deck points' velocities from its rotation
+        stance_acc = np.where(st.foot_touch == ON_FLOOR, -g.stance_gain * feet_v,
+                              W @ spin + g.stance_gain * (st.deck_v[:, None] + spin - feet_v))
         posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
         return WbcTargets(stance=self.stance.copy(), normals=normals, stance_acc=stance_acc, com_acc=com_acc,
                           angular_acc=ang_acc, swing_acc=swing_acc, forces=forces, posture_acc=posture)
 
-    def _feet(self, t: float, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
+    def _feet(self, k: int, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
               frame: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Swinging feet's accelerations and every foot's surface normal (module docstring);
-        ``frame``: the level board frame's origin and yaw rotation."""
-        g = self.g
+        """Swinging feet's accelerations and every foot's surface normal (module docstring), at the
+        contact table's index ``k``; ``frame``: the level board frame's origin and yaw rotation."""
+        g, table = self.g, self.contacts
         level, Ry = frame
-        deck = self.contacts.next_contact(t) == BOARD
-        deck_n = st.deck_R[:, 2]
-        target = level[:, None] + Ry @ bt.feet
-        target[:, deck] = st.deck_pos[:, None] + st.deck_R @ bt.feet[:, deck]
-        v_target = Ry @ (bt.feet_v + bt.board_v[:, None])
-        v_target[:, deck] = st.deck_v[:, None] + Ry @ bt.feet_v[:, deck]
-        normals = np.empty((3, 4))
-        normals[:] = UP[:, None]
-        on_deck = np.where(st.foot_touch > 0, st.foot_touch != ON_FLOOR, deck)
-        normals[:, on_deck] = deck_n[:, None]
-        reach = (self.contact_at(t) != SWING) & ~self.stance
-        target[:, reach] -= TOUCHDOWN_REACH_M * normals[:, reach]
+        deck = table.deck_next[k]
+        deck_n = st.deck_R[:, 2:3]
+        target = np.where(deck, st.deck_pos[:, None] + st.deck_R @ bt.feet, level[:, None] + Ry @ bt.feet)
+        v_target = Ry @ (bt.feet_v + np.where(deck, 0.0, bt.board_v[:, None])) + st.deck_v[:, None] * deck
+        touch = st.foot_touch
+        on_deck = (touch == ON_DECK) | ((touch == 0) & deck)  # touching the deck, or bound for it
+        normals = np.where(on_deck, deck_n, UP[:, None])
+        reach = table.planned[k] & ~self.stance
+        target -= TOUCHDOWN_REACH_M * (normals * reach)
         acc = Ry @ bt.feet_a + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
         return acc, normals
