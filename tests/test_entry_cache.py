@@ -60,7 +60,7 @@ def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
     """One flipped bit in a cached entry's payload is caught by its checksum: the entry is solved
     again, the user is told, and the cache is repaired."""
     first = sweep.run_task(_chain())
-    path = cache / "entries" / f"{first[0].cache_key}.pkl"
+    path = cache / "entries" / f"{first[0].cache_key}.entry"
     blob = bytearray(path.read_bytes())
     blob[len(blob) // 2] ^= 0x04
     path.write_bytes(bytes(blob))

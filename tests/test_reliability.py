@@ -61,7 +61,7 @@ def test_killed_build_leaves_no_process_and_resumes(tmp_path, sig):
     p = subprocess.Popen([*CLI, "build", str(cfg), "-o", str(out), "--no-progress", "-j", "2"], env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     deadline = time.monotonic() + 120
-    while not list((cache / "entries").glob("*.pkl")) and time.monotonic() < deadline and p.poll() is None:
+    while not list((cache / "entries").glob("*.entry")) and time.monotonic() < deadline and p.poll() is None:
         time.sleep(0.2)
     assert p.poll() is None, "the build ended before it could be killed"
     assert len(_session(p.pid)) >= 3  # the build, the queue's manager, workers

@@ -13,6 +13,7 @@ from pathlib import Path
 from skatelib.library.atomic import remove_stale_temporaries
 from skatelib.library.errors import ConfigError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
+from skatelib.pipeline.build import trust
 from skatelib.pipeline.build.cache import CACHE_ENV, cache_dir
 
 SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?P<port>\d{1,5})$")
@@ -70,19 +71,26 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
 
 
 def check_cache_dir() -> Path:
-    """The cache folder exists (or can be made) and is writable.
+    """The cache folder exists (or can be made, private to the user) and is writable, it and its
+    subfolders belong to the user and no one else can write them, and a shared cache named in
+    ``$SKATELIB_TRUSTED_CACHE`` is read-only (:mod:`skatelib.pipeline.build.trust`).
 
     Raises:
-        OutputError: Naming the folder and ``$SKATELIB_CACHE_DIR``.
+        OutputError: Naming the folder, what is wrong with it and what to do.
     """
     d = cache_dir()
     try:
-        (d / "entries").mkdir(parents=True, exist_ok=True)
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+        trust.check_own(d)
+        (d / "entries").mkdir(mode=0o700, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
             pass
     except OSError as e:
         raise OutputError(d, f"the cache folder cannot be used ({e.strerror}); set ${CACHE_ENV} to a writable "
                              "folder, or pass --no-cache") from e
+    shared = trust.trusted_cache()
+    if shared is not None:
+        trust.check_shared(shared)
     remove_stale_temporaries(d / "entries")
     return d
 
@@ -96,6 +104,10 @@ def check_scheduler(address: str, timeout_s: float = 3.0) -> None:
     m = SCHEDULER_RE.match(address)
     if m is None:
         raise ConfigError("--scheduler", "--scheduler", f"{address!r} is not an address like tcp://HOST:PORT")
+    if address.startswith("tls://"):
+        from skatelib.pipeline.build.sweep import tls_settings
+
+        tls_settings()
     host, port = m["host"].strip("[]"), int(m["port"])
     try:
         with socket.create_connection((host, port), timeout=timeout_s):

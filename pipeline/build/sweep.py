@@ -20,6 +20,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
+from skatelib.library.errors import ConfigError
 from skatelib.pipeline.build.contract import BuildOptions, BuildTask, EntryEvent, EventSink, Outcome, ProgressFn
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -132,6 +133,26 @@ def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: 
     return outcomes
 
 
+def tls_settings() -> Any:
+    """dask's security settings for a ``tls://`` scheduler (``distributed.security.Security`` from
+    the dask config: ``distributed.comm.tls.ca-file``, ``.client.cert``, ``.client.key``).
+
+    Raises:
+        ConfigError: When the config names no CA file or no client certificate (key ``--scheduler``).
+    """
+    try:
+        from distributed.security import Security
+    except ImportError as e:
+        raise ImportError("the dask backend needs dask.distributed: pip install 'skatelib[dask]'") from e
+    security: Any = Security()  # its TLS attributes are set from the config at run time
+    if not security.tls_ca_file or not security.tls_client_cert:
+        raise ConfigError("--scheduler", "--scheduler",
+                          "a tls:// scheduler needs dask's TLS settings: set distributed.comm.tls.ca-file, "
+                          "distributed.comm.tls.client.cert and .client.key in the dask config (or "
+                          "DASK_DISTRIBUTED__COMM__TLS__CA_FILE and the like)")
+    return security
+
+
 def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
               on_entry: ProgressFn | None) -> list[Outcome]:
     try:
@@ -139,7 +160,10 @@ def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
     except ImportError as e:
         raise ImportError("the dask backend needs dask.distributed: pip install 'skatelib[dask]'") from e
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
+    if own and str(scheduler).startswith("tls://"):
+        client = Client(scheduler, security=tls_settings())  # certificates from the dask config
+    else:
+        client = Client(scheduler) if own else scheduler
     try:
         futures = [client.submit(run_task, task, use_cache, None, None, True, pure=False) for task in tasks]
         outcomes: list[Outcome] = []

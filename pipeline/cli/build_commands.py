@@ -65,7 +65,9 @@ def build(
     jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
     backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
                        ] = Backend.loky,
-    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address, tcp://HOST:PORT.")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        help="Dask scheduler address, tcp://HOST:PORT or tls://HOST:PORT (certificates from the dask config); "
+             "a scheduler runs code on its workers: use your own cluster only.")] = None,
     progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,

@@ -7,12 +7,16 @@ import hashlib
 from dataclasses import dataclass
 
 from skatelib.library import schema
+from skatelib.pipeline.build import codec
 from skatelib.pipeline.build.cache import cache_key, cached_or_solved
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
 from skatelib.pipeline.humanoid.config import HumanoidConfig
+from skatelib.pipeline.humanoid.geometry import Support
 from skatelib.pipeline.humanoid.motion import Motion, plan_for, plan_json, solve_motion, step_model
-from skatelib.pipeline.humanoid.step import SOLVER_OPTIONS, StepSpec, step_problem
+from skatelib.pipeline.humanoid.step import SOLVER_OPTIONS, StepResult, StepSpec, step_problem
 from skatelib.pipeline.humanoid.verify import judge
+
+codec.register(Motion, StepResult, StepSpec, Support)  # what the entry cache holds
 
 
 def entry_name(config: HumanoidConfig, velocity_mps: float) -> tuple[str, int]:

@@ -18,6 +18,7 @@ import platform
 import shutil
 import subprocess
 import tempfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.atomic import remove_stale_temporaries
+from skatelib.pipeline.build import trust
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,9 @@ class CompileTarget:
 def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, target: CompileTarget,
                              serialized: str | None = None) -> StageFunctions:
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
-    content hash.
+    content hash, with its SHA-256 recorded beside it and checked before it is loaded (a library
+    that changed, or sits where others can write, is compiled again with a
+    :class:`~skatelib.pipeline.build.trust.CacheNote`; see :mod:`skatelib.pipeline.build.trust`).
 
     The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the
     flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a cache hit costs
@@ -119,7 +123,10 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     native = host_cpu() if "-march=native" in flags else ""
     key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
-    if not lib.exists():
+    found, note = trust.usable_library(lib)  # only from a folder no one else can write, as built
+    if note:
+        warnings.warn(note, trust.CacheNote, stacklevel=2)
+    if found is None:
         fns = stage_functions(z, p, cost, cons)
         gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
         for f in (fns.value, fns.grad, fns.jac, fns.hess):
@@ -132,8 +139,12 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
             so_tmp = Path(tmp) / "stage.so"
             subprocess.run([cc, *_accepted(cc, flags), "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)],
                            check=True, capture_output=True)
-            os.replace(so_tmp, lib)  # atomic: parallel workers never load a half-written library
-    return StageFunctions(*(ca.external(name, str(lib)) for name in _NAMES))
+            record = Path(tmp) / "stage.sha256"
+            record.write_text(trust.sha256_of(so_tmp) + "\n")
+            os.replace(record, trust.digest_record(lib))  # the record first: a reader never trusts a
+            os.replace(so_tmp, lib)  # half-written library, and parallel workers load a whole one
+        found = lib
+    return StageFunctions(*(ca.external(name, str(found)) for name in _NAMES))
 
 
 def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:
