@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.library.errors import SkatelibError
+from skatelib.library.perturb import perturbation_items
 
 
 class PerturbationError(SkatelibError, ValueError):
@@ -185,20 +186,7 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
     """
     changes: dict[str, Any] = {}
     extra: dict[str, float] = {}
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        key, sep, value = item.partition("=")
-        key = key.strip()
-        if not sep or (key not in PERTURB_KEYS and key not in EXTRA_KEYS):
-            raise PerturbationError(
-                f"--perturb {item!r}: expected KEY=VALUE with KEY one of {', '.join([*PERTURB_KEYS, *EXTRA_KEYS])}")
-        value = value.strip()
-        relative = value.endswith("%")
-        try:
-            number = float(value[:-1] if relative else value)
-        except ValueError:
-            raise PerturbationError(f"--perturb {item!r}: {value!r} is not a number or a percentage") from None
-        if not math.isfinite(number):
-            raise PerturbationError(f"--perturb {item!r}: must be finite")
+    for item, key, number, relative in perturbation_items(text, [*PERTURB_KEYS, *EXTRA_KEYS], PerturbationError):
         if key in EXTRA_KEYS:
             if relative:
                 raise PerturbationError(f"--perturb {item!r}: {key} takes an absolute value")

@@ -18,6 +18,8 @@ from skatelib.library.errors import SkatelibError
 from skatelib.runtime.blend import BlendCheck
 from skatelib.runtime.references import Channels, Sample, Window
 
+WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the entry's own knots)
+
 
 class EntryNotFound(SkatelibError):
     """No entry matches a key or a request (the message lists what exists)."""
@@ -132,9 +134,19 @@ class Entry:
         """References for an MPC horizon at ``t0 + k dt``, k = 0..n-1: states (n, 28), controls
         (n, 24), contact codes (n, 4) and times (n,). Clamped to the entry like :meth:`sample`.
 
+        ``n`` is at most :data:`WINDOW_MAX_N` (10 000: any controller's horizon, and a bound on what
+        one call allocates, about 5 MB), or the entry's own knot count if that is larger.
+
         Raises:
-            ValueError: When ``t0`` or ``dt`` is not finite, ``dt <= 0`` or ``n < 1``.
+            TypeError: When ``n`` is not an integer.
+            ValueError: When ``t0`` or ``dt`` is not finite, ``dt <= 0``, ``n < 1`` or ``n`` is
+                beyond the bound.
         """
+        if not isinstance(n, (int, np.integer)) or isinstance(n, bool):
+            raise TypeError(f"window(t0, n, dt): n must be an integer count of steps, got {n!r}")
+        if n > WINDOW_MAX_N and n > len(self.t):
+            raise ValueError(f"window(t0, n, dt): n = {n} steps is beyond the bound of {WINDOW_MAX_N} "
+                             "(skatelib.runtime.entry.WINDOW_MAX_N); sample a longer span in several windows")
         if not isfinite(t0):
             raise ValueError(f"window(t0, n, dt): t0 must be a finite time in seconds, got {t0!r}")
         if not (isfinite(dt) and dt > 0.0):

@@ -15,10 +15,10 @@ Keys (``KEY=VALUE,...``; ``+10%`` relative, a plain number absolute):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 from skatelib.library.errors import SkatelibError
+from skatelib.library.perturb import perturbation_items
 
 
 class TwinPerturbationError(SkatelibError, ValueError):
@@ -50,17 +50,6 @@ TWIN_KEYS = (*_SCALES, *_ABSOLUTE, *_PAYLOAD_AXES)
 DEFAULT_TWIN_PERTURBATION = "mass=+10%,mu=0.5,kb=-20%,rolling=+100%"
 
 
-def _number(item: str, value: str) -> tuple[float, bool]:
-    relative = value.endswith("%")
-    try:
-        number = float(value[:-1] if relative else value)
-    except ValueError:
-        raise TwinPerturbationError(f"--perturb {item!r}: {value!r} is not a number or a percentage") from None
-    if not math.isfinite(number):
-        raise TwinPerturbationError(f"--perturb {item!r}: must be finite")
-    return number, relative
-
-
 def parse_twin_perturbation(text: str, library_mu: float) -> TwinErrors:
     """``KEY=VALUE,...`` (module docstring) as :class:`TwinErrors`.
 
@@ -69,12 +58,7 @@ def parse_twin_perturbation(text: str, library_mu: float) -> TwinErrors:
     """
     changes: dict[str, float] = {}
     payload_pos = [0.0, 0.0, 0.0]
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        key, sep, value = (s.strip() for s in item.partition("="))
-        if not sep or key not in TWIN_KEYS:
-            raise TwinPerturbationError(
-                f"--perturb {item!r}: expected KEY=VALUE with KEY one of {', '.join(TWIN_KEYS)}")
-        number, relative = _number(item, value)
+    for item, key, number, relative in perturbation_items(text, TWIN_KEYS, TwinPerturbationError):
         if key in _SCALES:
             scale = 1.0 + number / 100.0 if relative else number
             if scale <= 0:

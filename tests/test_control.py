@@ -245,6 +245,8 @@ def test_perturbations_parse_and_refuse():
     for bad in ("weight=+10%", "mass", "mass=abc", "mu=nan", "mass=-100%"):
         with pytest.raises(PerturbationError):
             parse_perturbation(bad, p)
+    with pytest.raises(PerturbationError, match="mass is given twice"):  # it silently kept the last
+        parse_perturbation("mass=+10%,mass=+20%", p)
 
 
 def test_steering_follows_the_deck_roll_and_its_negative_control(lib):

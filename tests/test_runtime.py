@@ -192,3 +192,25 @@ def test_blend_margin_refuses_a_blend_at_the_friction_cone(tmp_path):
     loose = edge.blend(0.4, 1, strict=False)
     assert not loose.success and loose.check is not None and loose.check.max_friction_use == pytest.approx(0.995)
     assert edge.blend(0.4, 1, margin=BlendMargin(friction_fraction=0.0)).success
+
+
+def test_window_takes_an_integer_count_and_has_a_bound(lib):
+    """A float n is a TypeError (it was 'slice indices must be integers'); n beyond WINDOW_MAX_N is a
+    ValueError before anything is allocated (10**7 steps took 6.5 GB); at the bound it works."""
+    import tracemalloc
+
+    from skatelib.runtime.entry import WINDOW_MAX_N
+
+    e = lib["v0.30_s1"]
+    with pytest.raises(TypeError, match="n must be an integer"):
+        e.window(0.0, 10.5, 0.1)
+    with pytest.raises(TypeError, match="n must be an integer"):
+        e.window(0.0, True, 0.1)
+    tracemalloc.start()
+    with pytest.raises(ValueError, match="beyond the bound"):
+        e.window(0.0, 10**7, 1e-3)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 1e6
+    w = e.window(0.0, WINDOW_MAX_N, 1e-3)
+    assert w.state.shape[0] == WINDOW_MAX_N and e.window(0.0, np.int64(3), 0.1).state.shape[0] == 3

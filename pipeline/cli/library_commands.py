@@ -74,7 +74,7 @@ def validate(
         "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
                               "verdict in the library (entry attribute closed_loop_json).")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries tracked in parallel.")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries tracked in parallel.")] = 2,
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
     plant: Annotated[PlantKind, typer.Option(
         help="With --closed-loop: model (the verdicts in closed_loop_json) or mujoco (the twin under the "

@@ -32,7 +32,7 @@ def track(
         help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
              "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Entries run in parallel.")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries run in parallel.")] = 2,
     save: Annotated[Path | None, typer.Option(
         help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run (either plant)."
     )] = None,
