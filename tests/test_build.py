@@ -157,6 +157,12 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     r2 = subprocess.run([*CLI, "build", str(cfg_path), "-o", str(out), "--no-progress", "--no-cache",
                          "--allow-failures"], capture_output=True, text=True, env=env)
     assert r2.returncode == 0
+    # A library with no solved entry is of no use: validate and track say so and exit 1 (both
+    # passed it: "all entries valid", an empty table).
+    v = subprocess.run([*CLI, "validate", str(out)], capture_output=True, text=True, env=env)
+    assert v.returncode == 1 and "no entry of this library was solved" in v.stdout, v.stdout + v.stderr
+    t = subprocess.run([*CLI, "track", str(out)], capture_output=True, text=True, env=env)
+    assert t.returncode == 1 and "nothing to track" in t.stderr, t.stdout + t.stderr
 
 
 def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):

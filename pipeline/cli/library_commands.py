@@ -82,6 +82,7 @@ def validate(
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
     from skatelib.pipeline.validate import validate_library
+    from skatelib.runtime import MotionLibrary
 
     verdicts: list[dict[str, Any]] = []
 
@@ -91,9 +92,11 @@ def validate(
             console.print(escape(f"{key}: {message}"))
 
     problems = validate_library(library, report)
+    usable = any(e.success for e in MotionLibrary.open(library))
     if not as_json:
         console.print(f"[bold red]{count(problems, 'entry')} failed validation[/]" if problems
-                      else "[green]all entries valid[/]")
+                      else "[green]all entries valid[/]" if usable
+                      else "[bold red]no entry of this library was solved: nothing in it can be used[/]")
     failed = 0
     results: list[Any] = []
     if closed_loop:
@@ -105,12 +108,12 @@ def validate(
         if not as_json:
             console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
     if as_json:
-        doc = {"library": str(library), "valid": not problems, "entries": verdicts}
+        doc = {"library": str(library), "valid": not problems and usable, "usable": usable, "entries": verdicts}
         if closed_loop:
             doc["closed_loop"] = {"plant": perturb, "simulator": plant.value, "failed": failed,
                                   "entries": [r.as_dict() for r in results]}
         print(json.dumps(doc, indent=1, default=jsonable))
-    if problems or failed:
+    if problems or failed or not usable:
         raise typer.Exit(1)
 
 

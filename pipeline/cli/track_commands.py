@@ -17,7 +17,7 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
-from skatelib.pipeline.views.console import console, count, steer_table, track_table, twin_table
+from skatelib.pipeline.views.console import console, count, err_console, steer_table, track_table, twin_table
 
 
 def track(
@@ -58,6 +58,11 @@ def track(
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
+    from skatelib.runtime import MotionLibrary
+
+    if maneuver is Maneuver.entries and not entry and not any(e.success for e in MotionLibrary.open(library)):
+        err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
+        raise typer.Exit(1)
     if plant is PlantKind.mujoco:
         _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, maneuver,
                     (save, video))
