@@ -85,6 +85,8 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
             mismatch, or a required field missing.
     """
     path = Path(path)
+    if path.is_dir():
+        raise LibraryFormatError(path, "/", "is a folder, not a library file; give the .h5 file in it")
     if not path.is_file():
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
     raw = path.read_bytes()

@@ -151,6 +151,8 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
                        capture_output=True, text=True, env=env)
     assert r.returncode == 1, r.stdout + r.stderr
     assert "failed" in r.stdout
+    row = next(line for line in r.stdout.splitlines() if "v0.30_s1" in line and "Maximum" in line)
+    assert "%" not in row  # a failed row shows its status, not speeds or an off-label figure
     e = MotionLibrary.open(out)["v0.30_s1"]
     assert not e.success and e.attrs["status"] == "Maximum_Iterations_Exceeded"
     assert e.attrs["attempts"] == 3

@@ -167,6 +167,10 @@ def test_library_errors_exit_3_on_stderr(tmp_path):
     """A missing or damaged library: exit 3, message on stderr naming the file."""
     r = _run(["validate", str(tmp_path / "none.h5")])
     assert r.returncode == 3 and "none.h5" in r.stderr and r.stdout == ""
+    folder = tmp_path / "lib.h5"
+    folder.mkdir()
+    r = _run(["info", str(folder)])  # a folder is called a folder (it was "no such file")
+    assert r.returncode == 3 and "is a folder" in r.stderr and "no such file" not in r.stderr
 
 
 def test_inspect_save_is_checked_before_logging(tmp_path):

@@ -83,11 +83,15 @@ def summary(written: Written) -> None:
     for o in outcomes:
         r, ph = o.result, o.physics
         status = r.status.replace("Solve_Succeeded", "ok")
+        figures = ["-"] * 6  # a failed solve's speeds and margins mean nothing: its status says why
+        if r.success:
+            momentum = (ph or {}).get("momentum_speed_mps")
+            off = "-" if momentum is None else f"{(momentum - r.target_velocity_mps) / r.target_velocity_mps:+.2%}"
+            figures = [f"{r.final_velocity_mps:.4f}", fmt(ph, "momentum_speed_mps", "{:.4f}"), off,
+                       fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
+                       fmt(ph, "max_defect", "{:.1e}")]
         t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
-                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), f"{r.final_velocity_mps:.4f}",
-                  fmt(ph, "momentum_speed_mps", "{:.4f}"), fmt(ph, "momentum_speed_error", "{:.2%}"),
-                  fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
-                  fmt(ph, "max_defect", "{:.1e}"))
+                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), *figures)
     console.print(t)
     if written.extra is not None:
         frontier_table(written.extra)
