@@ -79,7 +79,7 @@ class RobotDynamics:
         model, data = self.model, self.data
         # M (its upper triangle), h, the joint Jacobians, the COM and its Jacobian; its bias pass
         # (the recursive Newton-Euler at zero qdd) leaves the bodies' accelerations at zero qdd in
-        # data.a, from which J-dot v follows (a test holds them to a forward pass at zero qdd).
+        # data.a, from which J-dot v follows (a test holds it to the rate of J(q) v along the motion).
         pin.computeAllTerms(model, data, qp, vp)
         M = data.M.copy()
         M[self._lower] = M.T[self._lower]

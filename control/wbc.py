@@ -111,7 +111,7 @@ class _Layout:
     def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings):
         self.legs, self.swing = legs, np.setdiff1d(np.arange(4), legs)
         nf = 3 * len(legs)
-        self.n = n = NV + nf
+        n = NV + nf
         self.q_diag = np.full(NV, s.regularization)
         self.q_diag[3:6] += s.w_attitude
         self.q_diag[joints] += s.w_posture

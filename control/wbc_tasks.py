@@ -36,8 +36,9 @@ UP = np.array([0.0, 0.0, 1.0])
 
 class ContactTable:
     """The planned contact codes on a grid of ``step_s`` from ``t0`` to ``t_stop`` (and
-    ``LOOKAHEAD_S`` beyond), and for each time the next contact each foot is planned to make: what
-    a tick asks of the schedule several times, looked up instead of sampled."""
+    ``LOOKAHEAD_S`` beyond), whether each foot is planned down, and whether it is on the deck now or
+    (swinging) bound for it next: what a tick asks of the schedule several times, looked up instead
+    of sampled."""
 
     LOOKAHEAD_S = 0.6
 
@@ -45,14 +46,13 @@ class ContactTable:
         self.t0, self.step = t0, step_s
         n = math.ceil((t_stop + self.LOOKAHEAD_S - t0) / step_s) + 2
         self.codes = np.array([contact_at(t0 + k * step_s) for k in range(n)], dtype=np.int8)
-        self.next = self.codes.copy()  # each foot's code now, or for a swinging one its next stance's
+        upcoming = self.codes.copy()  # each foot's code now, or for a swinging one its next stance's
         for k in range(n - 2, -1, -1):
-            later = self.next[k + 1]
+            later = upcoming[k + 1]
             fill = (self.codes[k] == SWING) & (later != SWING)
-            self.next[k, fill] = later[fill]
-
+            upcoming[k, fill] = later[fill]
         self.planned = self.codes != SWING  # (n, 4) planned down
-        self.deck_next = self.next == BOARD  # (n, 4) now or next on the deck
+        self.deck_next = upcoming == BOARD  # (n, 4) now or next on the deck
 
     def index(self, t: float) -> int:
         """The grid row of ``t`` (clamped)."""
@@ -60,9 +60,6 @@ class ContactTable:
 
     def at(self, t: float) -> np.ndarray:
         return self.codes[self.index(t)]
-
-    def next_contact(self, t: float) -> np.ndarray:
-        return self.next[self.index(t)]
 
 
 @dataclass

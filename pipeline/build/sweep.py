@@ -160,10 +160,10 @@ def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
     except ImportError as e:
         raise ImportError("the dask backend needs dask.distributed: pip install 'skatelib[dask]'") from e
     own = not isinstance(scheduler, Client)
-    if own and str(scheduler).startswith("tls://"):
-        client = Client(scheduler, security=tls_settings())  # certificates from the dask config
+    if own:  # a tls:// scheduler with the certificates of the dask config
+        client = Client(scheduler, security=tls_settings() if str(scheduler).startswith("tls://") else None)
     else:
-        client = Client(scheduler) if own else scheduler
+        client = scheduler
     try:
         futures = [client.submit(run_task, task, use_cache, None, None, True, pure=False) for task in tasks]
         outcomes: list[Outcome] = []

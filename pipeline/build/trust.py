@@ -74,7 +74,7 @@ def check_own(folder: Path) -> None:
     Raises:
         OutputError: Naming the folder and saying what to do.
     """
-    for d in (folder, *(p for p in (folder / "entries",) if p.exists())):
+    for d in _folders(folder):
         why = own_problem(d)
         if why:
             raise OutputError(d, f"the cache folder {why}: whoever can write it can run code in your builds. "
@@ -88,11 +88,17 @@ def check_shared(folder: Path) -> None:
     Raises:
         OutputError: Naming the folder and ``$SKATELIB_TRUSTED_CACHE``.
     """
-    for d in (folder, *(p for p in (folder / "entries",) if p.exists())):
+    for d in _folders(folder):
         why = shared_problem(d)
         if why:
             raise OutputError(d, f"the shared cache named in ${TRUSTED_ENV} {why}. Have its owner make it "
                                  f"read-only (chmod -R a-w {folder}), or unset {TRUSTED_ENV}")
+
+
+def _folders(cache: Path) -> tuple[Path, ...]:
+    """A cache folder and its ``entries`` folder, when it has one."""
+    entries = cache / "entries"
+    return (cache, entries) if entries.exists() else (cache,)
 
 
 def _inside(path: Path, folder: Path) -> bool:

@@ -42,10 +42,11 @@ class SwingForces:
 
 @dataclass(frozen=True)
 class DeckSupport:
-    """Each foot on the deck pushes down on it with at least ``fraction`` of the robot's weight
-    (its vertical force: a bound on the variable, no constraint row). Without it an optimum may
-    balance the body on the line between two feet with the third nearly unloaded: a state the
-    single rigid body holds and a robot with swinging legs tips over."""
+    """Each foot on the deck pushes down on it with at least ``min_force_N`` (the config's
+    ``min_deck_load_fraction`` of the robot's weight; its vertical force: a bound on the variable,
+    no constraint row). Without it an optimum may balance the body on the line between two feet
+    with the third nearly unloaded: a state the single rigid body holds and a robot with swinging
+    legs tips over."""
 
     schedule: KnotSchedule
     min_force_N: float
