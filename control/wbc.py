@@ -26,6 +26,7 @@ from skatelib.control.qp import QpSolveFailed
 
 NV = 18
 EQUALITY = 5  # DAQP's sense of a row held at equality (active and immutable)
+FLOOR_NORMAL = np.array([0.0, 0.0, 1.0])
 
 
 @dataclass(frozen=True)
@@ -64,7 +65,8 @@ class WbcTargets:
 
     Attributes:
         stance: (4,) feet held on their surface.
-        normals: (3, 4) the surface normal under each stance foot.
+        on_deck: (4,) feet on (or bound for) the deck; the others' surface is the floor.
+        deck_normal: (3,) the deck's normal.
         stance_acc: (3, 4) the stance feet's accelerations (their deck point's, with feedback).
         com_acc / angular_acc: The model COM point's acceleration; the trunk's angular
             acceleration in the trunk frame.
@@ -74,13 +76,19 @@ class WbcTargets:
     """
 
     stance: np.ndarray
-    normals: np.ndarray
+    on_deck: np.ndarray
+    deck_normal: np.ndarray
     stance_acc: np.ndarray
     com_acc: np.ndarray
     angular_acc: np.ndarray
     swing_acc: np.ndarray
     forces: np.ndarray
     posture_acc: np.ndarray
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(3, 4) the surface normal under each foot."""
+        return np.where(self.on_deck, self.deck_normal[:, None], FLOOR_NORMAL[:, None])
 
 
 @dataclass
@@ -135,7 +143,6 @@ class _Layout:
         # Where (k, per_leg, 3) blocks go in rows.ravel(): each foot's normal, then its facets.
         r_idx = r[:, None, None] + np.arange(per_leg)[None, :, None] + np.zeros((1, 1, 3), dtype=int)
         c_idx = NV + 3 * k[:, None, None] + np.zeros((1, per_leg, 1), dtype=int) + np.arange(3)
-        self.blocks = np.zeros((len(legs), per_leg, 3))
         self.flat = np.ravel_multi_index((r_idx.ravel(), c_idx.ravel()), self.rows.shape)
 
 
@@ -151,6 +158,8 @@ class WholeBodyController:
         self.tau_max = torque_limit_Nm
         self.mu = mu
         self._layouts: dict[bytes, _Layout] = {}
+        self._floor_rows = self._surface_rows(FLOOR_NORMAL)
+        self._deck: tuple[bytes, np.ndarray] = (b"", self._floor_rows)  # the last deck normal's rows
 
     def solve(self, T: DynamicsTerms, tg: WbcTargets) -> WbcOutput:
         """Torques of this tick.
@@ -196,6 +205,11 @@ class WholeBodyController:
             out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s)
         return out
 
+    def _surface_rows(self, normal: np.ndarray) -> np.ndarray:
+        """(1 + 4, 3) a stance foot's rows on a surface: its normal, then the pyramid's facets (or
+        the normal alone without the friction rows)."""
+        return np.array([normal.tolist(), *(pyramid(normal, self.mu) if self.s.friction_rows else [])])
+
     def _constraints(self, L: _Layout, T: DynamicsTerms, tg: WbcTargets, JcT: np.ndarray) -> None:
         """This tick's rows and bounds into ``L``'s arrays (``JcT``: the stance feet's stacked
         Jacobians, transposed)."""
@@ -207,16 +221,10 @@ class WholeBodyController:
         rows[6:6 + nf, :NV] = JcT.T  # stance feet
         up[6:6 + nf] = lo[6:6 + nf] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
         if len(legs):
-            blocks = L.blocks
-            surfaces: dict[bytes, np.ndarray] = {}  # feet on one surface share its rows
-            for i, leg in enumerate(legs):
-                normal = tg.normals[:, leg]
-                key = normal.tobytes()
-                block = surfaces.get(key)
-                if block is None:
-                    rows_ = [normal.tolist(), *(pyramid(normal, self.mu) if self.s.friction_rows else [])]
-                    block = surfaces[key] = np.array(rows_)
-                blocks[i] = block
+            key = tg.deck_normal.tobytes()
+            if key != self._deck[0]:
+                self._deck = (key, self._surface_rows(tg.deck_normal))
+            blocks = np.where(tg.on_deck[legs, None, None], self._deck[1], self._floor_rows)
             rows.reshape(-1)[L.flat] = blocks.ravel()
         rows[r:, :NV] = T.M[j]  # joint torques within the limit
         rows[r:, NV:] = -JcT[j]

@@ -95,19 +95,21 @@ class TaskMaker:
         rpy[2] += st.deck_yaw
         ang_acc = (g.kp_attitude * (R.T @ pin.log3(pin.rpy.rpyToMatrix(rpy) @ R.T))
                    + g.kd_attitude * (bt.omega - st.trunk_omega))
-        swing_acc, normals = self._feet(k, st, T.feet, feet_v, bt, (level, Ry))
+        swing_acc, on_deck = self._feet(k, st, T.feet, feet_v, bt, (level, Ry))
         W = pin.skew(st.deck_omega)
         spin = W @ (T.feet - st.deck_pos[:, None])  # the deck points' velocities from its rotation
         stance_acc = np.where(st.foot_touch == ON_FLOOR, -g.stance_gain * feet_v,
                               W @ spin + g.stance_gain * (st.deck_v[:, None] + spin - feet_v))
         posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
-        return WbcTargets(stance=self.stance.copy(), normals=normals, stance_acc=stance_acc, com_acc=com_acc,
-                          angular_acc=ang_acc, swing_acc=swing_acc, forces=forces, posture_acc=posture)
+        return WbcTargets(stance=self.stance.copy(), on_deck=on_deck, deck_normal=deck_R[:, 2], stance_acc=stance_acc,
+                          com_acc=com_acc, angular_acc=ang_acc, swing_acc=swing_acc, forces=forces,
+                          posture_acc=posture)
 
     def _feet(self, k: int, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
               frame: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Swinging feet's accelerations and every foot's surface normal (module docstring), at the
-        contact table's index ``k``; ``frame``: the level board frame's origin and yaw rotation."""
+        """Swinging feet's accelerations and which feet are on (or bound for) the deck (module
+        docstring), at the contact table's index ``k``; ``frame``: the level board frame's origin and
+        yaw rotation."""
         g, table = self.g, self.contacts
         level, Ry = frame
         deck = table.deck_next[k]
@@ -120,4 +122,4 @@ class TaskMaker:
         reach = table.planned[k] & ~self.stance
         target -= TOUCHDOWN_REACH_M * (normals * reach)
         acc = Ry @ bt.feet_a + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
-        return acc, normals
+        return acc, on_deck

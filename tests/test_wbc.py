@@ -116,8 +116,8 @@ def _standing(pair, **wbc):
 
 
 def _targets(com_acc, forces=None):
-    up = np.tile([[0.0], [0.0], [1.0]], (1, 4))
-    return WbcTargets(stance=np.ones(4, dtype=bool), normals=up, stance_acc=np.zeros((3, 4)),
+    return WbcTargets(stance=np.ones(4, dtype=bool), on_deck=np.zeros(4, dtype=bool),
+                      deck_normal=np.array([0.0, 0.0, 1.0]), stance_acc=np.zeros((3, 4)),
                       com_acc=np.asarray(com_acc, dtype=float), angular_acc=np.zeros(3), swing_acc=np.zeros((3, 4)),
                       forces=np.zeros((3, 4)) if forces is None else forces, posture_acc=np.zeros(12))
 
