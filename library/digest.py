@@ -71,15 +71,13 @@ def verify_raw(raw: bytes, name: bytes) -> tuple[bool, str | None]:
     return found, None
 
 
-def seal(path: Path, marker: bytes) -> str:
-    """Replace ``marker`` in the file at ``path`` by the file's digest; returns the digest."""
-    raw = bytearray(path.read_bytes())
+def seal(raw: bytearray, marker: bytes) -> str:
+    """Replace ``marker`` in a file's bytes by the file's digest, in place; returns the digest."""
     d = file_digest(raw, marker)
     if d is None:
-        raise RuntimeError(f"{path}: checksum placeholder not found exactly once")
+        raise RuntimeError("checksum placeholder not found exactly once")
     pos = bytes(raw).find(marker)
     raw[pos : pos + DIGEST_LEN] = d.encode()
-    path.write_bytes(bytes(raw))
     return d
 
 

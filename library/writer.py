@@ -8,6 +8,7 @@ and units. Readers that only need the data open a handful of datasets.
 
 from __future__ import annotations
 
+import io
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -17,7 +18,7 @@ from typing import Any
 import h5py
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.atomic import atomic_path
+from skatelib.library.atomic import write_atomic
 from skatelib.library.digest import placeholder, seal
 from skatelib.library.records import EntryRecord, jsonable
 
@@ -83,10 +84,14 @@ def write_library(
             }
         )
     marker = placeholder()
-    with atomic_path(path) as tmp:
-        _write_h5(tmp, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
-        seal(tmp, marker)
-    return path
+    # HDF5 writes into memory and Python writes the bytes: a full device is then an error of one
+    # write() (refused before it starts when the free space is short), never one inside HDF5's
+    # own I/O, which can leave the library in a state that crashes the process.
+    buffer = io.BytesIO()
+    _write_h5(buffer, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
+    raw = bytearray(buffer.getbuffer())
+    seal(raw, marker)
+    return write_atomic(path, bytes(raw))
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,8 @@ class _Model:
     text: Mapping[str, str]
 
 
-def _write_h5(tmp: Path, index: dict[str, Any], model: _Model, entries: Sequence[EntryRecord], marker: bytes) -> None:
+def _write_h5(tmp: io.BytesIO, index: dict[str, Any], model: _Model, entries: Sequence[EntryRecord],
+              marker: bytes) -> None:
     names = list(entries[0].arrays) if entries else []
     stored: dict[str, np.ndarray] = {}
     with h5py.File(tmp, "w") as f:

@@ -165,6 +165,14 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     assert v.returncode == 1 and "no entry of this library was solved" in v.stdout, v.stdout + v.stderr
     t = subprocess.run([*CLI, "track", str(out)], capture_output=True, text=True, env=env)
     assert t.returncode == 1 and "nothing to track" in t.stderr, t.stdout + t.stderr
+    # plot draws no failed trajectory as if it were a motion; inspect marks it FAILED.
+    p = subprocess.run([*CLI, "plot", str(out), "-o", str(tmp_path / "fig")], capture_output=True, text=True, env=env)
+    assert p.returncode == 1 and "no entry of this library was solved" in p.stdout, p.stdout + p.stderr
+    assert not list((tmp_path / "fig").iterdir())
+    rrd = tmp_path / "fail.rrd"
+    i = subprocess.run([*CLI, "inspect", str(out), "--save", str(rrd)], capture_output=True, text=True, env=env)
+    assert i.returncode == 0 and "marked FAILED" in i.stdout and "v0.30_s1" in i.stdout, i.stdout + i.stderr
+    assert b"**FAILED**" in rrd.read_bytes()
 
 
 def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):

@@ -44,7 +44,7 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
 
     Args:
         what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
-            ``"twin"`` (a MuJoCo MJCF file) or ``"video"`` (an MP4 or a GIF).
+            ``"twin"`` (a MuJoCo MJCF file), ``"video"`` (an MP4 or a GIF) or ``"frontier"`` (JSON).
 
     Raises:
         OutputError: Saying what to do.
@@ -70,10 +70,33 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
     remove_stale_temporaries(folder)
 
 
-def check_cache_dir() -> Path:
+def check_folder(out: Path) -> None:
+    """A folder that a command writes files into (``plot -o``): not a file, creatable, writable;
+    stale temporaries of killed writers removed.
+
+    Raises:
+        OutputError: Saying what to do.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise OutputError(out, "is a file; name a folder for the figures, e.g. out/figures")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out, prefix=".skatelib-probe-"):
+            pass
+    except OSError as e:
+        raise OutputError(out, f"the folder cannot be written ({e.strerror}); choose another one") from e
+    remove_stale_temporaries(out, "skatelib")
+
+
+def check_cache_dir(entries_too: bool = True) -> Path:
     """The cache folder exists (or can be made, private to the user) and is writable, it and its
     subfolders belong to the user and no one else can write them, and a shared cache named in
     ``$SKATELIB_TRUSTED_CACHE`` is read-only (:mod:`skatelib.pipeline.build.trust`).
+
+    Args:
+        entries_too: False when the command keeps only compiled code there (``--no-cache``,
+            ``solve``, ``frontier``): the advice then is not to pass ``--no-cache``.
 
     Raises:
         OutputError: Naming the folder, what is wrong with it and what to do.
@@ -86,8 +109,11 @@ def check_cache_dir() -> Path:
         with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
             pass
     except OSError as e:
-        raise OutputError(d, f"the cache folder cannot be used ({e.strerror}); set ${CACHE_ENV} to a writable "
-                             "folder, or pass --no-cache") from e
+        advice = ("set ${env} to a writable folder, or pass --no-cache" if entries_too else
+                  "the compiled stage functions are kept there even without the entry cache: set ${env} to a "
+                  "writable folder, or set [optimization] compile = false (3-4x slower solves)")
+        raise OutputError(d, f"the cache folder cannot be used ({e.strerror}); "
+                             + advice.format(env=CACHE_ENV)) from e
     shared = trust.trusted_cache()
     if shared is not None:
         trust.check_shared(shared)
@@ -128,6 +154,15 @@ def is_mjcf(path: Path) -> bool:
         return False
 
 
+def is_json(path: Path) -> bool:
+    """Whether ``path`` starts like a JSON object (a frontier file)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(64).lstrip().startswith(b"{")
+    except OSError:
+        return False
+
+
 def is_video(path: Path) -> bool:
     """Whether ``path`` starts like an MP4 (an ``ftyp`` box) or a GIF."""
     try:
@@ -144,4 +179,5 @@ _OUTPUTS = {
     "recording": ("recording.rrd", is_rerun_recording, "Rerun recording"),
     "twin": ("twin.xml", is_mjcf, "MuJoCo model"),
     "video": ("run.mp4", is_video, "video"),
+    "frontier": ("frontier.json", is_json, "JSON file"),
 }

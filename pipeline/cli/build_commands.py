@@ -6,7 +6,7 @@ from __future__ import annotations
 import enum
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
@@ -106,19 +106,30 @@ def frontier(
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (warm-started climb, then bisection)."""
+    from skatelib.library.atomic import write_atomic
+    from skatelib.pipeline.build.preflight import check_cache_dir, check_output
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
 
     cfg = load_config(config, QuadrupedConfig)
+    if out is not None:
+        check_output(out, [cfg.path], what="frontier")
+    if cfg.optimization.compile:
+        check_cache_dir(entries_too=False)
     search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
-    points = find_frontier(cfg, strides or cfg.sweep.strides, search, jobs)
+    counts = sorted(set(strides or cfg.sweep.strides))
+    console.print(f"searching the frontier of {count(len(counts), 'stride count')} ({', '.join(map(str, counts))}; "
+                  "each a climb and a bisection of solves on its own worker, about 10-30 s each)")
+
+    def done(point: Any, finished: int) -> None:
+        console.print(escape(f"  {point.n_strides} strides: {point.fastest_mps:.3f} m/s, stopped by {point.limit} "
+                             f"({finished}/{len(counts)} done)"))
+
+    points = find_frontier(cfg, counts, search, jobs, done)
     frontier_table(points)
     if out is not None:
-        from skatelib.library.atomic import atomic_path
-
-        with atomic_path(out) as tmp:
-            tmp.write_text(frontier_json(points, search))
+        write_atomic(out, frontier_json(points, search).encode())
         console.print(f"wrote {escape(str(out))}")
 
 
@@ -147,6 +158,10 @@ def solve(
 
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
+    if cfg.optimization.compile:
+        from skatelib.pipeline.build.preflight import check_cache_dir
+
+        check_cache_dir(entries_too=False)
     cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
     from skatelib.pipeline.quadruped.builder import summary

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import enum
 import json
+import shlex
+import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -137,8 +139,19 @@ def inspect(
     if save is not None:
         check_output(save, [library], force, what="recording")
     roots = inspect_library(library, entry, save, spawn, overlay)
-    where = escape(f" to {save}; open it with: rerun {save}") if save else ""
+    if save:
+        viewer = Path(sys.executable).parent / "rerun"  # beside this Python: on PATH or not
+        where = escape(f" to {save}; open it with: {shlex.quote(str(viewer))} {shlex.quote(str(save))}")
+    else:
+        where = ""
     console.print(f"logged {count(len(roots), 'entry')}{where}")
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(library)
+    failed = [k for k in (entry or [e.key for e in lib]) if not lib[k].success]
+    if failed:
+        console.print(escape(f"{count(len(failed), 'entry')} failed to solve and marked FAILED in its summary: "
+                             f"{', '.join(failed)}"))
 
 
 def plot(
@@ -153,11 +166,23 @@ def plot(
     """Figures of a library (matplotlib). Quadruped: board and momentum speed over time (the paper's
     Fig. 6), deck roll, the push foot's forces against the friction cone, the reachable-speed
     frontier. Humanoid: COM speed and height, COM and ZMP paths over the support polygons."""
-    from skatelib.pipeline.views.figures import FORMATS, write_figures
+    from skatelib.pipeline.build.preflight import check_folder
+    from skatelib.pipeline.views.figures import FORMATS, NothingSolved, write_figures
+    from skatelib.runtime import MotionLibrary
 
+    check_folder(out)
     formats = tuple(f.value for f in fmt) if fmt else FORMATS
-    for p in write_figures(library, out, frontier_file, formats):
+    try:
+        written = write_figures(library, out, frontier_file, formats)
+    except NothingSolved as e:
+        console.print(f"[bold red]{escape(str(e))}[/]")
+        raise typer.Exit(1) from e
+    for p in written:
         console.print(escape(str(p)))
+    failed = [e.key for e in MotionLibrary.open(library) if not e.success]
+    if failed:
+        console.print(escape(f"left out {count(len(failed), 'failed entry')} (stored with success = false): "
+                             f"{', '.join(failed)}"))
 
 
 COMMANDS = (info, validate, inspect, plot)

@@ -15,7 +15,7 @@ from skatelib.library import schema
 from skatelib.library.channels import HUMANOID_STATE_NAMES, HUMANOID_STATE_UNITS
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.humanoid.motion import stored_plan
-from skatelib.pipeline.views.figures import library_name, panels
+from skatelib.pipeline.views.figures import library_name, panels, solved
 from skatelib.runtime import MotionLibrary
 
 
@@ -46,14 +46,14 @@ def plot_com(lib: MotionLibrary, plt: Any) -> Any:
     for ax in (speed, height):
         ax.grid(alpha=0.3)
     height.ticklabel_format(axis="y", useOffset=False)
-    z = np.concatenate([e.channel("com_z") for e in lib])
+    z = np.concatenate([e.channel("com_z") for e in solved(lib)])
     height.set_ylim(z.min() - 0.02, z.max() + 0.02)  # a constant height stays a flat line in the middle
     return fig
 
 
 def plot_footprints(lib: MotionLibrary, plt: Any) -> Any:
     """Top view per entry: COM path (red), ZMP (green), support polygons of the stored plan (blue)."""
-    entries = list(lib)
+    entries = solved(lib)
     fig, axes = plt.subplots(len(entries), 1, figsize=(10, 2.8 * len(entries)), squeeze=False,
                              layout="constrained")
     fig.suptitle(f"{library_name(lib)}: COM (red), ZMP (green) and support polygons (blue), from above")

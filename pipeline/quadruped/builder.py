@@ -22,7 +22,7 @@ def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     from skatelib.pipeline.build.preflight import check_cache_dir
 
     if cfg.optimization.compile and not opts.cache:
-        check_cache_dir()
+        check_cache_dir(entries_too=False)
 
 
 def announce(cfg: QuadrupedConfig) -> None:

@@ -11,7 +11,7 @@ processes, like the sweep.
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
@@ -95,14 +95,19 @@ def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch) 
 
 
 def find_frontier(config: QuadrupedConfig, strides: Sequence[int], search: FrontierSearch = FrontierSearch(),
-                  jobs: int = 2) -> list[FrontierPoint]:
-    """The frontier of every stride count, one worker process per stride count."""
+                  jobs: int = 2, done: Callable[[FrontierPoint, int], None] | None = None) -> list[FrontierPoint]:
+    """The frontier of every stride count, one worker process per stride count; ``done(point,
+    finished)`` is called as each stride count finishes."""
     from joblib import Parallel, delayed, parallel_config
 
     cfg = replace(config, sweep=replace(config.sweep, strides=tuple(strides)))
+    points: list[FrontierPoint] = []
     with parallel_config(backend="loky", inner_max_num_threads=1):  # BLAS/OpenMP at 1 thread in the workers only
-        points = Parallel(n_jobs=min(jobs, len(strides)), backend="loky")(
-            delayed(frontier_for)(cfg, s, search) for s in sorted(strides, reverse=True))
+        for point in Parallel(n_jobs=min(jobs, len(strides)), backend="loky", return_as="generator_unordered")(
+                delayed(frontier_for)(cfg, s, search) for s in sorted(strides, reverse=True)):
+            points.append(point)
+            if done is not None:
+                done(point, len(points))
     return sorted(points, key=lambda p: p.n_strides)
 
 

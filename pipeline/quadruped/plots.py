@@ -21,7 +21,7 @@ from skatelib.library.channels import GROUND
 from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.pipeline.views.console import console
-from skatelib.pipeline.views.figures import by_strides, library_name, panels
+from skatelib.pipeline.views.figures import by_strides, library_name, panels, solved
 from skatelib.runtime import Entry, MotionLibrary
 
 
@@ -48,7 +48,7 @@ def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
     groups = by_strides(lib)
     fig, axes = panels(plt, len(groups), f"{library_name(lib)}: board speed (solid) and momentum speed (dashed)")
     cmap = plt.get_cmap("viridis")
-    speeds = sorted({e.target_velocity_mps for e in lib})
+    speeds = sorted({e.target_velocity_mps for e in solved(lib)})
     for ax, (n, entries) in zip(axes, groups.items(), strict=True):
         for e in entries:
             c = cmap(speeds.index(e.target_velocity_mps) / max(1, len(speeds) - 1))
@@ -96,7 +96,7 @@ def plot_push_forces(lib: MotionLibrary, plt: Any) -> Any:
     """Per entry, the pushing foot's |f_t| against Coulomb's mu f_n and the plan's mu_plan f_n."""
     mu = float(lib.model["friction_mu"])
     mu_plan = float(lib.model.get("friction_mu_plan", mu))
-    entries = list(lib)
+    entries = solved(lib)
     cols = 3
     rows = -(-len(entries) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(11, 2.2 * rows), squeeze=False, layout="constrained")

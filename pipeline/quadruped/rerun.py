@@ -4,8 +4,6 @@ arrows (blue on the board, orange on the ground) and the plots of its tab."""
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,11 +28,8 @@ class Robot:
     """Pinocchio model and visual shapes from the URDF stored in the library."""
 
     def __init__(self, urdf_text: str):
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / "robot.urdf"
-            path.write_text(urdf_text)
-            self.model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
-            self.geoms = pin.buildGeomFromUrdf(self.model, str(path), pin.GeometryType.VISUAL)
+        self.model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+        self.geoms = pin.buildGeomFromUrdfString(self.model, urdf_text, pin.GeometryType.VISUAL)
         self.data = self.model.createData()
         self.gdata = pin.GeometryData(self.geoms)
         self.q_idx = np.array([self.model.joints[j].idx_q for j in range(2, self.model.njoints)])

@@ -6,14 +6,28 @@ the writer.
 
 from __future__ import annotations
 
+import io
+import os
+import shutil
+import tempfile
 from pathlib import Path
 from typing import Any
 
-from skatelib.library.atomic import atomic_path
+from skatelib.library.atomic import NO_ROOM, no_room
+from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.kinds import kind_named
 from skatelib.runtime import Entry, MotionLibrary
 
 FORMATS = ("png", "svg")
+
+
+class NothingSolved(SkatelibError):
+    """A library none of whose entries was solved: there is nothing to draw or track."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        super().__init__(f"{path}: no entry of this library was solved (every one is stored with success = false); "
+                         "nothing in it can be drawn. See `skatelib info` for their statuses")
 
 
 def _pyplot() -> Any:
@@ -31,9 +45,14 @@ def library_name(lib: MotionLibrary) -> str:
     return str(lib.attrs.get("name", lib.path.stem))
 
 
+def solved(lib: MotionLibrary) -> list[Entry]:
+    """The entries the figures draw: those solved (a failed entry's trajectory is no motion to show)."""
+    return [e for e in lib if e.success]
+
+
 def by_strides(lib: MotionLibrary) -> dict[int, list[Entry]]:
     groups: dict[int, list[Entry]] = {}
-    for e in lib:
+    for e in solved(lib):
         groups.setdefault(e.n_strides, []).append(e)
     return dict(sorted(groups.items()))
 
@@ -46,24 +65,44 @@ def panels(plt: Any, n: int, title: str) -> tuple[Any, list[Any]]:
 
 def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
                   formats: tuple[str, ...] = FORMATS) -> list[Path]:
-    """Write the figures of the library at ``path`` into ``out_dir`` (each file atomically).
+    """Write the figures of the library at ``path`` into ``out_dir``, all or none: they are drawn
+    in memory, written into a temporary folder beside them and moved into place only when every
+    one is written.
 
     Raises:
-        SkatelibError: A frontier file that is not one, or one given for a kind without a frontier.
+        SkatelibError: A frontier file that is not one, or one given for a kind without a frontier;
+            a library with no solved entry.
+        OutputError: No room for the figures (nothing written, old figures untouched).
     """
     lib = MotionLibrary.open(path)
     kind = kind_named(lib.kind, lib.path)  # an unknown kind is refused, naming the known ones
+    if not solved(lib):
+        raise NothingSolved(lib.path)
     plt = _pyplot()
-    figures = kind.figures(lib, plt, frontier_file)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written = []
-    for stem, fig in figures.items():
+    drawn: dict[str, bytes] = {}
+    for stem, fig in kind.figures(lib, plt, frontier_file).items():
         for fmt in formats:
-            target = out_dir / f"{stem}.{fmt}"
-            with atomic_path(target) as tmp:
-                fig.savefig(tmp, format=fmt, dpi=110)
-            written.append(target)
+            buffer = io.BytesIO()
+            fig.savefig(buffer, format=fmt, dpi=110)
+            drawn[f"{stem}.{fmt}"] = buffer.getvalue()
         plt.close(fig)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    needed = sum(len(b) for b in drawn.values())
+    free = shutil.disk_usage(out_dir).free
+    if free < needed:
+        raise no_room(out_dir, needed)
+    staging = Path(tempfile.mkdtemp(prefix=f"skatelib-{os.getpid()}-figures-", dir=out_dir))
+    try:
+        for name, data in drawn.items():
+            (staging / name).write_bytes(data)
+        written = []
+        for name in drawn:
+            os.replace(staging / name, out_dir / name)
+            written.append(out_dir / name)
+    except OSError as e:
+        if e.errno in NO_ROOM:
+            raise no_room(out_dir, needed, e) from e
+        raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     return written
-
-

@@ -8,17 +8,17 @@ a tab with every entry side by side, and the viewer.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 from skatelib.library import schema
-from skatelib.library.atomic import atomic_path
+from skatelib.library.atomic import write_atomic
 from skatelib.library.errors import LibraryFormatError
 from skatelib.pipeline.kinds import RobotKind, kind_named
 from skatelib.runtime import Entry, MotionLibrary
@@ -56,7 +56,8 @@ def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
 def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
     """A short text at ``<root>/summary`` saying which entry this is and how it did."""
     a = e.attrs
-    parts = [f"{e.target_velocity_mps:.2f} m/s x {e.n_strides}", f"{a['status']}" + ("" if e.success else " (failed)")]
+    status = f"{a['status']}" if e.success else f"**FAILED** ({a['status']}): not a usable motion"
+    parts = [f"{e.target_velocity_mps:.2f} m/s x {e.n_strides}", status]
     if "iterations" in a:
         parts[-1] += f", {a['iterations']} iterations"
     ph = json.loads(str(a.get(schema.A_PHYSICS, "{}")))
@@ -95,21 +96,24 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
     log = kind_rerun(lib).rerun_logger(lib)
     rec = rr.RecordingStream(f"skatelib-track-{lib.path.stem}")
     roots = []
-    with atomic_path(save) as tmp:
-        rec.save(str(tmp))
-        rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        for n, (key, run) in enumerate(runs):
-            offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
-            rec.log(f"/{key}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # its tab's 3D view
-            log(rec, lib[key], f"/{key}/reference", offset)
-            _log_summary(rec, f"/{key}/reference", lib[key])
-            beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
-            log(rec, run, f"/{key}/closed_loop", beside)
-            roots += [f"/{key}/reference", f"/{key}/closed_loop"]
-        rec.send_blueprint(blueprint(lib, roots))
-        rec.flush()
-        rec.disconnect()
+    stream = rr.binary_stream(recording=rec)  # in memory, then written whole (a full device: one clear error)
+    rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    for n, (key, run) in enumerate(runs):
+        offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
+        rec.log(f"/{key}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # its tab's 3D view
+        log(rec, lib[key], f"/{key}/reference", offset)
+        _log_summary(rec, f"/{key}/reference", lib[key])
+        beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
+        log(rec, run, f"/{key}/closed_loop", beside)
+        roots += [f"/{key}/reference", f"/{key}/closed_loop"]
+    rec.send_blueprint(blueprint(lib, roots))
+    _write_stream(stream, save)
     return roots
+
+
+def _write_stream(stream: Any, save: Path) -> None:
+    data = stream.read(flush=True)
+    write_atomic(save, data or b"")
 
 
 def put_viewer_on_path() -> None:
@@ -128,13 +132,16 @@ def inspect_library(path: Path, keys: list[str] | None, save: Path | None, spawn
         raise LibraryFormatError(path, "/model/robot_urdf", "the library carries no robot description; rebuild it")
     for k in keys or []:
         lib[k]  # raises EntryNotFound with the valid keys before anything is written
-    rec = rr.RecordingStream(f"skatelib-{path.stem}")
-    with contextlib.ExitStack() as stack:
-        if save is not None:
-            rec.save(str(stack.enter_context(atomic_path(save))))  # moved into place only on success
-        if spawn:
-            put_viewer_on_path()
-            rec.spawn()
+    roots: list[str] = []
+    if save is not None:  # in memory, then written whole (a full device: one clear error, no partial file)
+        rec = rr.RecordingStream(f"skatelib-{path.stem}")
+        stream = rr.binary_stream(recording=rec)
+        roots = log_library(lib, rec, keys, overlay)
+        _write_stream(stream, save)
+    if spawn:
+        put_viewer_on_path()
+        rec = rr.RecordingStream(f"skatelib-{path.stem}")
+        rec.spawn()
         roots = log_library(lib, rec, keys, overlay)
         rec.flush()
         rec.disconnect()
