@@ -130,3 +130,39 @@ def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
                        np.asarray(ca.densify(sym.hess(zv, pv, 0.8, lam))), atol=1e-12)
     compiles = [ln for ln in calls.read_text().splitlines() if "-shared" in ln]
     assert len(compiles) == 1 and "-march=native" not in compiles[0]
+
+
+def test_builds_started_together_compile_once(tmp_path):
+    """Two processes asking for the same stage functions at once in an empty folder: one compiles
+    (the compiler is run once with -shared, and one 'compiling' line is logged), the other waits
+    for it and loads the same library; a second run logs nothing (a cache hit says nothing)."""
+    import subprocess
+    import sys
+
+    from skatelib.pipeline.ocp import stagewise
+
+    real = stagewise.c_compiler()
+    if real is None:
+        pytest.skip("no C compiler")
+    slow = tmp_path / "slow-cc"
+    calls = tmp_path / "calls.txt"
+    slow.write_text(f'#!/bin/sh\necho "$@" >> {calls}\nsleep 1\nexec {real} "$@"\n')
+    slow.chmod(0o755)
+    script = (
+        "import logging, sys\n"
+        "from pathlib import Path\n"
+        "from tests.test_stagewise import _toy_stage\n"
+        "from skatelib.pipeline.ocp import stagewise as s\n"
+        "logging.basicConfig(level=logging.INFO, format='%(name)s %(message)s', stream=sys.stdout)\n"
+        f"f = s.compiled_stage_functions(*_toy_stage(), s.CompileTarget(Path({str(tmp_path / 'cache')!r}), ('-O0',)))\n"
+        "print('value', f.value([0.3, -1.2, 0.5, 0.9], [1.7]))\n")
+    env = {**__import__("os").environ, "CC": str(slow)}
+    procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True, env=env)
+             for _ in range(2)]
+    outs = [p.communicate(timeout=120)[0] for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    assert sum(o.count("skatelib.compile compiling") for o in outs) == 1, outs
+    assert len({o.split("value")[1] for o in outs}) == 1
+    assert sum("-shared" in line for line in calls.read_text().splitlines()) == 1
+    again = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120)
+    assert again.returncode == 0 and "compiling" not in again.stdout, again.stdout + again.stderr

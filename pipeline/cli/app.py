@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import logging
 from typing import Annotated, Any
 
 import typer
@@ -41,6 +42,13 @@ def _root(
 app.callback()(_root)
 
 
+class _ConsoleLine(logging.Handler):
+    """Prints the pipeline's one-line notices (``skatelib.compile``: stage functions being compiled)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        console.print(escape(record.getMessage()))
+
+
 def _sigterm(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
 
@@ -57,6 +65,9 @@ def main() -> None:
     if debug:
         sys.argv.remove("--debug")
     signal.signal(signal.SIGTERM, _sigterm)
+    notices = logging.getLogger("skatelib.compile")  # a line when (only when) code is compiled
+    notices.addHandler(_ConsoleLine())
+    notices.setLevel(logging.INFO)
     try:
         app()
     except SystemExit as e:

@@ -12,7 +12,10 @@ functions can be compiled to C once and cached on disk by content hash.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
+import logging
 import os
 import platform
 import shutil
@@ -73,6 +76,7 @@ def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
 # takes it) evaluates faster with results identical to the last bit (docs/design-notes.md). The
 # library then runs only on this kind of CPU, so the host CPU is part of the cache key.
 _FLAGS = ("-O1", "-march=native")
+COMPILE_LOG = logging.getLogger("skatelib.compile")  # says when (and only when) code is compiled
 
 
 def host_cpu() -> str:
@@ -127,24 +131,44 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     if note:
         warnings.warn(note, trust.CacheNote, stacklevel=2)
     if found is None:
-        fns = stage_functions(z, p, cost, cons)
-        gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
-        for f in (fns.value, fns.grad, fns.jac, fns.hess):
-            gen.add(f)
         lib.parent.mkdir(parents=True, exist_ok=True)
-        remove_stale_temporaries(lib.parent, "compile")  # a compile killed earlier left its stage.c
-        with tempfile.TemporaryDirectory(prefix=f"compile-{os.getpid()}-", dir=lib.parent) as tmp:
-            c_file = Path(tmp) / "stage.c"
-            c_file.write_text(gen.dump())
-            so_tmp = Path(tmp) / "stage.so"
-            subprocess.run([cc, *_accepted(cc, flags), "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)],
-                           check=True, capture_output=True)
-            record = Path(tmp) / "stage.sha256"
-            record.write_text(trust.sha256_of(so_tmp) + "\n")
-            os.replace(record, trust.digest_record(lib))  # the record first: a reader never trusts a
-            os.replace(so_tmp, lib)  # half-written library, and parallel workers load a whole one
-        found = lib
+        # Builds started together compile once: the others wait for the lock and load its library.
+        with _locked(lib.with_suffix(".lock")):
+            found, _ = trust.usable_library(lib)
+            if found is None:
+                COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
+                                 "kept in %s)", cc, lib.parent)
+                _compile(stage_functions(z, p, cost, cons), cc, flags, lib)
+                found = lib
     return StageFunctions(*(ca.external(name, str(found)) for name in _NAMES))
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Any:
+    with open(path, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def _compile(fns: StageFunctions, cc: str, flags: tuple[str, ...], lib: Path) -> None:
+    """The four functions as C, compiled into ``lib`` with its SHA-256 record beside it."""
+    gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
+    for f in (fns.value, fns.grad, fns.jac, fns.hess):
+        gen.add(f)
+    remove_stale_temporaries(lib.parent, "compile")  # a compile killed earlier left its stage.c
+    with tempfile.TemporaryDirectory(prefix=f"compile-{os.getpid()}-", dir=lib.parent) as tmp:
+        c_file = Path(tmp) / "stage.c"
+        c_file.write_text(gen.dump())
+        so_tmp = Path(tmp) / "stage.so"
+        subprocess.run([cc, *_accepted(cc, flags), "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)],
+                       check=True, capture_output=True)
+        record = Path(tmp) / "stage.sha256"
+        record.write_text(trust.sha256_of(so_tmp) + "\n")
+        os.replace(record, trust.digest_record(lib))  # the record first: a reader never trusts a
+        os.replace(so_tmp, lib)  # half-written library, and parallel workers load a whole one
 
 
 def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:

@@ -26,19 +26,15 @@ def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
 
 
 def announce(cfg: QuadrupedConfig) -> None:
-    """What the user should know before the solves start: how the stage functions run."""
+    """What the user should know before the solves start: how the stage functions run (the command
+    line prints a line when, and only when, they are compiled)."""
     if not cfg.optimization.compile:
         return
-    from skatelib.pipeline.build.cache import cache_dir
     from skatelib.pipeline.ocp.stagewise import c_compiler
 
-    cc = c_compiler()
-    if cc is None:
+    if c_compiler() is None:
         err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
                           "3-4x slower; install gcc to compile them")
-    else:
-        console.print(escape(f"stage functions: compiled with {cc} on first use of a model (about a "
-                             f"minute, once; cached in {cache_dir()})"))
 
 
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:
