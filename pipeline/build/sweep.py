@@ -187,13 +187,23 @@ def _call(job: Callable[[], T], parent_pid: int) -> T:
     return job()
 
 
-def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int) -> list[T]:
+def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int, done: Callable[[int], None] | None = None) -> list[T]:
     """Each picklable no-argument callable's result, in the order given: in ``n_jobs`` loky
-    workers (BLAS and OpenMP at one thread), or in this process with ``n_jobs`` 1 or one job."""
+    workers (BLAS and OpenMP at one thread), or in this process with ``n_jobs`` 1 or one job;
+    ``done(n)`` hears how many results are in as they come (in the order given)."""
+    out: list[T] = []
     if n_jobs <= 1 or len(jobs) <= 1:
-        return [job() for job in jobs]
+        for job in jobs:
+            out.append(job())
+            if done is not None:
+                done(len(out))
+        return out
     from joblib import Parallel, delayed, parallel_config
 
     with parallel_config(backend="loky", inner_max_num_threads=1):
-        return list(Parallel(n_jobs=min(n_jobs, len(jobs)), backend="loky")(
-            delayed(_call)(job, os.getpid()) for job in jobs))
+        for r in Parallel(n_jobs=min(n_jobs, len(jobs)), backend="loky", return_as="generator")(
+                delayed(_call)(job, os.getpid()) for job in jobs):
+            out.append(r)
+            if done is not None:
+                done(len(out))
+    return out

@@ -19,6 +19,24 @@ for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *track_co
 
 __all__ = ["app", "main"]
 
+# The import names of the optional packages -> the extra that brings each (pyproject.toml; a test
+# holds the two equal), so that every missing package is reported with what to install.
+EXTRA_OF = {"rerun": "viz", "matplotlib": "plot", "daqp": "control", "proxsuite": "control", "osqp": "control",
+            "threadpoolctl": "control", "mujoco": "sim", "PIL": "video", "imageio_ffmpeg": "video",
+            "distributed": "dask", "dask": "dask"}
+
+
+def install_hint(error: ImportError) -> str:
+    """The message for a missing package: its own words, and the extra to install when they do not
+    name one already."""
+    text = str(error)
+    if "skatelib[" in text:
+        return text
+    extra = EXTRA_OF.get((error.name or "").split(".")[0])
+    if extra is None:
+        return f"{text}; `make venv` (or pip install 'skatelib[build,viz,plot,control,sim,video]') installs every extra"
+    return f"{text}; pip install 'skatelib[{extra}]'"
+
 
 def _print_version(value: bool) -> None:
     if value:
@@ -77,5 +95,6 @@ def main() -> None:
     except (SkatelibError, ImportError) as e:
         if debug:
             raise
-        err_console.print(f"[bold red]error:[/] {escape(str(e))}")
+        text = install_hint(e) if isinstance(e, ImportError) else str(e)
+        err_console.print(f"[bold red]error:[/] {escape(text)}")
         raise SystemExit(exit_code(e)) from None

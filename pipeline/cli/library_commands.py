@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import enum
 import json
-import shlex
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -21,6 +19,7 @@ from skatelib.pipeline.views.console import (
     library_summary,
     track_table,
     twin_table,
+    viewer_hint,
 )
 
 LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
@@ -139,11 +138,7 @@ def inspect(
     if save is not None:
         check_output(save, [library], force, what="recording")
     roots = inspect_library(library, entry, save, spawn, overlay)
-    if save:
-        viewer = Path(sys.executable).parent / "rerun"  # beside this Python: on PATH or not
-        where = escape(f" to {save}; open it with: {shlex.quote(str(viewer))} {shlex.quote(str(save))}")
-    else:
-        where = ""
+    where = escape(f" to {save}; {viewer_hint(save)}") if save else ""
     console.print(f"logged {count(len(roots), 'entry')}{where}")
     from skatelib.runtime import MotionLibrary
 

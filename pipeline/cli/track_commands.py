@@ -17,7 +17,16 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
-from skatelib.pipeline.views.console import console, count, err_console, steer_table, track_table, twin_table
+from skatelib.pipeline.views.console import (
+    console,
+    count,
+    err_console,
+    run_with_progress,
+    steer_table,
+    track_table,
+    twin_table,
+    viewer_hint,
+)
 
 
 def track(
@@ -33,6 +42,7 @@ def track(
              "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
     seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries run in parallel.")] = 2,
+    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     save: Annotated[Path | None, typer.Option(
         help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run (either plant)."
     )] = None,
@@ -64,7 +74,7 @@ def track(
         err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
         raise typer.Exit(1)
     if plant is PlantKind.mujoco:
-        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, maneuver,
+        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), maneuver,
                     (save, video))
         return
     if video is not None:
@@ -74,7 +84,7 @@ def track(
         if steer_table(run_calls(steer, jobs), perturb):
             raise typer.Exit(1)
         return
-    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), jobs, save)
+    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), save)
 
 
 def _recording(library: Path, save: Path | None) -> Any:
@@ -92,18 +102,20 @@ def _recording(library: Path, save: Path | None) -> Any:
 
 
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                 jobs: int, save: Path | None) -> None:
+                 runner: tuple[int, bool], save: Path | None) -> None:
+    """``runner``: parallel jobs, and whether to show progress."""
     from skatelib.control.track import track_jobs
-    from skatelib.pipeline.build.sweep import run_calls
 
+    jobs, progress = runner
     save_closed_loop = _recording(library, save)
-    runs = run_calls(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None), jobs)
+    runs = run_with_progress(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None),
+                             jobs, "tracking", progress)
     results = [r for r, _ in runs]
     if save is not None and save_closed_loop is not None:
         from skatelib.runtime import MotionLibrary
 
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
-        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
+        console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = track_table(results, perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
@@ -111,7 +123,9 @@ def _track_model(library: Path, entry: list[str] | None, plant_error: str, pertu
 
 
 def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                jobs: int, maneuver: Maneuver, outputs: tuple[Path | None, Path | None]) -> None:
+                runner: tuple[int, bool], maneuver: Maneuver, outputs: tuple[Path | None, Path | None]) -> None:
+    """``runner``: parallel jobs, and whether to show progress."""
+    jobs, progress = runner
     from skatelib.pipeline.build.sweep import run_calls
     from skatelib.pipeline.twin_track import twin_jobs, twin_steer_jobs
 
@@ -128,7 +142,8 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         from skatelib.pipeline.build.preflight import check_output
 
         check_output(video, [library], what="video")
-    runs = run_calls(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)), jobs)
+    runs = run_with_progress(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)),
+                             jobs, "riding on the twin", progress)
     results = [r for r, _, _ in runs]
     for _, written, _ in runs:
         if written:
@@ -137,7 +152,7 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         from skatelib.runtime import MotionLibrary
 
         save_closed_loop(MotionLibrary.open(library), [(r.key, e) for r, _, e in runs if e is not None], save)
-        console.print(escape(f"wrote {save}; open it with: rerun {save}"))
+        console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = twin_table(results, perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")

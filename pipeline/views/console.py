@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 from rich.console import Console
@@ -25,6 +29,23 @@ def _console(stderr: bool = False) -> Console:
 
 console = _console()
 err_console = _console(stderr=True)
+
+
+def run_with_progress(jobs: Sequence[Callable[[], Any]], n_jobs: int, label: str, enabled: bool = True) -> list[Any]:
+    """``sweep.run_calls`` with a progress bar (done / total, elapsed) unless ``enabled`` is False."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from skatelib.pipeline.build.sweep import run_calls
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console, disable=not enabled, transient=True) as bar:
+        task = bar.add_task(label, total=len(jobs))
+        return run_calls(jobs, n_jobs, lambda n: bar.update(task, completed=n))
+
+
+def viewer_hint(save: Path) -> str:
+    """How to open a recording: the viewer beside this Python (on PATH or not), paths quoted."""
+    viewer = Path(sys.executable).parent / "rerun"
+    return f"open it with: {shlex.quote(str(viewer))} {shlex.quote(str(save))}"
 
 
 def count(n: int, noun: str) -> str:
@@ -146,14 +167,22 @@ PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_
               "casadi_version", "ipopt_version", "pinocchio_version")
 
 
+# The closed-loop verdicts `validate --closed-loop` stores: (name in `info`, entry attribute).
+CLOSED_LOOP = (("closed_loop", schema.A_CLOSED_LOOP), ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN))
+
+
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
     """``skatelib info --json``: provenance, model and one record per entry."""
     entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
                 "success": e.success, "status": str(e.attrs[schema.A_STATUS]),
                 "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
                 "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
-                "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))} for e in lib]
+                "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}"))),
+                **{name: json.loads(str(e.attrs[attr])) for name, attr in CLOSED_LOOP if attr in e.attrs}}
+               for e in lib]
     provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
+    provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
+                   if f"{name}_{k}" in lib.attrs}
     return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
             "model": dict(lib.model), "entries": entries}
 
@@ -181,3 +210,21 @@ def library_summary(lib: Any, path: Any) -> None:
                   fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
                   off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
+    _closed_loop_summary(lib)
+
+
+def _closed_loop_summary(lib: Any) -> None:
+    """The closed-loop verdicts stored by ``validate --closed-loop`` (model plant, twin), if any."""
+    for name, attr in CLOSED_LOOP:
+        stored = {e.key: json.loads(str(e.attrs[attr])) for e in lib if attr in e.attrs}
+        if not stored:
+            continue
+        where = "the twin (MuJoCo, whole-body controller)" if name.endswith("twin") else "the model plant"
+        plant, when = lib.attrs.get(f"{name}_plant", "?"), lib.attrs.get(f"{name}_utc", "?")
+        t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
+                        ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
+        for key, v in stored.items():
+            t.add_row(key, fmt(v, "label_mps", "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
+                      fmt(v, "speed_error", "{:+.1%}"), "pass" if v.get("passed") else "FAIL",
+                      escape(str(v.get("reasons") or "")))
+        console.print(t)
