@@ -12,8 +12,9 @@ OUT    ?=
 .PHONY: all venv venv-build relink library test lint bench clean help cpp figures
 
 help:
-	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5)"
-	@echo "make test      run the test suite"
+	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build] extra only"
+	@echo "make venv      install every extra into .venv (viewer, plots, controller, twin, videos, dask, dev tools)"
+	@echo "make test      run the test suite (installs every extra)"
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
