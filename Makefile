@@ -5,11 +5,13 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
 BUILD_STAMP := $(VENV)/.skatelib-build-installed
 # make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
-ALL_EXTRAS := build,viz,plot,control,sim,video,dask,dev
+ALL_EXTRAS := build,viz,plot,control,sim,video,dask,export,dev
 CONFIG ?=
 OUT    ?=
+# build --check's tolerance against the reference (docs/ci.md: what holds across machines)
+CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library test lint bench clean help cpp figures
+.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build] extra only"
@@ -18,6 +20,7 @@ help:
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
+	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 define install
@@ -69,6 +72,15 @@ lint: venv
 	$(BIN)/mypy $(foreach p,$(PACKAGES),-p skatelib.$(p))
 	$(BIN)/mypy benchmarks tools examples
 	$(BIN)/python tools/check_layout.py
+
+# The small library CI regenerates and compares (skatelib build --check): after an intended change
+# of the trajectories, `make reference` and commit the file with the change.
+REFERENCE := tests/data/tiny-reference.h5
+reference: venv
+	$(BIN)/skatelib build tests/configs/tiny.toml -o $(REFERENCE) --no-cache --no-progress
+
+check-library: venv
+	$(BIN)/skatelib build tests/configs/tiny.toml --check $(REFERENCE) --no-progress $(CHECK_TOLERANCE)
 
 bench: venv
 	$(BIN)/python -m benchmarks.run

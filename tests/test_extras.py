@@ -15,7 +15,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # A distribution's import names, where they differ from its name.
 # dask[distributed]: the backend imports dask.distributed as `distributed`.
-IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distributed",), "pillow": ("PIL",)}
+IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distributed",), "pillow": ("PIL",),
+                "mcap-ros2-support": ("mcap_ros2",)}
 
 # Module groups (globs under the repository) -> the extras a user has who runs them. The first
 # matching group counts. Rerun and matplotlib views are commands of the pipeline: build comes too.
@@ -29,6 +30,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/*/plots.py", ("build", "plot")),
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
     ("pipeline/twin_track.py", ("build", "control", "sim")),  # track --plant mujoco
+    ("pipeline/exports.py", ("build", "export")),  # export --format mcap
     ("pipeline/**/*.py", ("build",)),
     ("library/*.py", ()),
     ("runtime/*.py", ()),

@@ -79,7 +79,7 @@ def check_folder(out: Path) -> None:
     """
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise OutputError(out, "is a file; name a folder for the figures, e.g. out/figures")
+        raise OutputError(out, "is a file; name a folder for the files, e.g. out/figures")
     try:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=out, prefix=".skatelib-probe-"):
@@ -154,6 +154,15 @@ def is_mjcf(path: Path) -> bool:
         return False
 
 
+def is_mcap(path: Path) -> bool:
+    """Whether ``path`` starts with the MCAP magic."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(5) == b"\x89MCAP"
+    except OSError:
+        return False
+
+
 def is_json(path: Path) -> bool:
     """Whether ``path`` starts like a JSON object (a frontier file)."""
     try:
@@ -180,4 +189,5 @@ _OUTPUTS = {
     "twin": ("twin.xml", is_mjcf, "MuJoCo model"),
     "video": ("run.mp4", is_video, "video"),
     "frontier": ("frontier.json", is_json, "JSON file"),
+    "mcap": ("library.mcap", is_mcap, "MCAP file"),
 }

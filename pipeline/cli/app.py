@@ -9,12 +9,13 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.cli import build_commands, library_commands, track_commands
+from skatelib.pipeline.cli import build_commands, diff_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   help="Offline motion-library pipeline for legged robots on skateboards.")
-for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *track_commands.COMMANDS):
+for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *diff_commands.COMMANDS,
+                 *track_commands.COMMANDS):
     app.command()(_command)
 
 __all__ = ["app", "main"]
@@ -23,7 +24,7 @@ __all__ = ["app", "main"]
 # holds the two equal), so that every missing package is reported with what to install.
 EXTRA_OF = {"rerun": "viz", "matplotlib": "plot", "daqp": "control", "proxsuite": "control", "osqp": "control",
             "threadpoolctl": "control", "mujoco": "sim", "PIL": "video", "imageio_ffmpeg": "video",
-            "distributed": "dask", "dask": "dask"}
+            "distributed": "dask", "dask": "dask", "mcap_ros2": "export"}
 
 
 def install_hint(error: ImportError) -> str:

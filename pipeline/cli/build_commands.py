@@ -75,6 +75,11 @@ def build(
         "--frontier", help="Also search the reachable-speed frontier of every stride count and store it.")] = False,
     force: Annotated[bool, typer.Option("--force", help="Overwrite an output file that is not a skatelib library.")
                      ] = False,
+    check: Annotated[Path | None, typer.Option(
+        "--check", help="Build into a temporary file and compare it with this library as `skatelib diff` does, "
+                        "without writing or replacing anything; exit 1 when they differ.")] = None,
+    atol: Annotated[float, typer.Option("--atol", min=0.0, help="With --check: absolute tolerance.")] = 0.0,
+    rtol: Annotated[float, typer.Option("--rtol", min=0.0, help="With --check: relative tolerance.")] = 0.0,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
@@ -84,12 +89,42 @@ def build(
     from skatelib.pipeline.config import load_config
 
     cfg = load_config(config)
+    opts = BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier)
+    if check is not None:
+        if out is not None:
+            raise typer.BadParameter("--check compares with LIB and writes nothing: leave out -o", param_hint="-o")
+        _build_and_check(cfg, opts, check, (atol, rtol), allow_failures)
+        return
     target = out or default_output(cfg)
     check_output(target, [cfg.path], force)
-    run = run_build(cfg, target, BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier))
+    run = run_build(cfg, target, opts)
     if run.failed and not allow_failures:
         console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
+        raise typer.Exit(1)
+
+
+def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[float, float],
+                     allow_failures: bool) -> None:
+    """``build --check``: the build in a temporary folder, compared with ``reference``."""
+    import tempfile
+
+    from skatelib.library.compare import Tolerance, compare_files
+    from skatelib.library.reader import read_library
+    from skatelib.pipeline.build.orchestrate import run_build
+    from skatelib.pipeline.views.diff_view import show_diff
+
+    read_library(reference)  # a missing or damaged reference is refused before any solve (exit 3)
+    with tempfile.TemporaryDirectory(prefix="skatelib-check-") as tmp:
+        built = Path(tmp) / reference.name
+        run = run_build(cfg, built, opts)
+        d = compare_files(reference, built, Tolerance(*tolerance))
+        show_diff(d)
+    if not d.equal:
+        console.print(escape(f"the build differs from {reference} (left as it was)"))
+        raise typer.Exit(1)
+    if run.failed and not allow_failures:
+        console.print(f"[bold red]{count(run.failed, 'entry')} failed[/], as in {escape(str(reference))}")
         raise typer.Exit(1)
 
 

@@ -12,15 +12,12 @@ functions can be compiled to C once and cached on disk by content hash.
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import hashlib
 import logging
 import os
 import platform
 import shutil
 import subprocess
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,8 +25,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.atomic import remove_stale_temporaries
 from skatelib.pipeline.build import trust
+from skatelib.pipeline.ocp.codegen import compile_library, locked
 
 
 @dataclass(frozen=True)
@@ -133,42 +130,15 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     if found is None:
         lib.parent.mkdir(parents=True, exist_ok=True)
         # Builds started together compile once: the others wait for the lock and load its library.
-        with _locked(lib.with_suffix(".lock")):
+        with locked(lib.with_suffix(".lock")):
             found, _ = trust.usable_library(lib)
             if found is None:
                 COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
                                  "kept in %s)", cc, lib.parent)
-                _compile(stage_functions(z, p, cost, cons), cc, flags, lib)
+                fns = stage_functions(z, p, cost, cons)
+                compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
                 found = lib
     return StageFunctions(*(ca.external(name, str(found)) for name in _NAMES))
-
-
-@contextlib.contextmanager
-def _locked(path: Path) -> Any:
-    with open(path, "a") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(f, fcntl.LOCK_UN)
-
-
-def _compile(fns: StageFunctions, cc: str, flags: tuple[str, ...], lib: Path) -> None:
-    """The four functions as C, compiled into ``lib`` with its SHA-256 record beside it."""
-    gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
-    for f in (fns.value, fns.grad, fns.jac, fns.hess):
-        gen.add(f)
-    remove_stale_temporaries(lib.parent, "compile")  # a compile killed earlier left its stage.c
-    with tempfile.TemporaryDirectory(prefix=f"compile-{os.getpid()}-", dir=lib.parent) as tmp:
-        c_file = Path(tmp) / "stage.c"
-        c_file.write_text(gen.dump())
-        so_tmp = Path(tmp) / "stage.so"
-        subprocess.run([cc, *_accepted(cc, flags), "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)],
-                       check=True, capture_output=True)
-        record = Path(tmp) / "stage.sha256"
-        record.write_text(trust.sha256_of(so_tmp) + "\n")
-        os.replace(record, trust.digest_record(lib))  # the record first: a reader never trusts a
-        os.replace(so_tmp, lib)  # half-written library, and parallel workers load a whole one
 
 
 def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:

@@ -1,0 +1,71 @@
+"""The commands that compare and convert libraries: ``diff`` (``build --check`` shares its
+comparison) and ``export``."""
+
+from __future__ import annotations
+
+import enum
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from skatelib.pipeline.cli.library_commands import LibArg
+from skatelib.pipeline.views.console import jsonable
+
+AtolOpt = Annotated[float, typer.Option("--atol", min=0.0, help="Absolute tolerance (in each channel's unit).")]
+RtolOpt = Annotated[float, typer.Option("--rtol", min=0.0, help="Relative tolerance.")]
+
+
+def diff(
+    a: LibArg,
+    b: Annotated[Path, typer.Argument(help="The library to compare it with (.h5).")],
+    atol: AtolOpt = 0.0,
+    rtol: RtolOpt = 0.0,
+    entry: Annotated[list[str] | None, typer.Option("--entry", "-e", help="Compare only this entry (repeatable).")
+                     ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the comparison as one JSON document.")] = False,
+) -> None:
+    """What changed between two libraries: entries added, removed and changed (the largest deviation
+    of each channel, with its unit and time), label-level figures, model, config keys and
+    provenance. Exit 0 when equal within the tolerances (default: bit for bit), 1 when they differ."""
+    from skatelib.library.compare import Tolerance, compare_files
+    from skatelib.pipeline.views.diff_view import show_diff
+
+    d = compare_files(a, b, Tolerance(atol, rtol), entry)
+    if as_json:
+        print(json.dumps(d.as_dict(), indent=1, default=jsonable))
+    else:
+        show_diff(d)
+    if not d.equal:
+        raise typer.Exit(1)
+
+
+class ExportFormat(enum.StrEnum):
+    npz = "npz"
+    csv = "csv"
+    mcap = "mcap"
+
+
+def export(
+    library: LibArg,
+    fmt: Annotated[ExportFormat, typer.Option("--format", "-f", help="npz or csv (a file per entry in the folder "
+                                              "OUT), mcap (one ROS 2 bag file OUT).")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="Folder (npz, csv) or file (mcap) to write.")],
+) -> None:
+    """Write a library in another tool's format: npz and csv per entry with column names and units;
+    MCAP (a ROS 2 bag: PoseStamped, JointState, WrenchStamped, the board) for Foxglove and
+    ros2 bag play (pip install 'skatelib[export]')."""
+    from skatelib.pipeline.build.preflight import check_folder, check_output
+    from skatelib.pipeline.exports import export as write
+    from skatelib.pipeline.views.console import console, count
+
+    if fmt is ExportFormat.mcap:
+        check_output(out, [library], what="mcap")
+    else:
+        check_folder(out)
+    written = write(library, fmt.value, out)
+    console.print(escape(f"wrote {count(len(written), 'file')}: {written[0]}" + (" ..." if len(written) > 1 else "")))
+
+
+COMMANDS = (diff, export)

@@ -1,0 +1,105 @@
+"""Libraries in other tools' formats (``skatelib export``), each read back by a test:
+
+* ``npz``: a folder with one ``<key>.npz`` per entry: its arrays by name (``t``, ``state``, ...),
+  and for each array with named columns ``<name>__columns`` and ``<name>__units``.
+* ``csv``: a folder with one ``<key>.csv`` per entry: a row per knot, a column per channel headed
+  ``array.column [unit]`` (trailing axes flattened: ``foot_pos.FL.x [m]``); a control holds on
+  [t_k, t_{k+1}), so the last knot's control cells are empty.
+* ``mcap``: one ROS 2 bag (MCAP, CDR) for Foxglove and ``ros2 bag play``, stamped with the entries'
+  times, topics under ``/<key>/``. Every kind: each array per knot as ``std_msgs/Float64MultiArray``
+  (its dimension labelled with the column names). The quadruped also: ``base_pose``
+  (``geometry_msgs/PoseStamped``: the centre of mass and the trunk's orientation, world frame),
+  ``joint_states`` (``sensor_msgs/JointState``: the URDF's joint names, angles, velocities),
+  ``foot_force/<leg>`` (``geometry_msgs/WrenchStamped``: the force on the foot, world frame) and
+  ``board_pose`` / ``board_twist`` (its origin, yaw and roll; its planar velocity and roll rate).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skatelib.library.atomic import write_atomic
+from skatelib.library.compare import column_names
+from skatelib.library.reader import read_library
+from skatelib.library.records import EntryRecord
+
+FORMATS = ("npz", "csv", "mcap")
+
+
+def headers(e: EntryRecord) -> tuple[list[str], np.ndarray]:
+    """The CSV's column headers and its (knots, columns) table (NaN where a control has no value)."""
+    t = np.asarray(e.arrays["t"], dtype=np.float64)
+    heads, cols = ["t [s]"], [t[:, None]]
+    for name in sorted(k for k in e.arrays if k != "t"):
+        a = np.asarray(e.arrays[name], dtype=np.float64)
+        if a.ndim == 0 or a.shape[0] not in (len(t), len(t) - 1):
+            continue  # not a per-knot array (the humanoid's per-step node tables)
+        flat = a.reshape(len(a), -1)
+        if len(flat) < len(t):
+            flat = np.vstack([flat, np.full((len(t) - len(flat), flat.shape[1]), np.nan)])
+        heads += [f"{name}.{c} [{u}]" if u else f"{name}.{c}" for c, u in zip(*column_names(name, a, e), strict=True)]
+        cols.append(flat)
+    return heads, np.hstack(cols)
+
+
+def write_npz(path: Path, out: Path) -> list[Path]:
+    data = read_library(path)
+    written = []
+    for key, e in data.entries.items():
+        arrays: dict[str, np.ndarray] = {k: np.asarray(v) for k, v in e.arrays.items()}
+        for k in e.columns:
+            arrays[f"{k}__columns"] = np.array(list(e.columns[k]))
+            arrays[f"{k}__units"] = np.array(list(e.units.get(k, [""] * len(e.columns[k]))))
+        buffer = io.BytesIO()
+        np.savez(buffer, **arrays)  # type: ignore[arg-type]
+        written.append(write_atomic(out / f"{key}.npz", buffer.getvalue()))
+    return written
+
+
+def write_csv(path: Path, out: Path) -> list[Path]:
+    data = read_library(path)
+    written = []
+    for key, e in data.entries.items():
+        heads, table = headers(e)
+        text = io.StringIO()
+        w = csv.writer(text, lineterminator="\n")
+        w.writerow(heads)
+        for row in table:
+            w.writerow(["" if np.isnan(v) else repr(float(v)) for v in row])
+        written.append(write_atomic(out / f"{key}.csv", text.getvalue().encode()))
+    return written
+
+
+def write_mcap(path: Path, out: Path) -> list[Path]:
+    """One MCAP file of every entry (module docstring)."""
+    try:
+        from mcap_ros2.writer import Writer
+    except ImportError as missing:
+        raise ImportError(f"MCAP export needs mcap and mcap-ros2-support ({missing}); "
+                          "pip install 'skatelib[export]'") from missing
+    from skatelib.pipeline import ros_messages as msg
+
+    data = read_library(path)
+    kind = str(data.attrs.get("kind", ""))
+    joints = json.loads(str(data.attrs.get("config_resolved_json", "{}"))).get("robot", {}).get("joint_names", [])
+    buffer = io.BytesIO()
+    writer = Writer(buffer)
+    schemas = {name: writer.register_msgdef(name, text) for name, text in msg.DEFINITIONS.items()}
+    for key, e in data.entries.items():
+        for topic, name, t, message in msg.entry_messages(key, e, kind, joints):
+            ns = round(t * 1e9)
+            writer.write_message(topic, schemas[name], message, log_time=ns, publish_time=ns)
+    writer.finish()
+    return [write_atomic(out, buffer.getvalue())]
+
+
+def export(path: Path, fmt: str, out: Path) -> list[Path]:
+    """Write the library at ``path`` as ``fmt`` (:data:`FORMATS`) to ``out`` (a folder for npz and
+    csv, a file for mcap); every file whole or not at all."""
+    writers: dict[str, Any] = {"npz": write_npz, "csv": write_csv, "mcap": write_mcap}
+    return list(writers[fmt](path, out))

@@ -1,0 +1,109 @@
+"""`skatelib export`: each format read back with its own reader (numpy, csv, the mcap package's
+ROS 2 decoder) equals the library: every array, column name and unit; the MCAP's poses, joint
+states and foot forces at the entry's times."""
+
+from __future__ import annotations
+
+import csv
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from skatelib.library.channels import LEGS
+from skatelib.library.reader import read_library
+from skatelib.library.rotations import rpy_matrices
+from skatelib.pipeline.ros_messages import quaternion_xyzw
+
+from tests.helpers import CLI, TINY
+
+
+def _cli(args: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "COLUMNS": "200"})
+
+
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    out = tmp_path_factory.mktemp("export") / "lib.h5"
+    r = _cli(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(out)])
+    assert r.returncode == 0, r.stdout + r.stderr
+    return out
+
+
+def test_npz_round_trips(lib, tmp_path):
+    data = read_library(lib)
+    r = _cli(["export", str(lib), "-f", "npz", "-o", str(tmp_path / "npz")])
+    assert r.returncode == 0, r.stdout + r.stderr
+    for key, e in data.entries.items():
+        with np.load(tmp_path / "npz" / f"{key}.npz") as z:
+            for name, arr in e.arrays.items():
+                np.testing.assert_array_equal(z[name], arr)
+            for name, cols in e.columns.items():
+                assert list(z[f"{name}__columns"]) == list(cols) and list(z[f"{name}__units"]) == list(e.units[name])
+
+
+def test_csv_round_trips(lib, tmp_path):
+    """Every cell equals the library's value to the last bit (repr of a float); a control's last
+    knot is empty."""
+    data = read_library(lib)
+    r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "csv")])
+    assert r.returncode == 0, r.stdout + r.stderr
+    key, e = next(iter(data.entries.items()))
+    with open(tmp_path / "csv" / f"{key}.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    head, body = rows[0], rows[1:]
+    assert head[0] == "t [s]" and len(body) == len(e.arrays["t"])
+    col = head.index("state.base_z [m]")
+    assert [float(row[col]) for row in body] == e.arrays["state"][:, 2].tolist()
+    col = head.index("foot_pos.RL.y [m]")
+    assert [float(row[col]) for row in body] == e.arrays["foot_pos"][:, 2, 1].tolist()
+    col = head.index("control.f_FR_z [N]")
+    assert [float(row[col]) for row in body[:-1]] == e.arrays["control"][:, 5].tolist() and body[-1][col] == ""
+
+
+def test_mcap_round_trips(lib, tmp_path):
+    """The bag read with mcap's ROS 2 decoder: one message per knot and topic, stamped with the
+    knot's time; the base position, the orientation (as a rotation matrix) and the joint angles,
+    velocities and foot forces equal the library's."""
+    reader = pytest.importorskip("mcap.reader")
+    decoder = pytest.importorskip("mcap_ros2.decoder")
+    data = read_library(lib)
+    out = tmp_path / "lib.mcap"
+    r = _cli(["export", str(lib), "-f", "mcap", "-o", str(out)])
+    assert r.returncode == 0, r.stdout + r.stderr
+    key, e = next(iter(data.entries.items()))
+    t, x, u = e.arrays["t"], e.arrays["state"], e.arrays["control"]
+    got: dict[str, list] = {}
+    with open(out, "rb") as f:
+        for _, channel, message, m in reader.make_reader(f, decoder_factories=[decoder.DecoderFactory()]
+                                                        ).iter_decoded_messages():
+            got.setdefault(channel.topic, []).append((message.log_time, m))
+    poses = got[f"/{key}/base_pose"]
+    assert [ns for ns, _ in poses] == [round(s * 1e9) for s in t]
+    R = rpy_matrices(x[:, 3:6])
+    for k, (_, m) in enumerate(poses):
+        p = m.pose.position
+        assert [p.x, p.y, p.z] == x[k, 0:3].tolist()
+        o = m.pose.orientation
+        np.testing.assert_allclose([o.x, o.y, o.z, o.w], quaternion_xyzw(R[k]), atol=1e-15)
+    joints = got[f"/{key}/joint_states"]
+    assert list(joints[3][1].name)[:3] == ["FL_abad", "FL_hip", "FL_knee"]
+    np.testing.assert_array_equal([list(m.position) for _, m in joints], x[:, 12:24])
+    np.testing.assert_array_equal([list(m.velocity) for _, m in joints][:-1], u[:, 12:24])
+    for i, leg in enumerate(LEGS):
+        forces = [[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z] for _, m in got[f"/{key}/foot_force/{leg}"]]
+        np.testing.assert_array_equal(forces[:-1], u[:, 3 * i:3 * i + 3])
+    assert len(got[f"/{key}/state"]) == len(t) and len(got[f"/{key}/board_twist"]) == len(t)
+
+
+def test_quaternion_matches_the_rotation():
+    """The quaternion of random rotations rebuilds the matrix (an independent formula)."""
+    rng = np.random.default_rng(1)
+    for rpy in rng.uniform(-3.1, 3.1, size=(200, 3)):
+        R = rpy_matrices(rpy[None])[0]
+        x, y, z, w = quaternion_xyzw(R)
+        rebuilt = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        np.testing.assert_allclose(rebuilt, R, atol=1e-12)
