@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+import pytest
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.quadruped import tasks
 
@@ -56,3 +57,24 @@ def test_a_failed_entry_hands_its_turn_to_the_nearest_success_towards_the_start(
                             0.85: "solution 0.7", 1.0: "solution 0.7"}
     assert keyed_on == {0.3: None, 0.2: "key 0.3", 0.5: "key 0.3", 0.7: "key 0.3", 0.85: "key 0.7",
                         1.0: "key 0.7"}
+
+
+def test_an_entrys_time_is_every_attempt(monkeypatch):
+    """A solve that fails twice and converges on the third try reports 3 attempts and the sum of
+    their build and solve times (the build table's row is the entry's own time, not its last try's)."""
+    from dataclasses import dataclass
+
+    from skatelib.pipeline.quadruped import attempts
+
+    @dataclass(frozen=True)
+    class Timed:
+        success: bool
+        build_time_s: float
+        solve_time_s: float
+
+    times = iter([(False, 0.1, 1.0), (False, 0.2, 2.0), (True, 0.4, 4.0), (True, 9.0, 9.0)])
+    monkeypatch.setattr(attempts, "solve", lambda spec: Timed(*next(times)))
+    monkeypatch.setattr(attempts, "retry_ladder", lambda spec: [spec] * 4)
+    result, n = attempts.solve_with_retries(object())
+    assert n == 3 and result.success
+    assert result.solve_time_s == pytest.approx(7.0) and result.build_time_s == pytest.approx(0.7)

@@ -19,12 +19,17 @@ def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
 
 
 def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
-    """Solve, walking the retry ladder until one converges; the last failure is returned as is."""
+    """Solve, walking the retry ladder until one converges; the last failure is returned as is.
+    Its ``build_time_s`` and ``solve_time_s`` are the entry's own: every attempt's, added up."""
     result = None
     ladder = retry_ladder(spec)
-    for attempt, s in enumerate(ladder, 1):
+    build = total = 0.0
+    attempts = 0
+    for s in ladder:
         result = solve(s)
+        attempts += 1
+        build, total = build + result.build_time_s, total + result.solve_time_s
         if result.success:
-            return result, attempt
+            break
     assert result is not None
-    return result, len(ladder)
+    return replace(result, build_time_s=build, solve_time_s=total), attempts

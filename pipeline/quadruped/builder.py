@@ -73,7 +73,8 @@ def summary(written: Written) -> None:
     """One row per entry: status, iterations, tries, time and the independent checks' figures;
     then the frontier, when searched."""
     outcomes = cast("list[EntryOutcome]", list(written.outcomes))
-    t = entry_table("entries (time: c = from the cache; momentum: the speed robot and board ride at together)",
+    t = entry_table("entries (time: the entry's solves, every attempt; c = from the cache; momentum: the speed "
+                    "robot and board ride at together)",
                     ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
                      "Coulomb margin [N]", "torque [N m]", "defect"))
     for o in outcomes:
