@@ -99,3 +99,28 @@ def test_build_check_passes_unchanged_and_fails_changed(pair):
     assert (d / "a.h5").read_bytes() == before
     r = _cli(["build", str(TINY), "--check", str(d / "missing.h5")])
     assert r.returncode == 3, r.stdout + r.stderr
+
+
+def test_humanoid_libraries_compare_too(tmp_path):
+    """A humanoid library equals its copy; with its COM height moved 2 mm at one knot it differs,
+    naming the entry, com_z, its unit and that knot's time."""
+    root = TINY.parents[2]
+    lib = tmp_path / "walk.h5"
+    r = _cli(["build", str(root / "configs" / "hrp2_walk.toml"), "-o", str(lib), "--no-progress"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    shutil.copy(lib, tmp_path / "copy.h5")
+    assert _cli(["diff", str(lib), str(tmp_path / "copy.h5")]).returncode == 0
+    data = read_library(lib)
+    key, rec = next(iter(data.entries.items()))
+    state = np.array(rec.arrays["state"])
+    state[40, 2] += 2e-3
+    moved = type(rec)(rec.key, rec.attrs, {**rec.arrays, "state": state}, rec.columns, rec.units)
+    keep = {k: v for k, v in data.attrs.items() if k not in ("format", "format_version", "content_sha256")}
+    other = write_library(tmp_path / "moved.h5", keep, data.model_attrs, data.model_arrays, data.model_text,
+                          [moved, *(e for k, e in data.entries.items() if k != key)])
+    r = _cli(["diff", str(lib), str(other), "--json"])
+    doc = json.loads(r.stdout)
+    assert r.returncode == 1 and [c["key"] for c in doc["changed"] if c["channels"]] == [key]
+    (ch,) = doc["changed"][0]["channels"]
+    assert (ch["column"], ch["unit"]) == ("com_z", "m") and ch["max_abs"] == pytest.approx(2e-3)
+    assert ch["at_s"] == pytest.approx(float(rec.arrays["t"][40]))
