@@ -1,0 +1,95 @@
+"""The Foot Coordinates Generator (Takasugi et al., Sec. IV-B): both feet's trajectories for a
+solved step plan, sampled at the motion's times.
+
+* Walking: the stance foot stays; the swing foot travels from its foothold to the next one during
+  single support along a cycloid (no speed at lift-off and touchdown) rising to ``height_m``; the
+  sole's yaw goes linearly from one foothold's to the next.
+* Skating: the board foot (the support foot on the board) follows a minimum-jerk path to the
+  step's reference position and velocity in the push (accelerating) phase, then moves uniformly
+  with the board while sliding and stopping. The pushing foot stays on the ground during the
+  push, then swings onto the board beside the board foot during the slide: horizontally a
+  minimum-jerk path that lands at the board's velocity, vertically a cycloid rising to
+  ``height_m``; from then on it rides with the board.
+
+Feet are (K, 2, 4) arrays: per knot, the right (0) and left (1) sole's centre on the ground (x, y,
+z) and its yaw.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from skatelib.pipeline.humanoid.step import StepSpec
+
+RIGHT, LEFT = 0, 1
+
+
+def cycloid(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """The cycloid's progress along the ground and its height as fractions, at phase ``s`` in
+    [0, 1]: (theta - sin theta) / 2 pi and (1 - cos theta) / 2 with theta = 2 pi s. Both start and
+    end with zero rate."""
+    theta = 2 * np.pi * np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0)
+    return (theta - np.sin(theta)) / (2 * np.pi), (1 - np.cos(theta)) / 2
+
+
+Triple = tuple[np.ndarray | Sequence[float], np.ndarray | Sequence[float], np.ndarray | Sequence[float]]
+
+
+def minimum_jerk(start: Triple, end: Triple, duration_s: float) -> np.ndarray:
+    """The quintic of the minimum-jerk path (Flash and Hogan) between two (position, velocity,
+    acceleration) triples of n-vectors over ``duration_s``: coefficients c0..c5 of
+    p(t) = sum c_i t^i (6, n)."""
+    p0, v0, a0 = (np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in start)
+    p1, v1, a1 = (np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in end)
+    T = duration_s
+    # The end conditions on c3, c4, c5 once c0..c2 match the start.
+    M = np.array([[T**3, T**4, T**5], [3 * T**2, 4 * T**3, 5 * T**4], [6 * T, 12 * T**2, 20 * T**3]])
+    rhs = np.vstack([p1 - (p0 + v0 * T + a0 * T**2 / 2), v1 - (v0 + a0 * T), a1 - a0])
+    return np.vstack([p0, v0, a0 / 2, np.linalg.solve(M, rhs)])
+
+
+def evaluate(coeffs: np.ndarray, t: np.ndarray | float) -> np.ndarray:
+    """A polynomial's value at the times ``t`` (clamped to start at 0): (len(t), n)."""
+    tt = np.maximum(np.atleast_1d(np.asarray(t, dtype=np.float64)), 0.0)
+    return np.stack([tt**i for i in range(len(coeffs))], axis=1) @ coeffs
+
+
+def walking_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float) -> np.ndarray:
+    """Both feet along a walking plan (module docstring); ``t`` from the plan's start."""
+    feet = np.zeros((len(t), 2, 4))
+    foot = {RIGHT: np.array([0.0, -step_width_m / 2, 0.0]), LEFT: np.array([0.0, step_width_m / 2, 0.0])}
+    feet[:, RIGHT, 0:3], feet[:, LEFT, 0:3] = foot[RIGHT], foot[LEFT]
+    t0 = 0.0
+    for spec in plan:
+        if spec.terminal == "walk" and len(spec.segments) == 2:  # a step: single, then double support
+            stance = np.asarray(spec.segments[0][1].p0)
+            swing = LEFT if np.allclose(stance, foot[RIGHT]) else RIGHT
+            single = spec.segments[1][0]
+            start, end = foot[swing].copy(), np.asarray(spec.p_step, dtype=np.float64)
+            along, up = cycloid((t - t0) / single)
+            moving = t >= t0
+            feet[moving, swing, 0:3] = start + along[moving, None] * (end - start)
+            feet[moving, swing, 2] += height_m * up[moving]
+            foot[swing] = end
+        t0 += spec.duration_s
+    return feet
+
+
+def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float) -> np.ndarray:
+    """Both feet along a skating plan (push, slide, stop; module docstring)."""
+    push, slide = plan[0], plan[1]
+    v = np.asarray(push.v_step, dtype=np.float64)
+    board0, ground = np.array([0.0, -step_width_m / 2, 0.0]), np.array([0.0, step_width_m / 2, 0.0])
+    board_end = np.asarray(push.p_step, dtype=np.float64)
+    T1, T2 = push.duration_s, push.duration_s + slide.duration_s
+    feet = np.zeros((len(t), 2, 4))
+    path = minimum_jerk((board0, np.zeros(3), np.zeros(3)), (board_end, v, np.zeros(3)), T1)
+    feet[:, RIGHT, 0:3] = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
+    landing = board_end + v * slide.duration_s + np.array([0.0, ground[1] - board0[1], 0.0])
+    swing = minimum_jerk((ground, np.zeros(3), np.zeros(3)), (landing, v, np.zeros(3)), slide.duration_s)
+    _, up = cycloid((t - T1) / slide.duration_s)
+    feet[:, LEFT, 0:3] = np.select([(t < T1)[:, None], (t < T2)[:, None]],
+                                   [ground, evaluate(swing, t - T1)], landing + v * (t - T2)[:, None])
+    feet[:, LEFT, 2] += height_m * np.where((t >= T1) & (t < T2), up, 0.0)
+    return feet

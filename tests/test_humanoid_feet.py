@@ -1,0 +1,90 @@
+"""The Foot Coordinates Generator against closed forms: the cycloid's and the rest-to-rest minimum
+jerk's formulas, boundary conditions of the general quintic, and the feet of the shipped walking
+and skating plans at their footholds, touchdowns and board speeds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.humanoid.feet import LEFT, RIGHT, cycloid, evaluate, minimum_jerk, skating_feet, walking_feet
+from skatelib.pipeline.humanoid.motion import skating_steps, walking_steps
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+
+
+def test_cycloid_closed_form():
+    """Progress and height at quarter phases; zero rate at both ends (central differences)."""
+    along, up = cycloid(np.array([0.0, 0.25, 0.5, 0.75, 1.0]))
+    np.testing.assert_allclose(along, [0.0, 0.25 - 1 / (2 * np.pi), 0.5, 0.75 + 1 / (2 * np.pi), 1.0], atol=1e-15)
+    np.testing.assert_allclose(up, [0.0, 0.5, 1.0, 0.5, 0.0], atol=1e-15)
+    h = 1e-6
+    for s in (h, 1 - h):
+        a, u = cycloid(np.array([s - h, s + h]))
+        assert abs(np.diff(a)[0]) / (2 * h) < 1e-4 and abs(np.diff(u)[0]) / (2 * h) < 1e-4
+
+
+def test_rest_to_rest_minimum_jerk_is_the_textbook_quintic():
+    tau = np.linspace(0, 1, 11)
+    c = minimum_jerk(([0.2], [0.0], [0.0]), ([1.4], [0.0], [0.0]), 2.0)
+    np.testing.assert_allclose(evaluate(c, 2.0 * tau)[:, 0], 0.2 + 1.2 * (10 * tau**3 - 15 * tau**4 + 6 * tau**5),
+                               atol=1e-14)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-2, 2), min_size=6, max_size=6), st.floats(0.2, 3.0))
+def test_minimum_jerk_meets_its_boundary_conditions(values, T):
+    p0, v0, a0, p1, v1, a1 = values
+    c = minimum_jerk(([p0], [v0], [a0]), ([p1], [v1], [a1]), T)
+    d1 = np.array([i * c[i] for i in range(1, 6)])
+    d2 = np.array([i * (i - 1) * c[i] for i in range(2, 6)])
+    for coeffs, want0, want1 in ((c, p0, p1), (d1, v0, v1), (d2, a0, a1)):
+        np.testing.assert_allclose(evaluate(coeffs, np.array([0.0, T]))[:, 0], [want0, want1], atol=1e-9 * (1 + T**5))
+
+
+def test_walking_feet_follow_the_plan():
+    """The swing foot lands on each step's foothold at the end of single support, rising to the
+    height midway; the stance foot does not move meanwhile."""
+    cfg = load_config(CONFIGS / "hrp2_walk.toml")
+    h = cfg.humanoid
+    _, plan = walking_steps(cfg, 0.375)
+    t = np.round(np.arange(0.0, sum(s.duration_s for s in plan) + 1e-9, 0.01), 10)
+    feet = walking_feet(plan, t, 0.05, h.step_width_m)
+    t0 = plan[0].duration_s
+    for spec in plan[1:-1]:
+        single = spec.segments[1][0]
+        k0, k1 = np.searchsorted(t, t0 - 1e-9), np.searchsorted(t, t0 + single - 1e-9)
+        stance = np.asarray(spec.segments[0][1].p0)
+        leg = RIGHT if np.allclose(feet[k0, RIGHT, 0:3], stance) else LEFT
+        swing = 1 - leg
+        np.testing.assert_allclose(feet[k0:k1 + 1, leg, 0:3], np.tile(stance, (k1 + 1 - k0, 1)), atol=1e-12)
+        np.testing.assert_allclose(feet[k1, swing, 0:3], spec.p_step, atol=1e-12)
+        assert feet[(k0 + k1) // 2, swing, 2] == pytest.approx(0.05, abs=1e-3)
+        t0 += spec.duration_s
+    assert np.all(feet[:, :, 2] >= 0.0) and np.all(feet[:, :, 3] == 0.0)
+
+
+def test_skating_feet_follow_the_board():
+    """The board foot ends the push at the step's position and speed; it and then the landed
+    pushing foot move at the board speed; the pushing foot stays put during the push."""
+    cfg = load_config(CONFIGS / "hrp2_skate.toml")
+    h, s = cfg.humanoid, cfg.skate
+    v = 1.0
+    _, plan = skating_steps(cfg, v)
+    dt = 0.001
+    t = np.round(np.arange(0.0, s.push_s + s.slide_s + s.stop_s + 1e-9, dt), 10)
+    feet = skating_feet(plan, t, 0.05, h.step_width_m)
+    k1, k2 = round(s.push_s / dt), round((s.push_s + s.slide_s) / dt)
+    np.testing.assert_allclose(feet[k1, RIGHT, 0:3], plan[0].p_step, atol=1e-9)
+    rate = np.gradient(feet[:, :, 0], dt, axis=0)
+    assert rate[k1, RIGHT] == pytest.approx(v, abs=1e-3) and rate[0, RIGHT] == pytest.approx(0.0, abs=1e-3)
+    np.testing.assert_allclose(rate[k1 + 5:, RIGHT], v, atol=1e-6)
+    np.testing.assert_allclose(feet[:k1, LEFT, 0:3], np.tile([0.0, h.step_width_m / 2, 0.0], (k1, 1)), atol=1e-12)
+    np.testing.assert_allclose(rate[k2 + 5:, LEFT], v, atol=1e-6)
+    assert feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
+    assert feet[(k1 + k2) // 2, LEFT, 2] == pytest.approx(0.05, abs=1e-6)
+    np.testing.assert_allclose(feet[k2:, LEFT, 0] - feet[k2:, RIGHT, 0], 0.0, atol=1e-9)  # side by side
