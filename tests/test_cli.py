@@ -118,10 +118,13 @@ def test_every_help_shows_defaults_choices_and_units():
             assert "[default: " in text, (name, p.opts, text)
         if "|" in names:  # a choice: all of them listed
             assert any(c in names for c in ("daqp|proxqp|osqp", "loky|dask", "entries|steer", "png|svg",
-                                            "model|mujoco")), names
-        if "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
+                                            "model|mujoco", "npz|csv|mcap")), names
+        if p.name in ("atol", "rtol"):  # a comparison's tolerance: in each channel's own unit, or relative
+            assert "tolerance" in text, (name, p.opts, text)
+        elif "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
             assert "m/s" in text, (name, p.opts, text)
     assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()
                                              if p.name == "solver")
     assert set(QpSolver) == set(SOLVERS)
-    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model"}
+    assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model", "diff",
+                    "export"}
