@@ -11,7 +11,8 @@ from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
 HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
-FORMAT_VERSION: Final = (1, 2)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board model
+FORMAT_VERSION: Final = (1, 3)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
+# model; 1.3: the humanoid's whole body (joints, feet, filtered COM and ZMP, its URDF)
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -93,6 +94,15 @@ D_NODES_T: Final = "nodes_t"  # humanoid: per step, the GPM node times (S, N+2)
 D_NODES_STATE: Final = "nodes_state"  # humanoid: per step, the states at tau_0..tau_N and the end (S, N+2, 6)
 D_NODES_CONTROL: Final = "nodes_control"  # humanoid: per step, the controls at the LG nodes (S, N, 3)
 D_NODES_CONTACT_POINT: Final = "nodes_contact_point"  # humanoid: per step, the contact point at the nodes
+# Since 1.3, a humanoid entry whose COM motion holds also has its whole body:
+D_JOINTS: Final = "joints"  # (K, 12) joint angles [rad], columns the URDF's joint names
+D_JOINT_VELOCITIES: Final = "joint_velocities"  # (K, 12) [rad/s]
+D_BASE_POSE: Final = "base_pose"  # (K, 7) waist position [m] and quaternion x, y, z, w
+D_FEET: Final = "feet"  # (K, 8) right then left sole: x, y, z [m], yaw [rad]
+D_COM_REFERENCE: Final = "com_reference"  # (K, 3) the COM after the dynamics filter [m]
+D_ZMP_UNFILTERED: Final = "zmp_unfiltered"  # (K, 2) multibody ZMP of inverse kinematics on the GPM's COM [m]
+D_ZMP_WHOLEBODY: Final = "zmp_wholebody"  # (K, 2) multibody ZMP after the filter [m]
+A_WHOLEBODY: Final = "wholebody_json"  # the whole body's figures (errors, ZMP before and after, times)
 A_PHYSICS: Final = "physics_json"  # an entry's independent physics figures
 A_CLOSED_LOOP: Final = "closed_loop_json"  # an entry's closed-loop verdict (validate --closed-loop)
 A_CLOSED_LOOP_TWIN: Final = "closed_loop_twin_json"  # its verdict on the twin (validate --closed-loop --plant mujoco)

@@ -89,9 +89,37 @@ class Entry:
         return self._tend - self._t0
 
     def channel(self, name: str) -> np.ndarray:
-        """One named state or control channel over the knots (read-only; KeyError lists the names)."""
+        """One named channel over the knots: of the state or control, else of another array with
+        named columns (a humanoid's ``joints``, ``feet``...; ``ARRAY.COLUMN`` names one array's,
+        ``joint_velocities.R_knee``; a bare name that two arrays share is the positions', ``joints``
+        before ``joint_velocities``); read-only; KeyError lists the names."""
+        if name not in self.channels:
+            array, _, column = name.rpartition(".")
+            for k in ([array] if array else sorted(self.columns, key=lambda a: (a.endswith("velocities"), a))):
+                cols = list(self.columns.get(k, ()))
+                if k not in (schema.D_STATE, schema.D_CONTROL) and (column in cols):
+                    return self.arrays[k][:, cols.index(column)]
         which, j = self.channels.locate(name)
         return (self.control if which else self.state)[:, j]
+
+    def array_at(self, name: str, t: float) -> np.ndarray:
+        """The row of a per-knot array (``joints``, ``joint_velocities``, ``base_pose``, ``feet``...)
+        at time ``t`` [s], linear between knots and clamped to the entry (a quaternion in it is
+        interpolated by its components: renormalize it). Allocates one row.
+
+        Raises:
+            KeyError: Naming the arrays with a row per knot.
+        """
+        a = self.arrays.get(name)
+        if a is None or a.ndim < 1 or len(a) != self._n:
+            names = [k for k, v in self.arrays.items() if v.ndim >= 1 and len(v) == self._n and k != schema.D_T]
+            raise KeyError(f"no per-knot array {name!r}; arrays: {', '.join(names)}")
+        if not isfinite(t):
+            raise ValueError(f"array_at(name, t): t must be a finite time in seconds, got {t!r}")
+        i, f = self._locate(t)
+        row = a[i] + f * (a[min(i + 1, self._n - 1)] - a[i])
+        row.flags.writeable = False
+        return row
 
     def unit(self, name: str) -> str:
         """The unit of a state or control channel, as stored in the file."""

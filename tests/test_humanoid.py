@@ -95,15 +95,22 @@ def test_sqp_and_ipopt_reach_the_same_optimum():
 
 
 def test_library_round_trip_and_cli(tmp_path):
-    """`skatelib build` on the skating config writes a humanoid library that validates."""
+    """`skatelib build` on the skating config writes a humanoid library that validates: the 0.5 m/s
+    push with its whole body; the 0.75 and 1.0 m/s pushes stored as failed, their pushing legs
+    beyond reach at the push's end (hip extension and knee at their limits), so the build exits 1
+    unless --allow-failures."""
     out = tmp_path / "skate.h5"
     env = {**os.environ, "COLUMNS": "200"}
     cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out)], capture_output=True, text=True, env=env)
-    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.returncode == 1 and "2 entries failed" in r.stdout, r.stdout + r.stderr
     lib = MotionLibrary.open(out)
     assert lib.kind == "humanoid" and lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"]
-    e = lib.select(1.0)
+    assert [e.success for e in lib] == [True, False, False]
+    for key in ("skate_v0.75", "skate_v1.00"):
+        status = lib[key].attrs["status"]
+        assert "miss the body's targets" in status and "limits: L_hip_pitch, L_knee" in status, status
+    e = lib["skate_v1.00"]
     assert e.columns["state"] == ("com_x", "com_y", "com_z", "com_vx", "com_vy", "com_vz")
     assert e.columns["zmp"] == ("zmp_x", "zmp_y")
     assert e.sample(1.0).state[3] == pytest.approx(1.0, abs=1e-6)
@@ -140,13 +147,13 @@ def test_humanoid_build_goes_the_one_build_path(tmp_path):
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "--frontier"], capture_output=True, text=True,
                        env=env)
     assert r.returncode == 2 and "--frontier" in r.stderr and "humanoid" in r.stderr and not out.exists()
-    runs = [subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "-j", "2", "--no-progress"],
+    runs = [subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "-j", "2", "--no-progress", "--allow-failures"],
                            capture_output=True, text=True, env=env) for _ in range(2)]
     assert all(r.returncode == 0 for r in runs), runs[0].stderr + runs[1].stderr
     cached = [sum(" c " in line for line in r.stdout.splitlines() if line.startswith("│ skate_")) for r in runs]
     assert cached == [0, 9]  # three motions of three steps each
     lib = MotionLibrary.open(out)
-    assert lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"] and all(e.success for e in lib)
+    assert lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"] and lib["skate_v0.50"].success
     assert all(len(e.attrs["cache_key"]) == 32 for e in lib)
 
 

@@ -70,21 +70,23 @@ def test_walking_feet_follow_the_plan():
 
 def test_skating_feet_follow_the_board():
     """The board foot ends the push at the step's position and speed; it and then the landed
-    pushing foot move at the board speed; the pushing foot stays put during the push."""
+    pushing foot move at the board speed; the pushing foot stays put during the push and leaves
+    the ground at rest."""
     cfg = load_config(CONFIGS / "hrp2_skate.toml")
     h, s = cfg.humanoid, cfg.skate
     v = 1.0
     _, plan = skating_steps(cfg, v)
     dt = 0.001
     t = np.round(np.arange(0.0, s.push_s + s.slide_s + s.stop_s + 1e-9, dt), 10)
-    feet = skating_feet(plan, t, 0.05, h.step_width_m)
-    k1, k2 = round(s.push_s / dt), round((s.push_s + s.slide_s) / dt)
+    feet = skating_feet(plan, t, 0.05, h.step_width_m, 0.6)
+    k1, k2 = round(s.push_s / dt), round((s.push_s + 0.6) / dt)
     np.testing.assert_allclose(feet[k1, RIGHT, 0:3], plan[0].p_step, atol=1e-9)
     rate = np.gradient(feet[:, :, 0], dt, axis=0)
     assert rate[k1, RIGHT] == pytest.approx(v, abs=1e-3) and rate[0, RIGHT] == pytest.approx(0.0, abs=1e-3)
     np.testing.assert_allclose(rate[k1 + 5:, RIGHT], v, atol=1e-6)
     np.testing.assert_allclose(feet[:k1, LEFT, 0:3], np.tile([0.0, h.step_width_m / 2, 0.0], (k1, 1)), atol=1e-12)
     np.testing.assert_allclose(rate[k2 + 5:, LEFT], v, atol=1e-6)
+    assert rate[k1 + 1, LEFT] == pytest.approx(0.0, abs=2e-3)
     assert feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
     assert feet[(k1 + k2) // 2, LEFT, 2] == pytest.approx(0.05, abs=1e-6)
     np.testing.assert_allclose(feet[k2:, LEFT, 0] - feet[k2:, RIGHT, 0], 0.0, atol=1e-9)  # side by side

@@ -19,7 +19,7 @@ CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 @pytest.fixture(scope="module")
 def robot():
-    return Humanoid((CONFIGS / "hrp2_class.urdf").read_text())
+    return Humanoid((CONFIGS / "robots" / "hrp2_class.urdf").read_text())
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +85,7 @@ def test_dynamics_filter_brings_the_zmp_nearer_the_plan(robot, walk):
     """On the walk: the multibody ZMP's RMS error against the plan's ZMP falls by at least half,
     the IK still meets its (corrected) targets, and the COM correction stays within a few cm."""
     cfg, m, feet = walk
-    f = dynamics_filter(robot, cfg.gpm.sample_dt_s, m.state[:, 0:3], feet, m.zmp, robot.standing(0.70, 0.4))
+    f = dynamics_filter(robot, cfg.gpm.sample_dt_s, (m.state[:, 0:3], feet, m.zmp), robot.standing(0.70, 0.4))
     rms = [float(np.sqrt(np.mean(np.sum((z - m.zmp) ** 2, axis=1)))) for z in (f.zmp_before, f.zmp_after)]
     assert rms[1] < 0.5 * rms[0], rms
     assert f.ik.com_error_m.max() < 1e-8 and f.ik.feet_error_m.max() < 1e-8

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library.errors import ConfigError
-from skatelib.pipeline.config import MetaConfig, build_section, check_unique_keys, sections
+from skatelib.pipeline.config import CONFIG_DIR, MetaConfig, build_section, check_unique_keys, sections
 from skatelib.pipeline.config import setting as _f
 
 
@@ -53,6 +53,27 @@ class SkateConfig:
 
 
 @dataclass(frozen=True)
+class WholebodyConfig:
+    """The stages after the COM optimization (the paper's Fig. 5); the table may be left out."""
+
+    urdf: str = _f(doc="Robot description (URDF), relative to the config file or absolute; empty: the shipped "
+                       "HRP-2-class model.", default="")
+    swing_height_m: float = _f(0.0, 0.5, "Swing foot's highest point over its path [m].", default=0.05)
+    skate_swing_s: float = _f(0.05, 5.0, "Skating: the pushing foot's swing onto the board [s].", default=0.6)
+    preview_s: float = _f(0.05, 5.0, "Dynamics filter's preview of the ZMP reference [s] (Kajita: 1.6).",
+                          default=1.6)
+
+    def urdf_path(self, config: Path) -> Path:
+        if not self.urdf:
+            return CONFIG_DIR / "robots" / SHIPPED_URDF
+        p = Path(self.urdf)
+        return p if p.is_absolute() else config.parent / p
+
+
+SHIPPED_URDF = "hrp2_class.urdf"
+
+
+@dataclass(frozen=True)
 class HumanoidSweepConfig:
     motion: str = _f(doc="'walk' or 'skate'.")
     velocities_mps: tuple[float, ...] = _f(0.01, 5.0, "Walking: step length / step period; skating: board speed [m/s].")
@@ -70,6 +91,7 @@ class HumanoidConfig:
     walk: WalkConfig
     skate: SkateConfig
     sweep: HumanoidSweepConfig
+    wholebody: WholebodyConfig
 
     def resolved_json(self) -> str:
         d = dataclasses.asdict(self)
@@ -78,21 +100,28 @@ class HumanoidConfig:
         return json.dumps(d, sort_keys=True, default=str)
 
     def problem_json(self) -> str:
-        """The part of the config that determines a motion, as JSON: no name, no velocity list
-        (as the quadruped's ``problem_json``, the config part of an entry's cache key)."""
+        """The part of the config that determines a COM motion, as JSON: no name, no velocity list
+        and no whole-body stage (as the quadruped's ``problem_json``, the config part of an entry's
+        cache key; the whole-body stage runs after the cache)."""
         d = json.loads(self.resolved_json())
         d.pop("meta")
+        d.pop("wholebody")
         d["sweep"].pop("velocities_mps")
         return json.dumps(d, sort_keys=True)
 
 _HUMANOID_SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "humanoid": HumanoidModelConfig, "gpm": GpmConfig, "walk": WalkConfig,
-    "skate": SkateConfig, "sweep": HumanoidSweepConfig,
+    "skate": SkateConfig, "sweep": HumanoidSweepConfig, "wholebody": WholebodyConfig,
 }
 
 
 def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
+    data = {**data, "wholebody": data.get("wholebody", {})}  # an optional table: its defaults
     cfg = HumanoidConfig(path=path.resolve(), text=text, **sections(path, data, _HUMANOID_SECTIONS))
+    urdf = cfg.wholebody.urdf_path(cfg.path)
+    if not urdf.is_file():
+        raise ConfigError(path, "wholebody.urdf", f"{urdf} is not a file; name a URDF, or leave the key out for "
+                                                  "the shipped HRP-2-class model")
     if cfg.sweep.motion not in ("walk", "skate"):
         raise ConfigError(path, "sweep.motion", f"{cfg.sweep.motion!r}: use 'walk' or 'skate'")
     if cfg.gpm.solver not in ("ipopt", "sqp"):
@@ -106,5 +135,6 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
 
 
 def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
+    data = {**data, "wholebody": data.get("wholebody", {})}  # libraries written before the table
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _HUMANOID_SECTIONS.items()}
     return HumanoidConfig(path=Path(origin), text="", **sections)

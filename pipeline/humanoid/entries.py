@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from skatelib.library import schema
@@ -18,6 +19,7 @@ from skatelib.library.channels import (
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
+from skatelib.pipeline.humanoid.body import BodyMotion
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import Motion, plan_json
 from skatelib.pipeline.humanoid.tasks import EntryOutcome, entry_name
@@ -61,7 +63,33 @@ def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
                schema.D_ZMP: ZMP_NAMES, schema.D_CONTACT_POINT: POINT_NAMES}
     units = {schema.D_STATE: HUMANOID_STATE_UNITS, schema.D_CONTROL: HUMANOID_CONTROL_UNITS,
              schema.D_ZMP: ("m", "m"), schema.D_CONTACT_POINT: ("m", "m", "m")}
+    if o.body is not None:
+        attrs[schema.A_WHOLEBODY] = json.dumps(o.body.figures, sort_keys=True)
+        body_arrays, body_columns, body_units = _body_records(o.body)
+        arrays |= body_arrays
+        columns |= body_columns
+        units |= body_units
     return EntryRecord(key=o.key, attrs=attrs, arrays=arrays, columns=columns, units=units)
+
+
+FEET_NAMES = tuple(f"{side}_{c}" for side in ("R", "L") for c in ("x", "y", "z", "yaw"))
+
+
+def _body_records(b: BodyMotion) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """The whole body's arrays, column names and units (format 1.3)."""
+    n = len(b.joint_names)
+    arrays = {schema.D_JOINTS: b.q, schema.D_JOINT_VELOCITIES: b.qd, schema.D_BASE_POSE: b.base, schema.D_FEET: b.feet,
+              schema.D_COM_REFERENCE: b.com_reference, schema.D_ZMP_UNFILTERED: b.zmp_unfiltered,
+              schema.D_ZMP_WHOLEBODY: b.zmp_wholebody}
+    columns = {schema.D_JOINTS: b.joint_names, schema.D_JOINT_VELOCITIES: b.joint_names,
+               schema.D_BASE_POSE: ("x", "y", "z", "qx", "qy", "qz", "qw"), schema.D_FEET: FEET_NAMES,
+               schema.D_COM_REFERENCE: POINT_NAMES, schema.D_ZMP_UNFILTERED: ZMP_NAMES,
+               schema.D_ZMP_WHOLEBODY: ZMP_NAMES}
+    units = {schema.D_JOINTS: ("rad",) * n, schema.D_JOINT_VELOCITIES: ("rad/s",) * n,
+             schema.D_BASE_POSE: ("m",) * 3 + ("",) * 4, schema.D_FEET: ("m", "m", "m", "rad") * 2,
+             schema.D_COM_REFERENCE: ("m",) * 3, schema.D_ZMP_UNFILTERED: ("m", "m"),
+             schema.D_ZMP_WHOLEBODY: ("m", "m")}
+    return arrays, columns, units
 
 
 def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[EntryOutcome]) -> Path:
@@ -74,4 +102,6 @@ def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[Ent
              "source": h.source}
     root = root_attributes("humanoid", config.meta.name, config.text, config.resolved_json(),
                            {"solver": config.gpm.solver, "nodes": config.gpm.nodes})
-    return write_library(out, root, model, {}, {}, [entry_from_motion(o, config) for o in outcomes])
+    urdf = config.wholebody.urdf_path(config.path).read_text()
+    return write_library(out, root, model, {}, {schema.D_ROBOT_URDF: urdf},
+                         [entry_from_motion(o, config) for o in outcomes])

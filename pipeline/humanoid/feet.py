@@ -7,9 +7,9 @@ solved step plan, sampled at the motion's times.
 * Skating: the board foot (the support foot on the board) follows a minimum-jerk path to the
   step's reference position and velocity in the push (accelerating) phase, then moves uniformly
   with the board while sliding and stopping. The pushing foot stays on the ground during the
-  push, then swings onto the board beside the board foot during the slide: horizontally a
-  minimum-jerk path that lands at the board's velocity, vertically a cycloid rising to
-  ``height_m``; from then on it rides with the board.
+  push, then swings onto the board beside the board foot at the start of the slide: a
+  minimum-jerk path relative to the board foot (leaving the ground at rest, landing at rest on
+  the board), a cycloid rising to ``height_m``; from then on it rides with the board.
 
 Feet are (K, 2, 4) arrays: per knot, the right (0) and left (1) sole's centre on the ground (x, y,
 z) and its yaw.
@@ -76,20 +76,26 @@ def walking_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
     return feet
 
 
-def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float) -> np.ndarray:
-    """Both feet along a skating plan (push, slide, stop; module docstring)."""
+def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float,
+                 swing_s: float) -> np.ndarray:
+    """Both feet along a skating plan (push, slide, stop; module docstring). The pushing foot's
+    swing takes the first ``swing_s`` of the slide, planned relative to the board foot: it leaves
+    the ground at rest (moving backwards relative to the board) and lands beside the board foot,
+    at rest on the board."""
     push, slide = plan[0], plan[1]
     v = np.asarray(push.v_step, dtype=np.float64)
     board0, ground = np.array([0.0, -step_width_m / 2, 0.0]), np.array([0.0, step_width_m / 2, 0.0])
     board_end = np.asarray(push.p_step, dtype=np.float64)
-    T1, T2 = push.duration_s, push.duration_s + slide.duration_s
+    T1 = push.duration_s
+    Ts = min(swing_s, slide.duration_s)
     feet = np.zeros((len(t), 2, 4))
     path = minimum_jerk((board0, np.zeros(3), np.zeros(3)), (board_end, v, np.zeros(3)), T1)
-    feet[:, RIGHT, 0:3] = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
-    landing = board_end + v * slide.duration_s + np.array([0.0, ground[1] - board0[1], 0.0])
-    swing = minimum_jerk((ground, np.zeros(3), np.zeros(3)), (landing, v, np.zeros(3)), slide.duration_s)
-    _, up = cycloid((t - T1) / slide.duration_s)
-    feet[:, LEFT, 0:3] = np.select([(t < T1)[:, None], (t < T2)[:, None]],
-                                   [ground, evaluate(swing, t - T1)], landing + v * (t - T2)[:, None])
-    feet[:, LEFT, 2] += height_m * np.where((t >= T1) & (t < T2), up, 0.0)
+    board = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
+    feet[:, RIGHT, 0:3] = board
+    beside = ground - board0  # where the pushing foot lands, relative to the board foot
+    rel = minimum_jerk((ground - board_end, -v, np.zeros(3)), (beside, np.zeros(3), np.zeros(3)), Ts)
+    _, up = cycloid((t - T1) / Ts)
+    feet[:, LEFT, 0:3] = np.select([(t < T1)[:, None], (t < T1 + Ts)[:, None]],
+                                   [ground, board + evaluate(rel, t - T1)], board + beside)
+    feet[:, LEFT, 2] += height_m * np.where((t >= T1) & (t < T1 + Ts), up, 0.0)
     return feet

@@ -5,9 +5,11 @@ independent checks of a stored library, and the parts that build (:mod:`.builder
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from rich.markup import escape
 from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError, SkatelibError
@@ -35,7 +37,8 @@ def print_model(cfg: HumanoidConfig) -> None:
 
 
 def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
-    """Every step's GPM nodes against the plan stored with the entry; returns the failures."""
+    """Every step's GPM nodes against the plan stored with the entry, and its whole body's checks
+    when it has one; returns the failures."""
     from skatelib.pipeline.humanoid.motion import step_model, stored_plan
     from skatelib.pipeline.humanoid.verify import check_steps, failures
 
@@ -52,6 +55,12 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         nodes = (e.arrays[schema.D_NODES_T], e.arrays[schema.D_NODES_STATE], e.arrays[schema.D_NODES_CONTROL])
         rep = check_steps(plan, *nodes, step_model(cfg))
         fails = failures(rep)
+        if schema.D_JOINTS in e.arrays:  # the whole body (format 1.3), by its own checks
+            from skatelib.pipeline.humanoid.body import body_failures, stored_body
+            from skatelib.pipeline.humanoid.wholebody import Humanoid
+
+            body = stored_body(dict(e.arrays), dict(e.columns), json.loads(str(e.attrs[schema.A_WHOLEBODY])))
+            fails += [f"whole body: {f}" for f in body_failures(Humanoid(lib.urdf), plan, np.asarray(e.t), body)]
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})
     return bad

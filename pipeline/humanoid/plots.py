@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,33 @@ def figures(lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[st
     """
     if frontier_file is not None:
         raise SkatelibError(f"{lib.path}: a humanoid library has no reachable-speed frontier; drop --frontier")
-    return {"com": plot_com(lib, plt), "footprints": plot_footprints(lib, plt)}
+    out = {"com": plot_com(lib, plt), "footprints": plot_footprints(lib, plt)}
+    bodies = [e for e in solved(lib) if schema.D_ZMP_WHOLEBODY in e.arrays]
+    if bodies:
+        out["zmp_wholebody"] = plot_zmp(lib, bodies, plt)
+    return out
+
+
+def plot_zmp(lib: MotionLibrary, entries: list[Any], plt: Any) -> Any:
+    """The paper's Fig. 6-13 counterparts: per entry and axis, the planned ZMP (green), the
+    multibody ZMP of the whole body before the dynamics filter (grey) and after it (black), and
+    the COM (red)."""
+    fig, axes = plt.subplots(len(entries), 2, figsize=(12, 2.8 * len(entries)), squeeze=False, layout="constrained")
+    fig.suptitle(f"{library_name(lib)}: planned ZMP (green), multibody ZMP before (grey) and after (black) the "
+                 "dynamics filter, COM (red)")
+    for row, e in zip(axes, entries, strict=True):
+        figures = json.loads(str(e.attrs[schema.A_WHOLEBODY]))
+        for axis, ax in enumerate(row):
+            ax.plot(e.t, e.arrays[schema.D_ZMP][:, axis], color="C2", lw=1.5)
+            ax.plot(e.t, e.arrays[schema.D_ZMP_UNFILTERED][:, axis], color="0.6", lw=0.8)
+            ax.plot(e.t, e.arrays[schema.D_ZMP_WHOLEBODY][:, axis], color="k", lw=0.8)
+            ax.plot(e.t, e.state[:, axis], color="C3", lw=0.8, ls="--")
+            ax.set_ylabel(f"{'xy'[axis]} [m]")
+            ax.set_xlabel("time [s]")
+            ax.grid(alpha=0.3)
+        row[0].set_title(f"{e.key}: ZMP error RMS {figures['zmp_rms_unfiltered_m'] * 100:.1f} cm before the filter, "
+                         f"{figures['zmp_rms_m'] * 100:.1f} cm after", fontsize=9)
+    return fig
 
 
 def plot_com(lib: MotionLibrary, plt: Any) -> Any:

@@ -1,5 +1,7 @@
 """The humanoid in a Rerun recording: COM and its path, ZMP, the contact point, the soles and the
-support polygons of the entry's stored plan, and the plots of its tab."""
+support polygons of the entry's stored plan, and the plots of its tab; with a whole body (format
+1.3), the robot from the library's URDF posed at every knot, its soles' paths and the multibody
+ZMP after the dynamics filter."""
 
 from __future__ import annotations
 
@@ -35,6 +37,8 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
     rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
                                         half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
     _log_support_polygons(rec, lib, e, root, offset)
+    if schema.D_JOINTS in e.arrays and lib.urdf:
+        _log_body(rec, lib, e, root, offset)
     for name, col, label in (("com_z", x[:, 2], "COM height [m]"), ("com_vx", x[:, 3], "COM speed [m/s]"),
                              ("zmp_x", zmp[:, 0], "ZMP x [m]"), ("zmp_y", zmp[:, 1], "ZMP y [m]")):
         series(rec, root, name, t, col, label)
@@ -53,6 +57,31 @@ def _log_support_polygons(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry,
             ring = np.vstack([poly, poly[:1]])
             strips.append(np.column_stack([ring, np.full(len(ring), 0.002)]) + offset)
     rec.log(f"{root}/support_polygons", rr.LineStrips3D(strips, colors=[(60, 60, 200)]), static=True)
+
+
+def _log_body(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, offset: np.ndarray) -> None:
+    """The posed robot, the soles' paths and the multibody ZMP (black), with its plot beside the plan's."""
+    from skatelib.pipeline.views.rerun_robot import Robot, log_robot
+
+    t, base = e.t, e.arrays[schema.D_BASE_POSE]
+    log_robot(rec, Robot(lib.urdf), f"{root}/robot", t, (base[:, 0:3] + offset, _matrices(base[:, 3:7]),
+                                                          e.arrays[schema.D_JOINTS]))
+    feet = e.arrays[schema.D_FEET].reshape(len(t), 2, 4)
+    rec.log(f"{root}/sole_paths", rr.LineStrips3D([feet[:, s, 0:3] + offset for s in (0, 1)],
+                                                  colors=[(120, 120, 120)], radii=0.003), static=True)
+    zmp = e.arrays[schema.D_ZMP_WHOLEBODY]
+    rec.send_columns(f"{root}/zmp_wholebody", indexes=time_index(t), columns=rr.Points3D.columns(
+        positions=np.column_stack([zmp, np.zeros(len(t))]) + offset, radii=np.full(len(t), 0.015),
+        colors=np.zeros((len(t), 3), dtype=np.uint8)))
+    series(rec, root, "zmp_x_wholebody", t, zmp[:, 0], "multibody ZMP x [m]")
+
+
+def _matrices(quat_xyzw: np.ndarray) -> np.ndarray:
+    """Rotation matrices (K, 3, 3) of unit quaternions (K, 4) given as x, y, z, w."""
+    x, y, z, w = (quat_xyzw[:, i] for i in range(4))
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def logger(lib: MotionLibrary) -> Any:

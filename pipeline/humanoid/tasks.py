@@ -10,6 +10,7 @@ from skatelib.library import schema
 from skatelib.pipeline.build import codec
 from skatelib.pipeline.build.cache import cache_key, cached_or_solved
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
+from skatelib.pipeline.humanoid.body import BodyMotion, body_failures, robot_for, whole_body
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.geometry import Support
 from skatelib.pipeline.humanoid.motion import Motion, plan_for, plan_json, solve_motion, step_model
@@ -49,6 +50,7 @@ class EntryOutcome:
     cached: bool
     cache_key: str = ""
     note: str = ""
+    body: BodyMotion | None = None  # the whole body (when the COM motion was solved and holds)
 
     @property
     def success(self) -> bool:
@@ -86,7 +88,13 @@ class BuildTask:
         key = motion_key(cfg, v, plan_for(cfg, v)[1])
         payload, cached, note = cached_or_solved(key, ("motion",), lambda: {"motion": solve_motion(cfg, v)}, use_cache)
         motion = payload["motion"]
-        outcome = EntryOutcome(name, motion, judge(cfg, motion), cached, key, note)
+        failures = judge(cfg, motion)
+        body = None
+        if motion.success and not failures:  # the whole body of a motion that holds (not cached: it is quick)
+            body = whole_body(cfg, motion)
+            checks = body_failures(robot_for(cfg), list(motion.plan), motion.t, body)
+            failures = tuple(f"whole body: {f}" for f in checks)
+        outcome = EntryOutcome(name, motion, failures, cached, key, note, body)
         if events is not None:
             events.put(outcome.event())
         return [outcome]

@@ -24,6 +24,7 @@ from skatelib.pipeline.humanoid.preview import CartTable, preview_gains, track
 SOLES = ("R_sole", "L_sole")
 WAIST = "waist"
 PREVIEW_S = 1.6  # the dynamics filter's preview (Kajita et al. 2003)
+MISSED_M = 1e-6  # inverse kinematics that leaves a target this far has missed it
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,7 @@ class Humanoid:
         return np.concatenate(rows), np.vstack(J)
 
     def solve_ik(self, com: np.ndarray, feet: np.ndarray, q0: np.ndarray, tol: float = 1e-9,
-                 max_iterations: int = 50, damping: float = 1e-8) -> IkResult:
+                 max_iterations: int = 200, damping: float = 1e-8) -> IkResult:
         """Configurations for COM targets (K, 3) and feet (K, 2, 4: sole centre, yaw), from ``q0``."""
         q = q0.copy()
         out = np.empty((len(com), self.model.nq))
@@ -134,14 +135,17 @@ class Filtered:
     com: np.ndarray  # (K, 3) the corrected COM reference
 
 
-def dynamics_filter(robot: Humanoid, dt: float, com: np.ndarray, feet: np.ndarray, zmp_ref: np.ndarray,
-                    q0: np.ndarray) -> Filtered:
+def dynamics_filter(robot: Humanoid, dt: float, plan: tuple[np.ndarray, np.ndarray, np.ndarray], q0: np.ndarray,
+                    preview_s: float = PREVIEW_S) -> Filtered:
     """Kajita's dynamics filter: IK on the planned COM, the multibody ZMP's error against the
     plan's, a cart-table preview servo on that error giving a COM correction, IK again (gravity:
-    the model's)."""
+    the model's). ``plan``: the COM (K, 3), feet (K, 2, 4) and ZMP (K, 2) planned."""
+    com, feet, zmp_ref = plan
     g = float(-robot.model.gravity.linear[2])
     first = robot.solve_ik(com, feet, q0)
     before = robot.zmp(first.q, dt, g)
+    if max(first.com_error_m.max(), first.feet_error_m.max()) > MISSED_M:
+        return Filtered(first, before, before, com)  # a body not where the plan puts it: nothing to filter
     model = CartTable.of(dt, float(np.mean(com[:, 2])), g)
     gains = preview_gains(model, round(PREVIEW_S / dt))
     shift = np.zeros_like(com)

@@ -7,12 +7,12 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 import rerun as rr
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, LEGS, S_Q, S_RPY
 from skatelib.library.margins import forward_speed, friction_margins
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.pipeline.views.rerun_parts import ground, quat_rows, series, time_index
+from skatelib.pipeline.views.rerun_robot import Robot, log_robot
 from skatelib.runtime import Entry, MotionLibrary
 
 BOARD_COLOR, GROUND_COLOR, SWING_COLOR = (40, 110, 255), (255, 140, 0), (160, 160, 160)
@@ -24,56 +24,6 @@ PANELS = [("board speed vs target", "board_speed"), ("deck roll", "board_roll"),
           ("joint angles", "joints"), ("margins", "margins")]
 
 
-class Robot:
-    """Pinocchio model and visual shapes from the URDF stored in the library."""
-
-    def __init__(self, urdf_text: str):
-        self.model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
-        self.geoms = pin.buildGeomFromUrdfString(self.model, urdf_text, pin.GeometryType.VISUAL)
-        self.data = self.model.createData()
-        self.gdata = pin.GeometryData(self.geoms)
-        self.q_idx = np.array([self.model.joints[j].idx_q for j in range(2, self.model.njoints)])
-        feet = [f.name for f in self.model.frames if f.name.endswith("_foot")]
-        self.foot_ids = [self.model.getFrameId(f"{leg}_foot") for leg in LEGS] if len(feet) >= 4 else []
-
-    def shape(self, g: Any) -> Any:
-        geo = g.geometry
-        name = type(geo).__name__
-        if name == "Box":
-            return rr.Boxes3D(half_sizes=[geo.halfSide], colors=[(90, 90, 100)])
-        if name == "Cylinder":
-            return rr.Cylinders3D(lengths=[2 * geo.halfLength], radii=[geo.radius], colors=[(120, 120, 130)])
-        if name == "Sphere":
-            return rr.Ellipsoids3D(half_sizes=[[geo.radius] * 3], colors=[(30, 30, 30)], fill_mode="solid")
-        return None
-
-    def poses(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Per knot and shape: translations (K, G, 3) and xyzw quaternions (K, G, 4); per knot and
-        leg the feet's translational Jacobians over the leg's joints (K, 4, 3, 3) (zeros without
-        foot frames)."""
-        K, G = len(q), len(self.geoms.geometryObjects)
-        trans, quats = np.zeros((K, G, 3)), np.zeros((K, G, 4))
-        tau = np.zeros((K, 4, 3, 3))
-        qp = pin.neutral(self.model)
-        for k in range(K):
-            qp[:3] = base_pos[k]
-            qp[3:7] = pin.Quaternion(base_rot[k]).coeffs()
-            qp[self.q_idx] = q[k]
-            pin.forwardKinematics(self.model, self.data, qp)
-            pin.updateGeometryPlacements(self.model, self.data, self.geoms, self.gdata)
-            for i in range(G):
-                M = self.gdata.oMg[i]
-                trans[k, i] = M.translation
-                quats[k, i] = pin.Quaternion(M.rotation).coeffs()
-            if self.foot_ids:
-                pin.computeJointJacobians(self.model, self.data, qp)
-                pin.updateFramePlacements(self.model, self.data)
-                for leg, fid in enumerate(self.foot_ids):
-                    J = pin.getFrameJacobian(self.model, self.data, fid, pin.LOCAL_WORLD_ALIGNED)[:3, 6:]
-                    tau[k, leg] = J[:, 3 * leg: 3 * leg + 3]  # this leg's columns: d foot / d q_leg
-        return trans, quats, tau
-
-
 def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robot, root: str,
                         offset: np.ndarray) -> None:
     t, x, u = e.t, e.state, e.control
@@ -82,14 +32,7 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
     R = rpy_matrices(x[:, 3:6])
     com_off = lib.model_arrays.get("robot_com_offset_m", np.zeros(3))
     trunk = x[:, 0:3] - np.einsum("kij,j->ki", R, com_off) + offset
-    trans, quats, jac = robot.poses(trunk, R, x[:, 12:24])
-    for i, g in enumerate(robot.geoms.geometryObjects):
-        path = f"{root}/robot/{g.name}"
-        shape = robot.shape(g)
-        if shape is not None:
-            rec.log(path, shape, static=True)
-        rec.send_columns(path, indexes=time_index(t),
-                         columns=rr.Transform3D.columns(translation=trans[:, i], quaternion=quats[:, i]))
+    jac = log_robot(rec, robot, f"{root}/robot", t, (trunk, R, x[:, 12:24]))
     # Paths: the board's on the ground, each foot's trail, and where the push foot stood on the ground.
     rec.log(f"{root}/board_path", rr.LineStrips3D([e.board_pos[:, 0:3] * [1, 1, 0] + offset], colors=[(160, 110, 60)]),
             static=True)
