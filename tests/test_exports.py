@@ -5,8 +5,6 @@ states and foot forces at the entry's times."""
 from __future__ import annotations
 
 import csv
-import os
-import subprocess
 
 import numpy as np
 import pytest
@@ -15,20 +13,14 @@ from skatelib.library.reader import read_library
 from skatelib.library.rotations import rpy_matrices
 from skatelib.pipeline.ros_messages import quaternion_xyzw
 
-from tests.helpers import CLI, TINY
+from tests.helpers import one_entry_library, run_cli
 
-
-def _cli(args: list[str]) -> subprocess.CompletedProcess:
-    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "COLUMNS": "200"})
+_cli = run_cli
 
 
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
-    out = tmp_path_factory.mktemp("export") / "lib.h5"
-    r = _cli(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(out)])
-    assert r.returncode == 0, r.stdout + r.stderr
-    return out
+    return one_entry_library(tmp_path_factory.mktemp("export"))
 
 
 def test_npz_round_trips(lib, tmp_path):

@@ -13,7 +13,7 @@ import tomllib
 import pytest
 from skatelib.pipeline.cli.app import EXTRA_OF, install_hint
 
-from tests.helpers import TINY
+from tests.helpers import one_entry_library
 from tests.test_extras import ROOT, _names
 
 EXTRAS = {  # extra -> the import names of its packages that the [build] extra does not bring
@@ -41,10 +41,7 @@ def _cli(args: list[str], hidden: tuple[str, ...] = ()) -> subprocess.CompletedP
 
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
-    out = tmp_path_factory.mktemp("contact") / "lib.h5"
-    r = _cli(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(out)])
-    assert r.returncode == 0, r.stdout + r.stderr
-    return out
+    return one_entry_library(tmp_path_factory.mktemp("contact"))
 
 
 @pytest.mark.parametrize(("args", "extra"), [

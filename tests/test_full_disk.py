@@ -15,7 +15,7 @@ import pytest
 from skatelib.library import atomic
 from skatelib.library.errors import OutputError
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI, TINY, one_entry_library
 
 LIMIT_BYTES = 8_000  # smaller than any library, figure or recording written here
 
@@ -38,9 +38,7 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 def solved(tmp_path_factory):
     """A one-entry library of the tiny config, its figures and its recording, written with room."""
     d = tmp_path_factory.mktemp("disk")
-    lib = d / "lib.h5"
-    r = _run(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(lib)])
-    assert r.returncode == 0, r.stdout + r.stderr
+    lib = one_entry_library(d)
     r = _run(["plot", str(lib), "-o", str(d / "fig"), "-f", "png"])
     assert r.returncode == 0, r.stdout + r.stderr
     return d, lib

@@ -29,13 +29,18 @@ def is_skatelib_library(path: Path) -> bool:
     return raw.startswith(HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
 
 
+def _head(path: Path, n: int) -> bytes:
+    """The first ``n`` bytes of a file (empty when it cannot be read)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(n)
+    except OSError:
+        return b""
+
+
 def is_rerun_recording(path: Path) -> bool:
     """True when ``path`` starts with the Rerun recording signature."""
-    try:
-        with path.open("rb") as f:
-            return f.read(3) == b"RRF"
-    except OSError:
-        return False
+    return _head(path, 3) == b"RRF"
 
 
 def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, what: str = "library") -> None:
@@ -147,38 +152,22 @@ def check_scheduler(address: str, timeout_s: float = 3.0) -> None:
 
 def is_mjcf(path: Path) -> bool:
     """Whether ``path`` starts like a MuJoCo model file."""
-    try:
-        with open(path, "rb") as f:
-            return f.read(64).lstrip().startswith(b"<mujoco")
-    except OSError:
-        return False
+    return _head(path, 64).lstrip().startswith(b"<mujoco")
 
 
 def is_mcap(path: Path) -> bool:
     """Whether ``path`` starts with the MCAP magic."""
-    try:
-        with open(path, "rb") as f:
-            return f.read(5) == b"\x89MCAP"
-    except OSError:
-        return False
+    return _head(path, 5) == b"\x89MCAP"
 
 
 def is_json(path: Path) -> bool:
     """Whether ``path`` starts like a JSON object (a frontier file)."""
-    try:
-        with open(path, "rb") as f:
-            return f.read(64).lstrip().startswith(b"{")
-    except OSError:
-        return False
+    return _head(path, 64).lstrip().startswith(b"{")
 
 
 def is_video(path: Path) -> bool:
     """Whether ``path`` starts like an MP4 (an ``ftyp`` box) or a GIF."""
-    try:
-        with open(path, "rb") as f:
-            head = f.read(12)
-    except OSError:
-        return False
+    head = _head(path, 12)
     return head[4:8] == b"ftyp" or head[:6] in (b"GIF87a", b"GIF89a")
 
 
