@@ -121,6 +121,20 @@ class Entry:
         row.flags.writeable = False
         return row
 
+    def array_window(self, name: str, t0: float, n: int, dt: float) -> np.ndarray:
+        """The rows of a per-knot array at ``t0 + k dt``, k = 0..n-1, as :meth:`array_at` (n, ...);
+        ``n`` bounded as in :meth:`window`."""
+        self.array_at(name, t0)  # KeyError naming the per-knot arrays
+        self.window(t0, n, dt)  # the same argument checks and bound
+        a = self.arrays[name]
+        tc = np.clip(t0 + dt * np.arange(n), self._t0, self._tend)
+        j = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._last)
+        span = self.t[j + 1] - self.t[j] if self._n >= 2 else np.ones(n)
+        f = ((tc - self.t[j]) / span).reshape(-1, *([1] * (a.ndim - 1)))
+        out = a[j] + f * (a[np.minimum(j + 1, self._n - 1)] - a[j])
+        out.flags.writeable = False
+        return out
+
     def unit(self, name: str) -> str:
         """The unit of a state or control channel, as stored in the file."""
         self.channels.locate(name)

@@ -63,6 +63,12 @@ def test_the_runtime_serves_joints_by_name_and_time(walk):
     np.testing.assert_array_equal(e.array_at("joints", 99.0), q[-1])
     with pytest.raises(KeyError, match="joints"):
         e.array_at("nodes_t", 1.0)
+    w = e.array_window("joints", 1.0, 7, 0.013)
+    assert w.shape == (7, 12) and not w.flags.writeable
+    for k in range(7):
+        np.testing.assert_allclose(w[k], e.array_at("joints", 1.0 + 0.013 * k), atol=1e-15)
+    with pytest.raises(TypeError):
+        e.array_window("joints", 1.0, 2.5, 0.01)
 
 
 def _doctored(walk, tmp_path, name, change):
