@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+import warnings
 from typing import Annotated, Any
 
 import typer
@@ -68,6 +69,13 @@ class _ConsoleLine(logging.Handler):
         console.print(escape(record.getMessage()))
 
 
+def _warning_line(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """A warning as one line on stderr (a library of another minor format version, a cache note),
+    not Python's source excerpt."""
+    err_console.print(f"[yellow]warning:[/] {escape(str(message))}")
+
+
 def _sigterm(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
 
@@ -84,6 +92,7 @@ def main() -> None:
     if debug:
         sys.argv.remove("--debug")
     signal.signal(signal.SIGTERM, _sigterm)
+    warnings.showwarning = _warning_line
     notices = logging.getLogger("skatelib.compile")  # a line when (only when) code is compiled
     notices.addHandler(_ConsoleLine())
     notices.setLevel(logging.INFO)
