@@ -78,8 +78,9 @@ def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path):
 
 
 def test_humanoid_figures_draw_the_library(tmp_path):
-    """A humanoid library gets its own figures (through the kind table): COM speed and height, and
-    the top view whose COM line is the stored com_x, com_y and whose polygons are the stored plan's."""
+    """A humanoid library gets its own figures (through the kind table): COM speed and height, the
+    top view whose COM line is the stored com_x, com_y and whose polygons are the stored plan's,
+    and the planned against the whole body's multibody ZMP."""
     import matplotlib.pyplot as plt
     from skatelib.pipeline.humanoid.motion import stored_plan
     from skatelib.pipeline.humanoid.plots import plot_footprints
@@ -88,7 +89,7 @@ def test_humanoid_figures_draw_the_library(tmp_path):
 
     path = build_library(load_config(WALK), tmp_path / "w.h5", BuildOptions(jobs=1, cache=False)).path
     written = write_figures(path, tmp_path / "figs", None, ("png",))
-    assert sorted(p.name for p in written) == ["com.png", "footprints.png"]
+    assert sorted(p.name for p in written) == ["com.png", "footprints.png", "zmp_wholebody.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in written)
     lib = MotionLibrary.open(path)
     e = next(iter(lib))
