@@ -88,8 +88,8 @@ def test_one_loader_for_every_kind_and_the_kind_a_command_needs(tmp_path):
     with pytest.raises(ConfigError, match=r"hrp2_walk\.toml.*meta\.kind.*expected 'quadruped'"):
         load_config(CONFIG_DIR / "hrp2_walk.toml", QuadrupedConfig)
     assert config_from_json(walk.resolved_json(), tmp_path / "lib.h5") == walk.__class__(
-        path=tmp_path / "lib.h5", text="", **{k: getattr(walk, k) for k in ("meta", "humanoid", "gpm", "walk", "skate", "wholebody",
-                                                                             "sweep")})
+        path=tmp_path / "lib.h5", text="",
+        **{k: getattr(walk, k) for k in ("meta", "humanoid", "gpm", "walk", "skate", "wholebody", "sweep")})
     back = config_from_json(quad.resolved_json(), tmp_path / "lib.h5", quad.urdf_path, QuadrupedConfig)
     assert back.problem_json() == quad.problem_json()
     bad = tmp_path / "k.toml"
