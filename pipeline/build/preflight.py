@@ -65,14 +65,8 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
     if out.exists() and not force and not same_type(out):
         raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it (choose another file, or pass "
                                "--force)")
-    folder = out.parent
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".skatelib-probe-"):
-            pass
-    except OSError as e:
-        raise OutputError(out, f"its folder {folder} cannot be written ({e.strerror}); choose another output") from e
-    remove_stale_temporaries(folder)
+    _writable(out.parent, out, "its folder {folder} cannot be written ({why}); choose another output")
+    remove_stale_temporaries(out.parent)
 
 
 def check_folder(out: Path) -> None:
@@ -85,13 +79,18 @@ def check_folder(out: Path) -> None:
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputError(out, "is a file; name a folder for the files, e.g. out/figures")
+    _writable(out, out, "the folder cannot be written ({why}); choose another one")
+    remove_stale_temporaries(out, "skatelib")
+
+
+def _writable(folder: Path, named: Path, message: str) -> None:
+    """Make ``folder`` if needed and write a probe file in it, or refuse naming ``named``."""
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=out, prefix=".skatelib-probe-"):
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".skatelib-probe-"):
             pass
     except OSError as e:
-        raise OutputError(out, f"the folder cannot be written ({e.strerror}); choose another one") from e
-    remove_stale_temporaries(out, "skatelib")
+        raise OutputError(named, message.format(folder=folder, why=e.strerror)) from e
 
 
 def check_cache_dir(entries_too: bool = True) -> Path:
