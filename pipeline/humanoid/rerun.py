@@ -13,6 +13,7 @@ from skatelib.library import schema
 from skatelib.pipeline.views.rerun_parts import ground, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
+BOARD_HALF_M = (0.4, 0.12, 0.01)  # a drawn deck (the plan puts the board sole on the ground)
 PANELS = [("COM height", "com_z"), ("COM speed", "com_vx"), ("ZMP x", "zmp_x"), ("ZMP y", "zmp_y")]
 
 
@@ -74,6 +75,10 @@ def _log_body(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
         positions=np.column_stack([zmp, np.zeros(len(t))]) + offset, radii=np.full(len(t), 0.015),
         colors=np.zeros((len(t), 3), dtype=np.uint8)))
     series(rec, root, "zmp_x_wholebody", t, zmp[:, 0], "multibody ZMP x [m]")
+    if str(e.attrs.get("motion", "")) == "skate":  # the board under the board (right) sole, drawn only
+        rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[BOARD_HALF_M], colors=[(160, 110, 60)]), static=True)
+        centre = feet[:, 0, 0:3] + offset + np.array([BOARD_HALF_M[0] / 3, 0.0, -BOARD_HALF_M[2]])
+        rec.send_columns(f"{root}/board", indexes=time_index(t), columns=rr.Transform3D.columns(translation=centre))
 
 
 def _matrices(quat_xyzw: np.ndarray) -> np.ndarray:
