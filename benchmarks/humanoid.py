@@ -14,7 +14,8 @@ from benchmarks.figures import Figure, Measured
 
 STEP = Figure("humanoid-step", "humanoid skating push step, 10 LG nodes (SQP)", "ms", 5.0,
               "scipy SLSQP, finite differences (the paper's)")
-WHOLE = Figure("humanoid-wholebody", "humanoid walk, per phase (about 0.8 s of motion): GPM + feet + IK + dynamics filter", "ms", 800.0,
+WHOLE = Figure("humanoid-wholebody",
+               "humanoid walk, per phase (about 0.8 s of motion): GPM + feet + IK + dynamics filter", "ms", 800.0,
                "the GPM (COM) stage alone")
 FIGURES = (STEP, WHOLE)
 
