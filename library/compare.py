@@ -52,7 +52,7 @@ class ChannelChange:
     column: str
     unit: str
     max_abs: float
-    at_s: float | None  # the entry's time of that row (None when the array has no time axis)
+    at_s: float | None  # the entry's time of that row (None when the array has no row per knot)
     a: float
     b: float
 
@@ -162,7 +162,8 @@ def _channels(name: str, x: np.ndarray, y: np.ndarray, e: EntryRecord, t: np.nda
         dev = np.where(bad, np.abs(X.astype(np.float64) - Y.astype(np.float64)), -1.0)
     for j in np.nonzero(bad.any(axis=0))[0]:
         row = int(np.nanargmax(np.where(np.isnan(dev[:, j]), np.inf, dev[:, j])))
-        at = float(t[row]) if y.ndim and len(t) >= len(y) and row < len(t) else None
+        per_knot = y.ndim and len(y) in (len(t), len(t) - 1)  # a row per knot (or per interval)
+        at = float(t[row]) if per_knot else None
         yield ChannelChange(name, names[j], units[j], float(dev[row, j]), at, float(X[row, j]), float(Y[row, j]))
 
 
