@@ -86,7 +86,8 @@ bench: venv
 	$(BIN)/python -m benchmarks.run
 
 # The README's figures from the current code: the default library (built when missing), its
-# frontier for 1-4 strides, `skatelib plot`, and a screenshot of `skatelib inspect` in the viewer.
+# frontier for 1-4 strides, `skatelib plot`, a screenshot of `skatelib inspect` in the viewer, the
+# twin's GIF, and the humanoid walk's planned against multibody ZMP.
 LIB := out/cyberdog2-default.h5
 figures: venv
 	test -f $(LIB) || $(BIN)/skatelib build -o $(LIB)
@@ -96,6 +97,9 @@ figures: venv
 	$(BIN)/skatelib inspect $(LIB) --entry v0.50_s2 --entry v1.00_s4 --save build/figures/inspect.rrd --force
 	tools/rrd-screenshot build/figures/inspect.rrd docs/inspect.png 1400x850
 	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.gif
+	$(BIN)/skatelib build configs/hrp2_walk.toml -o out/hrp2-walk.h5 --no-progress
+	$(BIN)/skatelib plot out/hrp2-walk.h5 -o build/figures/hrp2-walk -f png
+	cp build/figures/hrp2-walk/zmp_wholebody.png docs/figures/hrp2-walk-zmp.png
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache
