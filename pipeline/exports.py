@@ -1,5 +1,8 @@
 """Libraries in other tools' formats (``skatelib export``), each read back by a test:
 
+Only solved entries are written (a failed entry's arrays are no motion; the command names those
+it leaves out).
+
 * ``npz``: a folder with one ``<key>.npz`` per entry: its arrays by name (``t``, ``state``, ...),
   and for each array with named columns ``<name>__columns`` and ``<name>__units``.
 * ``csv``: a folder with one ``<key>.csv`` per entry: a row per knot, a column per channel headed
@@ -23,9 +26,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library import schema
 from skatelib.library.atomic import write_atomic
 from skatelib.library.compare import column_names
-from skatelib.library.reader import read_library
+from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord
 
 FORMATS = ("npz", "csv", "mcap")
@@ -47,10 +51,15 @@ def headers(e: EntryRecord) -> tuple[list[str], np.ndarray]:
     return heads, np.hstack(cols)
 
 
+def solved(data: LibraryData) -> dict[str, EntryRecord]:
+    """The entries an export writes: the solved ones (a failed entry's arrays are no motion)."""
+    return {k: e for k, e in data.entries.items() if bool(e.attrs.get(schema.A_SUCCESS, False))}
+
+
 def write_npz(path: Path, out: Path) -> list[Path]:
     data = read_library(path)
     written = []
-    for key, e in data.entries.items():
+    for key, e in solved(data).items():
         arrays: dict[str, np.ndarray] = {k: np.asarray(v) for k, v in e.arrays.items()}
         for k in e.columns:
             arrays[f"{k}__columns"] = np.array(list(e.columns[k]))
@@ -64,7 +73,7 @@ def write_npz(path: Path, out: Path) -> list[Path]:
 def write_csv(path: Path, out: Path) -> list[Path]:
     data = read_library(path)
     written = []
-    for key, e in data.entries.items():
+    for key, e in solved(data).items():
         heads, table = headers(e)
         text = io.StringIO()
         w = csv.writer(text, lineterminator="\n")
@@ -90,7 +99,7 @@ def write_mcap(path: Path, out: Path) -> list[Path]:
     buffer = io.BytesIO()
     writer = Writer(buffer)
     schemas = {name: writer.register_msgdef(name, text) for name, text in msg.DEFINITIONS.items()}
-    for key, e in data.entries.items():
+    for key, e in solved(data).items():
         for topic, name, t, message in msg.entry_messages(key, e, kind, joints):
             ns = round(t * 1e9)
             writer.write_message(topic, schemas[name], message, log_time=ns, publish_time=ns)

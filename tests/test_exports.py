@@ -99,3 +99,19 @@ def test_quaternion_matches_the_rotation():
                             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
         np.testing.assert_allclose(rebuilt, R, atol=1e-12)
+
+
+def test_failed_entries_are_left_out_and_named(tmp_path):
+    """A library whose one entry failed: the export writes no file for it and says so."""
+    from skatelib.library import schema
+    from skatelib.library.writer import write_library
+
+    from tests.test_cpp_reader import _entry, _root
+
+    good = _entry(0.3, 1, False)
+    bad = type(good)(good.key, {**good.attrs, schema.A_SUCCESS: False, schema.A_STATUS: "Infeasible"},
+                     good.arrays, good.columns, good.units)
+    lib = write_library(tmp_path / "f.h5", _root(), dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0), {}, {}, [bad])
+    r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "csv")])
+    assert r.returncode == 0 and "left out 1 failed entry" in r.stdout, r.stdout + r.stderr
+    assert list((tmp_path / "csv").iterdir()) == []

@@ -32,6 +32,14 @@ def diff(
     from skatelib.library.compare import Tolerance, compare_files
     from skatelib.pipeline.views.diff_view import show_diff
 
+    if entry:
+        from skatelib.runtime import MotionLibrary
+
+        known = set(MotionLibrary.open(a).keys()) | set(MotionLibrary.open(b).keys())
+        unknown = [k for k in entry if k not in known]
+        if unknown:
+            raise typer.BadParameter(f"{', '.join(unknown)} is in neither library; entries: {', '.join(sorted(known))}",
+                                     param_hint="--entry")
     d = compare_files(a, b, Tolerance(atol, rtol), entry)
     if as_json:
         print(json.dumps(d.as_dict(), indent=1, default=jsonable))
@@ -64,8 +72,16 @@ def export(
         check_output(out, [library], what="mcap")
     else:
         check_folder(out)
+    from skatelib.runtime import MotionLibrary
+
+    failed = [e.key for e in MotionLibrary.open(library) if not e.success]
     written = write(library, fmt.value, out)
-    console.print(escape(f"wrote {count(len(written), 'file')}: {written[0]}" + (" ..." if len(written) > 1 else "")))
+    if written:
+        more = " ..." if len(written) > 1 else ""
+        console.print(escape(f"wrote {count(len(written), 'file')}: {written[0]}{more}"))
+    if failed:
+        console.print(escape(f"left out {count(len(failed), 'failed entry')} (stored with success = false): "
+                             f"{', '.join(failed)}"))
 
 
 COMMANDS = (diff, export)
