@@ -63,6 +63,8 @@ def test_one_weight_changed_is_named(pair):
     j = list(lib_a.columns[worst["array"]]).index(worst["column"])
     dev = np.abs(lib_a.arrays[worst["array"]][:, j] - lib_b.arrays[worst["array"]][:, j])
     assert worst["max_abs"] == pytest.approx(dev.max()) and worst["at_s"] == lib_b.arrays["t"][np.argmax(dev)]
+    r = _cli(["diff", str(d / "a.h5"), str(d / "b.h5"), "--entry", "v9.99_s1"])  # a typo is no 'equal'
+    assert r.returncode == 2 and "v0.30_s1" in r.stderr, r.stdout + r.stderr
 
 
 def test_tolerances_decide(pair, tmp_path):
