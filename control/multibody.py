@@ -86,8 +86,11 @@ class RobotDynamics:
         h, J_com, com, com_v = data.nle.copy(), data.Jcom.copy(), data.com[0].copy(), data.vcom[0].copy()
         pin.updateFramePlacements(model, data)
         world = pin.LOCAL_WORLD_ALIGNED
-        J_feet = np.array([pin.getFrameJacobian(model, data, f, world)[:3] for f in self.feet])
-        dJv = np.array([pin.getFrameClassicalAcceleration(model, data, f, world).linear for f in self.feet])
+        J_feet, dJv, feet = np.empty((4, 3, model.nv)), np.empty((4, 3)), np.empty((3, 4))
+        for i, f in enumerate(self.feet):
+            J_feet[i] = pin.getFrameJacobian(model, data, f, world)[:3]
+            dJv[i] = pin.getFrameClassicalAcceleration(model, data, f, world).linear
+            feet[:, i] = data.oMf[f].translation
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
         return DynamicsTerms(M=M, h=h, J_feet=J_feet, dJv_feet=dJv, J_com=J_com, dJv_com=data.acom[0].copy(),
-                             feet=np.array([data.oMf[f].translation for f in self.feet]).T, com=com, com_v=com_v)
+                             feet=feet, com=com, com_v=com_v)

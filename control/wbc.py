@@ -158,6 +158,9 @@ class WholeBodyController:
         self.tau_max = torque_limit_Nm
         self.mu = mu
         self._layouts: dict[bytes, _Layout] = {}
+        import daqp
+
+        self._daqp = daqp.solve
         self._floor_rows = self._surface_rows(FLOOR_NORMAL)
         self._deck: tuple[bytes, np.ndarray] = (b"", self._floor_rows)  # the last deck normal's rows
 
@@ -167,8 +170,6 @@ class WholeBodyController:
         Raises:
             QpSolveFailed: DAQP found no solution (the caller records a fall).
         """
-        import daqp
-
         L = self._layout(tg.stance)
         legs, swing, s, j = L.legs, L.swing, self.s, self._j
         Jc = T.J_feet[legs].reshape(-1, NV)  # stacked stance Jacobians
@@ -189,7 +190,7 @@ class WholeBodyController:
         g[j] -= s.w_posture * tg.posture_acc
         g[NV:] = -s.w_force * tg.forces[:, legs].T.ravel()
         self._constraints(L, T, tg, JcT)
-        x, _, flag, info = daqp.solve(L.H, g, L.rows, L.up, L.lo, L.sense)
+        x, _, flag, info = self._daqp(L.H, g, L.rows, L.up, L.lo, L.sense)
         if flag != 1:
             raise QpSolveFailed(f"whole-body QP: DAQP exit flag {flag}")
         qdd, f = x[:NV], x[NV:]

@@ -79,7 +79,8 @@ class TaskMaker:
                  forces: np.ndarray) -> WbcTargets:
         g, table, bt = self.g, self.contacts, self.plan.at(t)  # (a plan may adapt while it runs)
         k = table.index(t)
-        Ry = yaw_matrix(st.deck_yaw)
+        yaw = st.deck_yaw
+        Ry = yaw_matrix(yaw)
         deck_R = st.deck_R
         level = st.deck_pos + self.p.roll_axis_depth_m * (UP - deck_R[:, 2])
         planned = table.planned[k]
@@ -91,9 +92,8 @@ class TaskMaker:
         com_acc = (forces @ planned / self.p.mass_kg - self._gravity
                    + g.kp_com * (level + Ry @ bt.com - T.com) + g.kd_com * (v_ref - T.com_v))
         R = st.trunk_R
-        rpy = bt.rpy.copy()
-        rpy[2] += st.deck_yaw
-        ang_acc = (g.kp_attitude * (R.T @ pin.log3(pin.rpy.rpyToMatrix(rpy) @ R.T))
+        roll, pitch, yaw_plan = bt.rpy.tolist()
+        ang_acc = (g.kp_attitude * (R.T @ pin.log3(pin.rpy.rpyToMatrix(roll, pitch, yaw_plan + yaw) @ R.T))
                    + g.kd_attitude * (bt.omega - st.trunk_omega))
         swing_acc, on_deck = self._feet(k, st, T.feet, feet_v, bt, (level, Ry))
         W = pin.skew(st.deck_omega)
