@@ -55,19 +55,15 @@ def atomic_path(path: Path) -> Iterator[Path]:
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a library is an ordinary file
         os.replace(tmp, path)
-    except OSError as e:
+    except BaseException as e:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        if e.errno in NO_ROOM:
+        if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(path, None, e) from e
         raise
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
 
 
-def write_atomic(path: Path, data: bytes) -> Path:
+def write_atomic(path: Path, data: bytes | bytearray) -> Path:
     """Write ``data`` to ``path`` whole or not at all, refusing before writing a byte when the
     folder has less free space than the data needs.
 

@@ -91,7 +91,7 @@ def write_library(
     _write_h5(buffer, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
     raw = bytearray(buffer.getbuffer())
     seal(raw, marker)
-    return write_atomic(path, bytes(raw))
+    return write_atomic(path, raw)
 
 
 @dataclass(frozen=True)
@@ -103,11 +103,11 @@ class _Model:
     text: Mapping[str, str]
 
 
-def _write_h5(tmp: io.BytesIO, index: dict[str, Any], model: _Model, entries: Sequence[EntryRecord],
+def _write_h5(target: io.BytesIO, index: dict[str, Any], model: _Model, entries: Sequence[EntryRecord],
               marker: bytes) -> None:
     names = list(entries[0].arrays) if entries else []
     stored: dict[str, np.ndarray] = {}
-    with h5py.File(tmp, "w") as f:
+    with h5py.File(target, "w") as f:
         group = f.create_group(schema.G_MODEL)
         for k, v in model.attrs.items():
             group.attrs[k] = v
