@@ -24,6 +24,7 @@ from skatelib.pipeline.humanoid.wholebody import Humanoid, dynamics_filter
 
 if TYPE_CHECKING:
     from skatelib.pipeline.humanoid.config import HumanoidConfig
+    from skatelib.pipeline.humanoid.geometry import Support
     from skatelib.pipeline.humanoid.motion import Motion
     from skatelib.pipeline.humanoid.step import StepSpec
 
@@ -91,15 +92,23 @@ def whole_body(cfg: HumanoidConfig, m: Motion) -> BodyMotion:
                       feet.reshape(len(feet), 8), f.com, f.zmp_before, f.zmp_after, figures)
 
 
+def _supports(plan: list[StepSpec], t: np.ndarray) -> list[tuple[StepSpec, float, Support]]:
+    """At each time: its step, the time into its contact segment, and that segment's support."""
+    starts = np.cumsum([0.0] + [s.duration_s for s in plan])
+    out = []
+    for tk in t:
+        j = min(int(np.searchsorted(starts, tk, side="right")) - 1, len(plan) - 1)
+        local = float(tk - starts[j])
+        start, sup = [seg for seg in plan[j].segments if seg[0] <= local + 1e-9][-1]
+        out.append((plan[j], local - start, sup))
+    return out
+
+
 def zmp_margins(plan: list[StepSpec], t: np.ndarray, zmp: np.ndarray) -> np.ndarray:
     """Each knot's ZMP distance inside its support polygon (negative: outside) [m]."""
     out = np.empty(len(t))
-    starts = np.cumsum([0.0] + [s.duration_s for s in plan])
-    for k, tk in enumerate(t):
-        j = min(int(np.searchsorted(starts, tk, side="right")) - 1, len(plan) - 1)
-        local = tk - starts[j]
-        start, sup = [seg for seg in plan[j].segments if seg[0] <= local + 1e-9][-1]
-        p = zmp[k] - (np.asarray(sup.p0[0:2]) + np.asarray(sup.velocity[0:2]) * (local - start))
+    for k, (_, since, sup) in enumerate(_supports(plan, t)):
+        p = zmp[k] - (np.asarray(sup.p0[0:2]) + np.asarray(sup.velocity[0:2]) * since)
         poly = np.asarray(sup.polygon)
         inside = []
         for i in range(len(poly)):
@@ -144,14 +153,10 @@ def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: Bo
 def _board_foot(plan: list[StepSpec], t: np.ndarray, feet: np.ndarray) -> list[str]:
     """Skating: while the plan's support rides the board (a support velocity), the board (right)
     sole moves with it (1 mm/s)."""
-    starts = np.cumsum([0.0] + [s.duration_s for s in plan])
     rate = np.gradient(feet[:, 0, 0:2], t, axis=0)
     worst = 0.0
-    for k in range(1, len(t) - 1):
-        j = min(int(np.searchsorted(starts, t[k], side="right")) - 1, len(plan) - 1)
-        local = t[k] - starts[j]
-        _, sup = [seg for seg in plan[j].segments if seg[0] <= local + 1e-9][-1]
+    for k, (spec, _, sup) in enumerate(_supports(plan, t)):
         v = np.asarray(sup.velocity[0:2], dtype=np.float64)
-        if plan[j].terminal != "skate" and np.any(v != 0.0):
+        if 0 < k < len(t) - 1 and spec.terminal != "skate" and np.any(v != 0.0):
             worst = max(worst, float(np.abs(rate[k] - v).max()))
     return [f"the board sole leaves the board's speed by {worst:.4f} m/s"] if worst > 1e-3 else []
