@@ -49,6 +49,8 @@ def test_the_walk_stores_its_whole_body(walk):
     assert figures["com_error_max_m"] < 1e-6 and figures["feet_error_max_m"] < 1e-6
     r = _validate(walk)
     assert r.returncode == 0 and "all entries valid" in r.stdout, r.stdout + r.stderr
+    info = subprocess.run([*CLI, "info", str(walk), "--json"], capture_output=True, text=True, timeout=120)
+    assert json.loads(info.stdout)["entries"][0]["wholebody"] == figures  # info shows them too
 
 
 def test_the_runtime_serves_joints_by_name_and_time(walk):

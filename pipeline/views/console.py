@@ -169,6 +169,7 @@ PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_
 
 # The closed-loop verdicts `validate --closed-loop` stores: (name in `info`, entry attribute).
 CLOSED_LOOP = (("closed_loop", schema.A_CLOSED_LOOP), ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN))
+STORED_FIGURES = (*CLOSED_LOOP, ("wholebody", schema.A_WHOLEBODY))  # JSON attributes `info --json` opens
 
 
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
@@ -178,7 +179,7 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
                 "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
                 "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
                 "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}"))),
-                **{name: json.loads(str(e.attrs[attr])) for name, attr in CLOSED_LOOP if attr in e.attrs}}
+                **{name: json.loads(str(e.attrs[attr])) for name, attr in STORED_FIGURES if attr in e.attrs}}
                for e in lib]
     provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
     provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
@@ -210,7 +211,24 @@ def library_summary(lib: Any, path: Any) -> None:
                   fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
                   off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
+    _wholebody_summary(lib)
     _closed_loop_summary(lib)
+
+
+def _wholebody_summary(lib: Any) -> None:
+    """A humanoid's whole body per entry (format 1.3): the multibody ZMP against the plan's before
+    and after the dynamics filter, the filter's COM correction, inverse kinematics' residuals."""
+    rows = [(e.key, json.loads(str(e.attrs[schema.A_WHOLEBODY]))) for e in lib if schema.A_WHOLEBODY in e.attrs]
+    if not rows:
+        return
+    t = entry_table("whole body (multibody ZMP against the planned ZMP)", (
+        "entry", "ZMP RMS unfiltered [cm]", "ZMP RMS [cm]", "ZMP max [cm]", "COM moved [cm]", "IK COM [m]",
+        "IK soles [m]", "IK + filter [s]"))
+    for key, f in rows:
+        t.add_row(key, f"{f['zmp_rms_unfiltered_m'] * 100:.2f}", f"{f['zmp_rms_m'] * 100:.2f}",
+                  f"{f['zmp_max_m'] * 100:.2f}", f"{f['com_shift_max_m'] * 100:.2f}", f"{f['com_error_max_m']:.1e}",
+                  f"{f['feet_error_max_m']:.1e}", f"{f['ik_and_filter_s']:.2f}")
+    console.print(t)
 
 
 def _closed_loop_summary(lib: Any) -> None:
