@@ -66,7 +66,7 @@ def export(
     ros2 bag play (pip install 'skatelib[export]')."""
     from skatelib.pipeline.build.preflight import check_folder, check_output
     from skatelib.pipeline.exports import export as write
-    from skatelib.pipeline.views.console import console, count
+    from skatelib.pipeline.views.console import console, count, left_out
 
     if fmt is ExportFormat.mcap:
         check_output(out, [library], what="mcap")
@@ -74,14 +74,11 @@ def export(
         check_folder(out)
     from skatelib.runtime import MotionLibrary
 
-    failed = [e.key for e in MotionLibrary.open(library) if not e.success]
     written = write(library, fmt.value, out)
     if written:
         more = " ..." if len(written) > 1 else ""
         console.print(escape(f"wrote {count(len(written), 'file')}: {written[0]}{more}"))
-    if failed:
-        console.print(escape(f"left out {count(len(failed), 'failed entry')} (stored with success = false): "
-                             f"{', '.join(failed)}"))
+    left_out(MotionLibrary.open(library))
 
 
 COMMANDS = (diff, export)

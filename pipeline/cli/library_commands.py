@@ -15,6 +15,7 @@ from skatelib.pipeline.views.console import (
     console,
     count,
     jsonable,
+    left_out,
     library_json,
     library_summary,
     track_table,
@@ -174,10 +175,7 @@ def plot(
         raise typer.Exit(1) from e
     for p in written:
         console.print(escape(str(p)))
-    failed = [e.key for e in MotionLibrary.open(library) if not e.success]
-    if failed:
-        console.print(escape(f"left out {count(len(failed), 'failed entry')} (stored with success = false): "
-                             f"{', '.join(failed)}"))
+    left_out(MotionLibrary.open(library))
 
 
 COMMANDS = (info, validate, inspect, plot)

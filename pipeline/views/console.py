@@ -48,6 +48,14 @@ def viewer_hint(save: Path) -> str:
     return f"open it with: {shlex.quote(str(viewer))} {shlex.quote(str(save))}"
 
 
+def left_out(lib: Any) -> None:
+    """Say which entries a command left out because they are stored as failed (plot, export)."""
+    failed = [e.key for e in lib if not e.success]
+    if failed:
+        console.print(escape(f"left out {count(len(failed), 'failed entry')} (stored with success = false): "
+                             f"{', '.join(failed)}"))
+
+
 def count(n: int, noun: str) -> str:
     """'1 entry', '18 entries'."""
     plural = noun[:-1] + "ies" if noun.endswith("y") else noun + "s"
