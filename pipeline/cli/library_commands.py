@@ -16,8 +16,6 @@ from skatelib.pipeline.views.console import (
     count,
     jsonable,
     left_out,
-    library_json,
-    library_summary,
     track_table,
     twin_table,
     viewer_hint,
@@ -54,6 +52,7 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print it as one JSON document instead.")] = False,
 ) -> None:
     """Summarize a motion library: provenance, model and entries."""
+    from skatelib.pipeline.views.info_view import library_json, library_summary
     from skatelib.runtime import MotionLibrary
 
     lib = MotionLibrary.open(library)  # verifies the checksum first

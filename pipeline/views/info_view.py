@@ -1,0 +1,95 @@
+"""``skatelib info``: a library's provenance, model and entries, with the figures stored beside
+them (closed-loop verdicts, a humanoid's whole body), as tables or one JSON document."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from rich.markup import escape
+from skatelib.library import schema
+from skatelib.pipeline.views.console import console, count, entry_table, fmt, parameter_table
+
+PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_commit", "git_dirty",
+              "casadi_version", "ipopt_version", "pinocchio_version")
+
+
+# The closed-loop verdicts `validate --closed-loop` stores: (name in `info`, entry attribute).
+CLOSED_LOOP = (("closed_loop", schema.A_CLOSED_LOOP), ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN))
+STORED_FIGURES = (*CLOSED_LOOP, ("wholebody", schema.A_WHOLEBODY))  # JSON attributes `info --json` opens
+
+
+def library_json(lib: Any, path: Any) -> dict[str, Any]:
+    """``skatelib info --json``: provenance, model and one record per entry."""
+    entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
+                "success": e.success, "status": str(e.attrs[schema.A_STATUS]),
+                "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
+                "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
+                "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}"))),
+                **{name: json.loads(str(e.attrs[attr])) for name, attr in STORED_FIGURES if attr in e.attrs}}
+               for e in lib]
+    provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
+    provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
+                   if f"{name}_{k}" in lib.attrs}
+    return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
+            "model": dict(lib.model), "entries": entries}
+
+
+def library_summary(lib: Any, path: Any) -> None:
+    """``skatelib info``: provenance, the model's parameters and the entry table."""
+    a = lib.attrs
+    console.print(escape(f"{path}: {a.get('name', '?')} ({lib.kind}), format {a['format_version']}, "
+                         f"skatelib {a['skatelib_version']}, created {a['created_utc']}"))
+    console.print(escape(f"git {a['git_commit'][:12]}{' (dirty)' if a['git_dirty'] else ''}; casadi "
+                         f"{a['casadi_version']}, ipopt {a['ipopt_version']}, pinocchio {a['pinocchio_version']}"))
+    console.print(escape(f"content sha256 {lib.content_sha256}"))
+    parameter_table("model", [(str(k), v) for k, v in sorted(lib.model.items()) if not str(k).endswith("_source")],
+                    number="{:.6g}")
+    t = entry_table(count(len(lib), "entry"), ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots",
+                                                "duration [s]", "solve [s]", "momentum [m/s]", "off label",
+                                                "Coulomb margin [N]", "defect"))
+    for e in lib:
+        ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
+        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
+               if "momentum_speed_mps" in ph and e.target_velocity_mps else "-")
+        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
+                  escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
+                  f"{e.duration_s:.2f}",
+                  fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                  off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
+    console.print(t)
+    _wholebody_summary(lib)
+    _closed_loop_summary(lib)
+
+
+def _wholebody_summary(lib: Any) -> None:
+    """A humanoid's whole body per entry (format 1.3): the multibody ZMP against the plan's before
+    and after the dynamics filter, the filter's COM correction, inverse kinematics' residuals."""
+    rows = [(e.key, json.loads(str(e.attrs[schema.A_WHOLEBODY]))) for e in lib if schema.A_WHOLEBODY in e.attrs]
+    if not rows:
+        return
+    t = entry_table("whole body (multibody ZMP against the planned ZMP)", (
+        "entry", "ZMP RMS unfiltered [cm]", "ZMP RMS [cm]", "ZMP max [cm]", "COM moved [cm]", "IK COM [m]",
+        "IK soles [m]", "IK + filter [s]"))
+    for key, f in rows:
+        t.add_row(key, f"{f['zmp_rms_unfiltered_m'] * 100:.2f}", f"{f['zmp_rms_m'] * 100:.2f}",
+                  f"{f['zmp_max_m'] * 100:.2f}", f"{f['com_shift_max_m'] * 100:.2f}", f"{f['com_error_max_m']:.1e}",
+                  f"{f['feet_error_max_m']:.1e}", f"{f['ik_and_filter_s']:.2f}")
+    console.print(t)
+
+
+def _closed_loop_summary(lib: Any) -> None:
+    """The closed-loop verdicts stored by ``validate --closed-loop`` (model plant, twin), if any."""
+    for name, attr in CLOSED_LOOP:
+        stored = {e.key: json.loads(str(e.attrs[attr])) for e in lib if attr in e.attrs}
+        if not stored:
+            continue
+        where = "the twin (MuJoCo, whole-body controller)" if name.endswith("twin") else "the model plant"
+        plant, when = lib.attrs.get(f"{name}_plant", "?"), lib.attrs.get(f"{name}_utc", "?")
+        t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
+                        ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
+        for key, v in stored.items():
+            t.add_row(key, fmt(v, "label_mps", "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
+                      fmt(v, "speed_error", "{:+.1%}"), "pass" if v.get("passed") else "FAIL",
+                      escape(str(v.get("reasons") or "")))
+        console.print(t)
