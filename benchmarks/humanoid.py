@@ -28,7 +28,7 @@ def _whole_body() -> Measured:
     """The walk's whole pipeline per walking step (the paper claims its COM part runs faster than
     the step lasts), with each stage's time."""
     from skatelib.pipeline.config import CONFIG_DIR
-    from skatelib.pipeline.humanoid.body import whole_body
+    from skatelib.pipeline.humanoid.body import robot_for, whole_body
     from skatelib.pipeline.humanoid.motion import solve_motion
 
     c = load_config(CONFIG_DIR / "hrp2_walk.toml", HumanoidConfig)
@@ -36,7 +36,7 @@ def _whole_body() -> Measured:
     t0 = time.perf_counter()
     m = solve_motion(c, v)
     t_gpm = time.perf_counter() - t0
-    body = whole_body(c, m)
+    body = whole_body(c, m, robot_for(c))
     total = time.perf_counter() - t0
     n = len(m.steps)
     f = body.figures

@@ -29,18 +29,17 @@ def diff(
     """What changed between two libraries: entries added, removed and changed (the largest deviation
     of each channel, with its unit and time), label-level figures, model, config keys and
     provenance. Exit 0 when equal within the tolerances (default: bit for bit), 1 when they differ."""
-    from skatelib.library.compare import Tolerance, compare_files
+    from skatelib.library.compare import Tolerance, compare
+    from skatelib.library.reader import read_library
     from skatelib.pipeline.views.diff_view import show_diff
 
-    if entry:
-        from skatelib.runtime import MotionLibrary
-
-        known = set(MotionLibrary.open(a).keys()) | set(MotionLibrary.open(b).keys())
-        unknown = [k for k in entry if k not in known]
-        if unknown:
-            raise typer.BadParameter(f"{', '.join(unknown)} is in neither library; entries: {', '.join(sorted(known))}",
-                                     param_hint="--entry")
-    d = compare_files(a, b, Tolerance(atol, rtol), entry)
+    A, B = read_library(a), read_library(b)
+    known = set(A.entries) | set(B.entries)
+    unknown = [k for k in entry or [] if k not in known]
+    if unknown:
+        raise typer.BadParameter(f"{', '.join(unknown)} is in neither library; entries: {', '.join(sorted(known))}",
+                                 param_hint="--entry")
+    d = compare(A, B, Tolerance(atol, rtol), entry)
     if as_json:
         print(json.dumps(d.as_dict(), indent=1, default=jsonable))
     else:

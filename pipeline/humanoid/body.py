@@ -69,10 +69,10 @@ def feet_for(cfg: HumanoidConfig, m: Motion) -> np.ndarray:
     return skating_feet(m.plan, m.t, w.swing_height_m, h.step_width_m, w.skate_swing_s)
 
 
-def whole_body(cfg: HumanoidConfig, m: Motion) -> BodyMotion:
-    """Feet, inverse kinematics and the dynamics filter of a solved motion, with the time of each."""
+def whole_body(cfg: HumanoidConfig, m: Motion, robot: Humanoid) -> BodyMotion:
+    """Feet, inverse kinematics and the dynamics filter of a solved motion on ``robot`` (the
+    config's, :func:`robot_for`), with the time of each."""
     t0 = time.perf_counter()
-    robot = robot_for(cfg)
     feet = feet_for(cfg, m)
     t1 = time.perf_counter()
     dt = cfg.gpm.sample_dt_s

@@ -46,6 +46,10 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
     except SkatelibError as err:
         raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {err}") from err
+    from skatelib.pipeline.humanoid.body import body_failures, stored_body
+    from skatelib.pipeline.humanoid.wholebody import Humanoid
+
+    robot = Humanoid(lib.urdf) if lib.urdf else None  # the description the whole bodies were solved on
     bad = 0
     for e in lib:
         if not e.success:
@@ -56,11 +60,11 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         rep = check_steps(plan, *nodes, step_model(cfg))
         fails = failures(rep)
         if schema.D_JOINTS in e.arrays:  # the whole body (format 1.3), by its own checks
-            from skatelib.pipeline.humanoid.body import body_failures, stored_body
-            from skatelib.pipeline.humanoid.wholebody import Humanoid
-
-            body = stored_body(dict(e.arrays), dict(e.columns), json.loads(str(e.attrs[schema.A_WHOLEBODY])))
-            fails += [f"whole body: {f}" for f in body_failures(Humanoid(lib.urdf), plan, np.asarray(e.t), body)]
+            if robot is None:
+                fails.append("whole body: the library stores no robot description (/model/robot_urdf) to check it on")
+            else:
+                body = stored_body(dict(e.arrays), dict(e.columns), json.loads(str(e.attrs[schema.A_WHOLEBODY])))
+                fails += [f"whole body: {f}" for f in body_failures(robot, plan, np.asarray(e.t), body)]
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})
     return bad

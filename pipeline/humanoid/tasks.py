@@ -91,8 +91,9 @@ class BuildTask:
         failures = judge(cfg, motion)
         body = None
         if motion.success and not failures:  # the whole body of a motion that holds (not cached: it is quick)
-            body = whole_body(cfg, motion)
-            checks = body_failures(robot_for(cfg), list(motion.plan), motion.t, body)
+            robot = robot_for(cfg)
+            body = whole_body(cfg, motion, robot)
+            checks = body_failures(robot, list(motion.plan), motion.t, body)
             failures = tuple(f"whole body: {f}" for f in checks)
         outcome = EntryOutcome(name, motion, failures, cached, key, note, body)
         if events is not None:
