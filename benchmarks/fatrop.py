@@ -65,10 +65,10 @@ def lift(prob: PushoffProblem, v: float) -> Lifted:
     keep = np.isfinite(lo) | np.isfinite(hi)
     stage = ca.Function("stage", [z, p], [sum((c.cost(st) for c in prob.costs), ca.SX(0)),
                                           ca.vertcat(*[t.rows(st) for t in path])])
-    P = prob.parameters(v).reshape(N, N_PARAMS)
-    bounds = prob.bounds(v)
+    P = prob.parameters(0.0, v).reshape(N, N_PARAMS)
+    bounds = prob.bounds(0.0)
     lbx, ubx = bounds[0].reshape(N + 1, n), bounds[1].reshape(N + 1, n)
-    guess = prob.initial_guess(v, "ramp").reshape(N + 1, n)
+    guess = prob.initial_guess(0.0, v, "ramp").reshape(N + 1, n)
     Z = [ca.MX.sym("z0", nx)] + [ca.MX.sym(f"z{k}", nx + n) for k in range(1, N + 1)]
     U = [ca.MX.sym(f"u{k}", nu) for k in range(N + 1)]
     w, w0, wlb, wub, g, glb, gub = [], [], [], [], [], [], []

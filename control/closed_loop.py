@@ -20,18 +20,25 @@ from skatelib.control.loop import simulate
 from skatelib.control.plant import NB
 from skatelib.control.reference import EntryReference
 from skatelib.control.settings import ClosedLoop
-from skatelib.control.trace import Trace
+from skatelib.control.trace import Run, Trace
 from skatelib.control.verdict import TrackResult, track_result
 from skatelib.library import schema
 from skatelib.library.channels import NX
-from skatelib.runtime import MotionLibrary
+from skatelib.runtime import Entry, MotionLibrary
 
 
 def track_entry(lib: MotionLibrary, key: str, loop: ClosedLoop, keep_trace: bool = False
                 ) -> tuple[TrackResult, Trace | None]:
     """Run one entry in closed loop and judge it (:mod:`skatelib.control.verdict`); with
     ``keep_trace`` the run's time series too."""
-    entry = lib[key]
+    result, run = run_entry(lib, lib[key], loop, keep_trace)
+    return result, run.trace
+
+
+def run_entry(lib: MotionLibrary, entry: Entry, loop: ClosedLoop, keep_trace: bool = False) -> tuple[TrackResult, Run]:
+    """Run ``entry`` (of ``lib``, or one made of its entries: :mod:`skatelib.control.ride`) in closed
+    loop: its verdict and what the run measured."""
+    key = entry.key
     ref = EntryReference(lib, entry, loop.model, loop.settings)
     x_init = np.zeros(NB)
     x_init[:NX] = np.asarray(entry.state[0], dtype=np.float64)
@@ -39,4 +46,4 @@ def track_entry(lib: MotionLibrary, key: str, loop: ClosedLoop, keep_trace: bool
     kin = LegKinematics.from_library(lib)
     run = simulate(ref, x_init, loop, keep_trace, kin)
     label = float(entry.attrs[schema.A_TARGET_VELOCITY])
-    return track_result(key, label, run, loop.plant, kin.torque_limit_Nm), run.trace
+    return track_result(key, label, run, loop.plant, kin.torque_limit_Nm), run

@@ -22,13 +22,20 @@ from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NU, SWING
 from skatelib.library.margins import momentum_speed
 from skatelib.runtime import Entry, MotionLibrary
 
+SETTLE_S = 0.1  # after a foot leaves the ground the body still swings on the deck: no coast sample yet
+STAGE_ENDS = "ride_stage_ends_s"  # an entry joined from several (a ride): when each ends [s]
 
-def push_intervals(t: np.ndarray, on_ground: np.ndarray, t_end: float) -> list[tuple[float, float, float]]:
-    """(start, end, end of the coast after it) of each stance of the push foot on the ground."""
+
+def push_intervals(t: np.ndarray, on_ground: np.ndarray, t_end: float, stage_ends: list[float] | None = None
+                   ) -> list[tuple[float, float, float]]:
+    """(start, end, end of the coast after it) of each stance of the push foot on the ground; a
+    coast ends at the next stance or at the end of the stage (of a ride) the stance belongs to."""
     edges = np.diff(np.r_[0, on_ground.astype(np.int8), 0])
     starts = t[np.nonzero(edges[:-1] == 1)[0]]
     ends = t[np.minimum(np.nonzero(edges[1:] == -1)[0] + 1, len(t) - 1)]
     coast_ends = np.r_[starts[1:], t_end]
+    marks = sorted(stage_ends or [t_end])
+    coast_ends = [min(c, next((m for m in marks if m >= b - 1e-9), c)) for b, c in zip(ends, coast_ends, strict=True)]
     return [(float(a), float(b), float(c)) for a, b, c in zip(starts, ends, coast_ends, strict=True)]
 
 
@@ -62,7 +69,8 @@ class EntryReference:
         com = np.asarray(entry.state, dtype=np.float64)[:, None, 0:3]
         loaded = contact != SWING
         self.max_reach = float(np.max(np.linalg.norm((feet - com)[loaded], axis=-1)))
-        self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end)
+        stage_ends = [float(v) for v in np.atleast_1d(entry.attrs.get(STAGE_ENDS, []))]
+        self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end, stage_ends)
         drag = np.tanh(p.tanh_scale_s_per_m * momentum_speed(np.asarray(entry.state), p.mass_kg, p.board_mass_kg))
         self._friction_integral = np.r_[0.0, np.cumsum(0.5 * (drag[1:] + drag[:-1]) * np.diff(self._t))]
 
@@ -84,8 +92,11 @@ class EntryReference:
         """Nothing to learn from the feedback beyond the loop's observers."""
 
     def coasting(self, t: float) -> bool:
-        """Between the first push's start and the end, with no foot on the ground."""
-        return bool(self.pushes) and self.pushes[0][0] <= t < self.t_end and not np.any(self.contact(t) == GROUND)
+        """Before the end with no foot on the ground: from the first push's start on (a start-up starts
+        at rest), or from the start for a transition (it starts riding, its foot lifted)."""
+        start = self.t0 if self.e.from_velocity_mps > 0 else (self.pushes[0][0] if self.pushes else self.t_end)
+        settled = not np.any(self.contact(max(t - SETTLE_S, self.t0)) == GROUND)
+        return start <= t < self.t_end and settled and not np.any(self.contact(t) == GROUND)
 
     def speed_offset(self, t: float, coast_mps2: float) -> float:
         """How far the forward speed reference moves at ``t`` so that the entry still ends at its

@@ -1,6 +1,7 @@
 """The full-physics verdict on an entry ridden on a multibody plant (fails on any of):
 
-* speed: the speed delivered one second after the entry ends more than 5 % from the label
+* speed: the speed delivered one second after the entry ends more than 5 % from the label (a stop:
+  more than 0.05 m/s)
   (the momentum speed of robot and board together, all their bodies', plus what the floor's
   force on the wheels took in that second);
 * a fall (the trunk within 0.10 m of the deck, tilted beyond 0.6 rad, a link on the floor) or a
@@ -23,6 +24,7 @@ import numpy as np
 from skatelib.control.twin_loop import TwinRun
 
 SPEED_TOLERANCE = 0.05
+STOP_TOLERANCE_MPS = 0.05  # a stop (label 0) delivers at most this speed
 SLIP_LIMIT_M = 0.01
 HEADING_LIMIT_RAD = 0.1
 
@@ -65,11 +67,13 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
     """The verdict on one run (module docstring)."""
     m = run.measures
     delivered = m.momentum_after_1s_mps + m.friction_loss_Ns / m.system_mass_kg
-    err = (delivered - label) / label if label else float("nan")
+    err = (delivered - label) / label if label else delivered  # a stop: the speed left, over 1 m/s
     slip = m.max_slip_m()
     reasons = []
-    if not np.isfinite(err) or abs(err) > SPEED_TOLERANCE:
+    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
         reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
+    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
+        reasons.append(f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})")
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     if slip > SLIP_LIMIT_M:

@@ -1,6 +1,7 @@
 """The closed loop's verdict on an entry (fails on any of):
 
-* speed: the speed delivered, one second after the entry ends, more than 5 % from the label.
+* speed: the speed delivered, one second after the entry ends, more than 5 % from the label (a
+  stop: more than 0.05 m/s).
   Delivered speed = the plant's momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) at that time
   plus the speed that rolling friction took in that second (any coasting board loses it; the
   entry cannot be blamed for it). Both are reported;
@@ -23,6 +24,7 @@ from skatelib.control.trace import Run
 from skatelib.library.channels import I_BOARD_ROLL, NX
 
 SPEED_TOLERANCE = 0.05
+STOP_TOLERANCE_MPS = 0.05  # a stop (label 0) delivers at most this speed
 HEIGHT_LIMIT_M = 0.05  # body height over the deck may leave its reference by this much
 TILT_LIMIT_RAD = 0.35
 REACH_MARGIN_M = 0.05
@@ -87,10 +89,12 @@ def slip_reason(plant: Plant) -> str:
 def track_result(key: str, label: float, run: Run, plant_params: SkateParams, torque_limit_Nm: float) -> TrackResult:
     """The verdict on one entry's run (see the module docstring)."""
     delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
-    err = (delivered - label) / label if label else float("nan")
+    err = (delivered - label) / label if label else delivered  # a stop: the speed left, over 1 m/s
     reasons = []
-    if not np.isfinite(err) or abs(err) > SPEED_TOLERANCE:
+    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
         reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
+    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
+        reasons.append(f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})")
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     if run.plant.log.slips:

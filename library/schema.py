@@ -11,8 +11,9 @@ from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
 HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
-FORMAT_VERSION: Final = (1, 3)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
-# model; 1.3: the humanoid's whole body (joints, feet, filtered COM and ZMP, its URDF)
+FORMAT_VERSION: Final = (1, 4)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
+# model; 1.3: the humanoid's whole body (joints, feet, filtered COM and ZMP, its URDF); 1.4: transitions from
+# riding (from_velocity_mps, keys v0.50-0.80_s2) and the riding stance in /model
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -113,6 +114,7 @@ A_COLUMNS: Final = "columns"
 A_UNITS: Final = "units"
 A_TARGET_VELOCITY: Final = "target_velocity_mps"  # the entry's label [m/s]
 A_N_STRIDES: Final = "n_strides"
+A_FROM_VELOCITY: Final = "from_velocity_mps"  # since 1.4: a transition's start speed; absent or 0: from rest
 A_SUCCESS: Final = "success"
 A_STATUS: Final = "status"  # the solver's status, or the failed check
 A_ITERATIONS: Final = "iterations"
@@ -127,8 +129,11 @@ ENTRY_DATASETS: Final = {
 }
 
 
-def entry_key(target_velocity_mps: float, n_strides: int) -> str:
-    """Canonical quadruped entry name, e.g. ``v0.50_s2``."""
+def entry_key(target_velocity_mps: float, n_strides: int, from_velocity_mps: float = 0.0) -> str:
+    """Canonical quadruped entry name: ``v0.50_s2`` for a start-up from rest to 0.5 m/s in two strides,
+    ``v0.50-0.80_s2`` for a transition riding from 0.5 to 0.8 m/s (``v0.50-0.00_s1``: a stop)."""
+    if from_velocity_mps > 0.0:
+        return f"v{from_velocity_mps:.2f}-{target_velocity_mps:.2f}_s{n_strides}"
     return f"v{target_velocity_mps:.2f}_s{n_strides}"
 
 

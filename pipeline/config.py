@@ -212,7 +212,7 @@ def config_from_json(text: str, origin: Path, urdf: Path | None = None, expect: 
     return _kind(Path(origin), data.get("meta", {}).get("kind"), expect).from_json(data, Path(origin), urdf)
 
 
-def check_unique_keys(path: Path, velocities: tuple[float, ...]) -> None:
+def check_unique_keys(path: Path, velocities: tuple[float, ...], field: str = "sweep.velocities_mps") -> None:
     """Refuse speeds that repeat or that name the same entry (keys keep 2 decimals: 0.501 and 0.504
     are both ``v0.50``), before anything is solved.
 
@@ -223,7 +223,7 @@ def check_unique_keys(path: Path, velocities: tuple[float, ...]) -> None:
     for v in velocities:
         key = f"{v:.2f}"
         if key in seen:
-            raise ConfigError(path, "sweep.velocities_mps",
+            raise ConfigError(path, field,
                               f"{seen[key]} and {v} m/s both name entry speed v{key} (entry keys keep 2 decimals); "
                               "list speeds that differ by at least 0.01 m/s, each once")
         seen[key] = v

@@ -77,6 +77,12 @@ class Entry:
         return float(self.attrs[schema.A_TARGET_VELOCITY])
 
     @property
+    def from_velocity_mps(self) -> float:
+        """The speed the entry starts riding at; 0 for a start-up from rest (and every entry of a
+        library before format 1.4) [m/s]."""
+        return float(self.attrs.get(schema.A_FROM_VELOCITY, 0.0))
+
+    @property
     def n_strides(self) -> int:
         return int(self.attrs[schema.A_N_STRIDES])
 

@@ -16,6 +16,7 @@ from skatelib.library.errors import SkatelibError
 from skatelib.library.reader import EntryRecord, LibraryData, read_library
 from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck
 from skatelib.runtime.entry import Entry, EntryNotFound
+from skatelib.runtime.routes import route, speed_key
 
 
 class MotionLibrary:
@@ -75,35 +76,58 @@ class MotionLibrary:
         return (f"MotionLibrary({str(self.path)!r}, kind={self.kind!r}, {len(self)} entries, {ok} successful, "
                 f"speeds {self.speeds()} m/s)")
 
-    def speeds(self, strides: int | None = None) -> list[float]:
-        """Target speeds of the successful entries (with ``strides`` strides, when given) [m/s]."""
-        return sorted({e.target_velocity_mps for e in self
-                       if e.success and (strides is None or e.n_strides == strides)})
+    def speeds(self, strides: int | None = None, v_from: float = 0.0) -> list[float]:
+        """Target speeds of the successful entries from ``v_from`` (0: the start-ups; with ``strides``
+        strides, when given) [m/s]."""
+        return sorted({e.target_velocity_mps for e in self if e.success and speed_key(e.from_velocity_mps) ==
+                       speed_key(v_from) and (strides is None or e.n_strides == strides)})
 
-    def _candidates(self, strides: int | None) -> list[Entry]:
-        c = [e for e in self if e.success and (strides is None or e.n_strides == strides)]
+    def start_speeds(self) -> list[float]:
+        """The speeds successful entries start at: 0 (the start-ups) and the transitions' [m/s]."""
+        return sorted({speed_key(e.from_velocity_mps) for e in self if e.success})
+
+    def _candidates(self, strides: int | None, v_from: float = 0.0) -> list[Entry]:
+        start = [e for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(v_from)]
+        if not start:
+            raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v_from} m/s; entries start at "
+                                f"{self.start_speeds()} m/s (0: from rest)")
+        c = [e for e in start if strides is None or e.n_strides == strides]
         if not c:
-            have = sorted({e.n_strides for e in self if e.success})
-            raise EntryNotFound(f"{self.path}: no successful entry with strides={strides}; strides available: {have}")
+            have = sorted({e.n_strides for e in start})
+            raise EntryNotFound(f"{self.path}: no successful entry from {v_from} m/s with strides={strides}; "
+                                f"strides available: {have}")
         return c
 
-    def select(self, velocity: float, strides: int | None = None, clamp: bool = False) -> Entry:
-        """The successful entry whose target speed is nearest ``velocity`` [m/s] (fewest strides on ties).
+    def select(self, velocity: float, strides: int | None = None, clamp: bool = False, v_from: float = 0.0) -> Entry:
+        """The successful entry from ``v_from`` (0: a start-up from rest) whose target speed is nearest
+        ``velocity`` [m/s] (fewest strides on ties).
 
         Raises:
-            ValueError: When ``velocity`` is NaN or infinite.
-            EntryNotFound: When no successful entry has ``strides`` strides, or ``velocity`` lies
-                outside the stored speeds and ``clamp`` is false (the message lists the speeds).
+            ValueError: When a speed is NaN or infinite.
+            EntryNotFound: When no successful entry starts at ``v_from`` or has ``strides`` strides, or
+                ``velocity`` lies outside the stored speeds and ``clamp`` is false (the message lists
+                the speeds; :meth:`route` chains entries where no single one gets there).
         """
-        if not isfinite(velocity):
-            raise ValueError(f"select(velocity): velocity must be a finite speed in m/s, got {velocity!r}")
-        c = self._candidates(strides)
+        if not (isfinite(velocity) and isfinite(v_from)):
+            raise ValueError(f"select(velocity, v_from): finite speeds in m/s, got {velocity!r}, {v_from!r}")
+        c = self._candidates(strides, v_from)
         speeds = sorted({e.target_velocity_mps for e in c})
         if not clamp and not speeds[0] - 1e-9 <= velocity <= speeds[-1] + 1e-9:
             which = "" if strides is None else f" for {strides} strides"
-            raise EntryNotFound(f"{self.path}: {velocity} m/s is outside the stored speeds {speeds} m/s{which}; "
-                                "pass clamp=True for the nearest")
+            start = "" if not v_from else f" from {v_from} m/s"
+            raise EntryNotFound(f"{self.path}: {velocity} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
+                                "pass clamp=True for the nearest, or route() for a chain")
         return min(c, key=lambda e: (abs(e.target_velocity_mps - velocity), e.n_strides))
+
+    def route(self, v_from: float, v_to: float) -> list[Entry]:
+        """The chain of successful entries that rides from ``v_from`` to ``v_to`` [m/s] in the least
+        time (0: at rest), one entry when one gets there (:func:`skatelib.runtime.routes.route`).
+
+        Raises:
+            ValueError: When the speeds are equal or negative.
+            EntryNotFound: When no chain gets there (the message lists what can be reached).
+        """
+        return route(self, v_from, v_to, f"{self.path}: ")
 
     def blend(self, velocity: float, strides: int | None = None, strict: bool = True,
               margin: BlendMargin = DEFAULT_MARGIN) -> Entry:

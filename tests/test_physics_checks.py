@@ -12,8 +12,8 @@ from skatelib.library.margins import friction_margins
 from skatelib.library.rotations import board_rotations
 from skatelib.pipeline.quadruped import problem, pushoff
 from skatelib.pipeline.quadruped.bounds import bound_terms
+from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
-from skatelib.pipeline.quadruped.terms import FinalSpeed
 from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory, judge
 
 
@@ -46,13 +46,14 @@ def test_honest_entry_rides_at_its_label(honest, system):
 def shove(small_cfg):
     """Solved the old way: only the board's final speed constrained, no riding end state."""
     def board_only(self, n):
-        lo, hi = np.full((n, 3), -np.inf), np.full((n, 3), np.inf)
+        lo, hi = np.full((n, 4), -np.inf), np.full((n, 4), np.inf)
         lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
         return lo, hi
 
     mp = pytest.MonkeyPatch()
     try:
         mp.setattr(FinalSpeed, "bounds", board_only)
+        mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
         mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
         mp.setattr(pushoff, "_PROBLEMS", {})
         shove = solve(PushoffSpec(small_cfg, 0.3, 1))

@@ -180,10 +180,10 @@ def shove_lib(tmp_path_factory):
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped import problem, pushoff
     from skatelib.pipeline.quadruped.bounds import bound_terms
-    from skatelib.pipeline.quadruped.terms import FinalSpeed
+    from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
 
     def board_only(self, n):
-        lo, hi = np.full((n, 3), -np.inf), np.full((n, 3), np.inf)
+        lo, hi = np.full((n, 4), -np.inf), np.full((n, 4), np.inf)
         lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
         return lo, hi
 
@@ -193,6 +193,7 @@ def shove_lib(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     try:
         mp.setattr(FinalSpeed, "bounds", board_only)
+        mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
         mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
         mp.setattr(pushoff, "_PROBLEMS", {})
         build_library(cfg, out, BuildOptions(jobs=1, cache=False, progress=False))

@@ -94,7 +94,8 @@ def validate(
     problems = validate_library(library, report)
     usable = any(v["status"] != "skipped" for v in verdicts)  # every kind skips the entries stored as failed
     if not as_json:
-        console.print(f"[bold red]{count(problems, 'entry')} failed validation[/]" if problems
+        console.print(f"[bold red]{count(problems, 'entry')} (or junction between entries) failed validation[/]"
+                      if problems
                       else "[green]all entries valid[/]" if usable
                       else "[bold red]no entry of this library was solved: nothing in it can be used[/]")
     failed = 0

@@ -55,6 +55,9 @@ def track(
     plant: Annotated[PlantKind, typer.Option(
         help="model: the single-rigid-body plant of the MPC's family (the legs by inverse kinematics); mujoco: "
              "the physical twin (skatelib.sim), the MPC over a 510 Hz whole-body controller.")] = PlantKind.model,
+    ride: Annotated[str | None, typer.Option(
+        help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
+             "library's entries (a route of several where no single one gets there), on the model plant.")] = None,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
@@ -68,11 +71,11 @@ def track(
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
-    from skatelib.runtime import MotionLibrary
-
-    if maneuver is Maneuver.entries and not entry and not any(e.success for e in MotionLibrary.open(library)):
-        err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
-        raise typer.Exit(1)
+    _refuse_unsolved(library, maneuver is Maneuver.entries and not entry)
+    if ride is not None:
+        alone = plant is PlantKind.model and maneuver is Maneuver.entries and not entry and video is None
+        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), save, alone)
+        return
     if plant is PlantKind.mujoco:
         _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), maneuver,
                     (save, video))
@@ -87,6 +90,15 @@ def track(
     _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), save)
 
 
+def _refuse_unsolved(library: Path, all_entries: bool) -> None:
+    """Exit 1 when every entry is to be tracked and none was solved."""
+    from skatelib.runtime import MotionLibrary
+
+    if all_entries and not any(e.success for e in MotionLibrary.open(library)):
+        err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
+        raise typer.Exit(1)
+
+
 def _recording(library: Path, save: Path | None) -> Any:
     """``save_closed_loop`` when a recording is asked for, its output checked before the runs."""
     if save is None:
@@ -99,6 +111,33 @@ def _recording(library: Path, save: Path | None) -> Any:
         raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
     check_output(save, [library], what="recording")
     return save_closed_loop
+
+
+def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any], save: Path | None,
+                alone: bool) -> None:
+    """A chained ride (:mod:`skatelib.control.ride`) on the model plant, its stages' table. ``errors``:
+    the plant's perturbation and its name; ``controller``: the MPC's and the run's settings; ``alone``:
+    no option that rides something else (the twin, the steering maneuver, entries, a video)."""
+    if not alone:
+        raise SkatelibError("--ride rides its stages on the model plant: leave out --plant mujoco, --maneuver, "
+                            "--entry and --video")
+    (plant_error, perturb), (mpc, settings) = errors, controller
+    from skatelib.control.ride import parse_ride, ride
+    from skatelib.control.track import JobSpec, _quadruped
+    from skatelib.pipeline.views.console import ride_table
+
+    try:
+        stages = parse_ride(text)
+    except ValueError as e:
+        raise typer.BadParameter(str(e), param_hint="--ride") from None
+    save_closed_loop = _recording(library, save)
+    lib = _quadruped(library, plant_error, "a ride")
+    result = ride(lib, stages, JobSpec(str(library), plant_error, mpc, settings).loop(lib), keep_trace=save is not None)
+    if save is not None and save_closed_loop is not None and result.entry is not None:
+        save_closed_loop(lib, [(result.run.key, result.entry)], save, {result.run.key: result.reference})
+        console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
+    if not ride_table(result, perturb):
+        raise typer.Exit(1)
 
 
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,

@@ -92,6 +92,8 @@ def bound_terms(config: QuadrupedConfig, system: SkateSystem, schedule: KnotSche
             knots=LAST),
         Box("end_angular_speed", columns("base_wx", "base_wz"), -term.angular_speed_tol_radps,
             term.angular_speed_tol_radps, knots=LAST),
+        Box("end_joints", columns("q_FL_abad", "q_RR_knee"), system.stance.q_ride - term.joint_tol_rad,
+            system.stance.q_ride + term.joint_tol_rad, knots=LAST),
         Box("end_joint_speed", JOINT_SPEEDS, -term.joint_velocity_tol_radps, term.joint_velocity_tol_radps,
             knots=BEFORE_LAST),
     ]

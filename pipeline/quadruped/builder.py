@@ -1,6 +1,6 @@
 """The quadruped's part of a build (``pipeline/build/orchestrate.py``): its options check, its tasks (one
-warm-start chain per stride count), the library it writes (with the frontier when asked) and the
-table it prints."""
+warm-start chain per stride count, one per start speed of the transitions), the library it writes
+(with the frontier when asked) and the table it prints."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from skatelib.library.schema import entry_key
 from skatelib.pipeline.build.contract import BuildOptions, Outcome, Written
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.tasks import BuildTask, EntryOutcome, ordered, tasks_for
+from skatelib.pipeline.quadruped.transition_tasks import TransitionTask
 from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table
 
 
@@ -37,9 +38,12 @@ def announce(cfg: QuadrupedConfig) -> None:
                           "3-4x slower; install gcc to compile them")
 
 
-def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:
-    """One warm-start chain per stride count (most strides first, for load balance)."""
-    return tasks_for(cfg, ipopt)
+def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask | TransitionTask]:
+    """One warm-start chain per stride count (most strides first, for load balance), then one per
+    start speed of the transitions."""
+    from skatelib.pipeline.quadruped.transition_tasks import transition_tasks
+
+    return [*tasks_for(cfg, ipopt), *transition_tasks(cfg, ipopt)]
 
 
 def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
@@ -83,12 +87,13 @@ def summary(written: Written) -> None:
         figures = ["-"] * 6  # a failed solve's speeds and margins mean nothing: its status says why
         if r.success:
             momentum = (ph or {}).get("momentum_speed_mps")
-            off = "-" if momentum is None else f"{(momentum - r.target_velocity_mps) / r.target_velocity_mps:+.2%}"
+            label = r.target_velocity_mps
+            off = "-" if momentum is None else f"{(momentum - label) / (label or 1):+.2%}"  # a stop: over 1 m/s
             figures = [f"{r.final_velocity_mps:.4f}", fmt(ph, "momentum_speed_mps", "{:.4f}"), off,
                        fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
                        fmt(ph, "max_defect", "{:.1e}")]
-        t.add_row(entry_key(r.target_velocity_mps, r.n_strides), escape(status), str(r.iterations), str(o.attempts),
-                  f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), *figures)
+        t.add_row(entry_key(r.target_velocity_mps, r.n_strides, r.from_velocity_mps), escape(status), str(r.iterations),
+                  str(o.attempts), f"{r.solve_time_s:.2f}" + (" c" if o.cached else ""), *figures)
     console.print(t)
     if written.extra is not None:
         frontier_table(written.extra)

@@ -15,6 +15,7 @@ from skatelib.library.errors import ConfigError
 from skatelib.pipeline.config import MetaConfig, build_section, check_unique_keys, sections
 from skatelib.pipeline.config import setting as _f
 from skatelib.pipeline.quadruped.board_config import BoardConfig, ContactConfig
+from skatelib.pipeline.quadruped.ride_config import TerminalConfig, TransitionsConfig
 
 FRICTION_MODELS = ("cone", "polygon8")
 
@@ -48,6 +49,8 @@ class StanceConfig:
     push_foot_y_m: float = _f(0.0, 0.6, "Pushing foot |y| from the board centre line on the ground [m].")
     push_clearance_m: float = _f(0.0, 0.2, "Lateral clearance of the pushing foot from the deck edge [m].")
     swing_height_m: float = _f(0.0, 0.2, "Least foot lift at mid-swing [m].")
+    ride_load_fraction: float = _f(0.0, 0.33, "Riding with the push foot lifted, each deck foot carries at least this "
+                                   "share of the weight: where the body sits over the deck [-].", default=0.2)
 
 
 @dataclass(frozen=True)
@@ -106,23 +109,6 @@ class OptimizationConfig:
 
 
 @dataclass(frozen=True)
-class TerminalConfig:
-    """The riding state every push-off ends in, from which three-leg transfer and balancing begin."""
-
-    relative_speed_tol_mps: float = _f(1e-4, 0.5, "Largest lateral COM speed relative to the board at the end [m/s].",
-                                       default=0.005)
-    vertical_speed_tol_mps: float = _f(1e-4, 0.5, "Largest |vertical COM speed| at the end [m/s].", default=0.005)
-    angular_speed_tol_radps: float = _f(1e-4, 1.0, "Largest |body angular velocity| per axis at the end [rad/s].",
-                                    default=0.005)
-    height_tol_m: float = _f(1e-4, 0.1, "Largest COM height error from the riding stance at the end [m].", default=0.01)
-    attitude_tol_rad: float = _f(1e-4, 0.5, "Largest |body roll| and |pitch| at the end [rad].", default=0.03)
-    joint_velocity_tol_radps: float = _f(1e-3, 10.0, "Largest |joint velocity| over the last interval [rad/s].",
-                                         default=0.05)
-    push_foot_height_m: float = _f(0.0, 0.2, "Push foot's lift-off clearance above the ground at the end [m].",
-                                   default=0.02)
-
-
-@dataclass(frozen=True)
 class SweepConfig:
     velocities_mps: tuple[float, ...] = _f(0.05, 3.0, "Target board speeds [m/s].")
     strides: tuple[int, ...] = _f(1, 20, "Stride counts [-].")
@@ -144,6 +130,7 @@ class QuadrupedConfig:
     optimization: OptimizationConfig
     terminal: TerminalConfig
     sweep: SweepConfig
+    transitions: TransitionsConfig
 
     @property
     def urdf_path(self) -> Path:
@@ -164,6 +151,8 @@ class QuadrupedConfig:
         d = json.loads(self.resolved_json())
         d.pop("meta")
         d.pop("sweep")
+        for key in ("speeds_mps", "stops", "strides"):  # what is built, not how a transition is posed
+            d["transitions"].pop(key)
         d["optimization"].pop("compile")
         d["robot"]["urdf"] = hashlib.sha256(self.urdf_path.read_bytes()).hexdigest()
         return json.dumps(d, sort_keys=True)
@@ -172,11 +161,12 @@ class QuadrupedConfig:
 _SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "robot": RobotConfig, "board": BoardConfig, "stance": StanceConfig,
     "contact": ContactConfig, "schedule": ScheduleConfig, "optimization": OptimizationConfig,
-    "terminal": TerminalConfig, "sweep": SweepConfig,
+    "terminal": TerminalConfig, "sweep": SweepConfig, "transitions": TransitionsConfig,
 }
 
 
 def from_toml(path: Path, data: dict[str, Any], text: str) -> QuadrupedConfig:
+    data = {**data, "transitions": data.get("transitions", {})}  # an optional table: its defaults
     cfg = QuadrupedConfig(path=path.resolve(), text=text, **sections(path, data, _SECTIONS))
     _check_cross_fields(cfg)
     return cfg
@@ -187,6 +177,7 @@ def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> Quadrupe
         raise ConfigError(origin, "robot.urdf", "a quadruped config needs its robot description")
     data["robot"]["urdf"] = str(urdf)
     data.setdefault("terminal", {})  # format 1.0 libraries predate the riding end state
+    data.setdefault("transitions", {})  # libraries before 1.4 hold start-ups only
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _SECTIONS.items()}
     cfg = QuadrupedConfig(path=Path(origin), text="", **sections)
     _check_cross_fields(cfg)
@@ -228,6 +219,9 @@ def _check_sweep(cfg: QuadrupedConfig) -> None:
     if not cfg.sweep.velocities_mps or not cfg.sweep.strides:
         raise ConfigError(p, "sweep", "velocities_mps and strides must not be empty")
     check_unique_keys(p, cfg.sweep.velocities_mps)
+    check_unique_keys(p, cfg.transitions.speeds_mps, "transitions.speeds_mps")
+    if len(set(cfg.transitions.strides)) != len(cfg.transitions.strides) or not cfg.transitions.strides:
+        raise ConfigError(p, "transitions.strides", f"{list(cfg.transitions.strides)}: list each stride count once")
     if len(set(cfg.sweep.strides)) != len(cfg.sweep.strides):
         raise ConfigError(p, "sweep.strides", f"{list(cfg.sweep.strides)} repeats a stride count; list each once")
     steps = cfg.schedule.period_s / cfg.optimization.dt_s

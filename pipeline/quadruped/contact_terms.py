@@ -101,7 +101,7 @@ def band_intervals(push_contact: np.ndarray, n: int, reach: int = 2) -> list[int
     """The intervals k (knot k to k+1) within ``reach`` of a lift-off or touchdown of the push foot."""
     out: set[int] = set()
     for k in range(n):
-        if push_contact[k] == SWING and (k == 0 or push_contact[k - 1] != SWING):  # first knot in the air
+        if push_contact[k] == SWING and k > 0 and push_contact[k - 1] != SWING:  # first knot in the air
             out.update(range(k - 1, min(k - 1 + reach, n)))
         if push_contact[k] == SWING and k + 1 <= n and push_contact[k + 1] != SWING:  # last knot in the air
             out.update(range(max(k + 1 - reach, 0), k + 1))

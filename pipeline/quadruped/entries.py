@@ -47,13 +47,16 @@ def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[
         "friction_mu_plan": config.optimization.friction_margin * s.friction_mu,
         "joint_limit_margin_rad": config.optimization.joint_limit_margin_rad,
         **{f"terminal_{k}": v for k, v in dataclasses.asdict(config.terminal).items()},
+        "final_velocity_tol": config.optimization.final_velocity_tol,
+        "stop_speed_tol_mps": config.transitions.stop_speed_tol_mps,
         "board_source": config.board.source,
     }
     arrays = {
         schema.D_ROBOT_INERTIA: s.srb.inertia_kgm2, "robot_com_offset_m": s.srb.com_offset_m,
         schema.D_JOINT_LOWER: s.robot.lower_limits, schema.D_JOINT_UPPER: s.robot.upper_limits,
         "stance_q_board_rad": s.stance.q_board, "stance_q_push_rad": s.stance.q_push,
-        "stance_deck_points_m": s.stance.cr,
+        "stance_deck_points_m": s.stance.cr, "stance_q_ride_rad": s.stance.q_ride,
+        "stance_ride_trunk": s.stance.ride_trunk, "stance_riding_com_m": s.riding_com_m,
     }
     return attrs, arrays
 
@@ -62,6 +65,7 @@ def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, floa
                       cache_key: str = "") -> EntryRecord:
     attrs = {
         schema.A_TARGET_VELOCITY: r.target_velocity_mps, schema.A_N_STRIDES: r.n_strides,
+        schema.A_FROM_VELOCITY: r.from_velocity_mps,
         schema.A_SUCCESS: r.success, schema.A_STATUS: r.status, schema.A_ITERATIONS: r.iterations,
         schema.A_SOLVE_TIME: r.solve_time_s, "build_time_s": r.build_time_s, schema.A_OBJECTIVE: r.objective,
         schema.A_MAX_VIOLATION: r.max_constraint_violation, "final_velocity_mps": r.final_velocity_mps,
@@ -77,7 +81,8 @@ def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, floa
     units = {schema.D_STATE: STATE_UNITS, schema.D_CONTROL: CONTROL_UNITS,
              schema.D_CONTACT: ("0 swing, 1 board, 2 ground",) * 4, schema.D_FOOT_POS: ("m",) * 4,
              schema.D_BOARD_POS: BOARD_POS_UNITS}
-    return EntryRecord(key=schema.entry_key(r.target_velocity_mps, r.n_strides), attrs=attrs, arrays=arrays,
+    key = schema.entry_key(r.target_velocity_mps, r.n_strides, r.from_velocity_mps)
+    return EntryRecord(key=key, attrs=attrs, arrays=arrays,
                      columns=columns, units=units)
 
 

@@ -1,6 +1,6 @@
-"""Cold initial guesses of the push-off NLP: the static stance riding a board whose speed ramps to
-the target (``"ramp"``) or at rest (``"hold"``), with the push leg posed by inverse kinematics.
-Never random: the same problem always starts from the same point."""
+"""Cold initial guesses of the push-off NLP: the static stance riding a board whose speed ramps from
+the start speed to the target (``"ramp"``) or holds the start speed (``"hold"``), with the push leg
+posed by inverse kinematics. Never random: the same problem always starts from the same point."""
 
 from __future__ import annotations
 
@@ -13,20 +13,21 @@ from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import SkateSystem
 
 
-def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v_target: float,
+def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v_from: float, v_target: float,
                   kind: str) -> np.ndarray:
-    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp (or held), the push leg
-    by IK, and contact forces that carry the ramp's momentum."""
+    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp from ``v_from`` (or
+    at ``v_from``), the push leg by IK, and contact forces that carry the ramp's momentum."""
     sch = schedule
     K = len(sch.t)
     guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
-    a = v_target / sch.t[-1] if kind == "ramp" else 0.0
-    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = a * sch.t
-    guess[:, S_POS.start] += 0.5 * a * sch.t**2
-    guess[:, I_BOARD_XY.start] = 0.5 * a * sch.t**2
+    a = (v_target - v_from) / sch.t[-1] if kind == "ramp" else 0.0
+    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = v_from + a * sch.t
+    travel = v_from * sch.t + 0.5 * a * sch.t**2
+    guess[:, S_POS.start] += travel
+    guess[:, I_BOARD_XY.start] = travel
     guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m,
                                      system.end_push_foot_height_m + 0.01)
-    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v_target, a, kind)
+    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v_target - v_from, a, kind)
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
 
@@ -49,6 +50,16 @@ def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, 
         q_leg = system.stance.q_push[leg].copy()
         for k in range(k0, k1 + 1):
             q_leg, _ = newton.solve(fk, foot_world - trunk[k], q_leg, (lo, hi))
+            q[k, leg] = q_leg
+    if runs and runs[0][0] > 0:  # a lead-in: from the riding pose (the first knot's) down to the first hold
+        k0 = runs[0][0]
+        start = trunk[0] + np.asarray(system.robot.foot_positions_body(system.stance.q_ride))[:, p]
+        q_leg = system.stance.q_ride[leg].copy()
+        q[0, leg] = q_leg
+        for k in range(1, k0):
+            target = _swing(start, holds[0], k / k0, system.extra.get("swing_apex_m", 0.06), False)
+            target[2] = start[2] + (holds[0][2] - start[2]) * (k / k0) ** 2  # down, not over an apex
+            q_leg, _ = newton.solve(fk, target - trunk[k], q_leg, (lo, hi))
             q[k, leg] = q_leg
     for j, (_, k1) in enumerate(runs):
         last = j + 1 == len(runs)
@@ -74,13 +85,14 @@ def _swing(start: np.ndarray, end: np.ndarray, s: float, apex_m: float, rising: 
     return point
 
 
-def _forces(system: SkateSystem, sch: KnotSchedule, v_target: float, a: float, kind: str) -> np.ndarray:
-    """Forces (K - 1, 12): weight shared by the feet in contact, the push foot's forward force over the
-    push time carrying robot and board to the target, the deck feet accelerating the board."""
+def _forces(system: SkateSystem, sch: KnotSchedule, dv: float, a: float, kind: str) -> np.ndarray:
+    """Forces (K - 1, 12): weight shared by the feet in contact, the push foot's force along the
+    heading over the push time changing robot and board's speed by ``dv``, the deck feet
+    accelerating the board."""
     p = system.push_index
     m_r, m_b = system.srb.mass_kg, system.board.mass_kg
     push_time = sum(k1 - k0 for k0, k1 in sch.stance_intervals(p, GROUND)) * (sch.t[1] - sch.t[0])
-    f_push = (m_r + m_b) * v_target / push_time if kind == "ramp" and push_time > 0 else 0.0
+    f_push = (m_r + m_b) * dv / push_time if kind == "ramp" and push_time > 0 else 0.0
     f = np.zeros((len(sch.t) - 1, 12))
     for k in range(len(sch.t) - 1):
         on = [i for i in range(4) if sch.contact[k, i] != SWING]

@@ -95,7 +95,7 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         if not e.success:
             report(e.key, "skipped", f"stored as failed ({e.attrs['status']}): skipped", {})
             continue
-        rep = check_trajectory(system, Trajectory.of(e), e.target_velocity_mps)
+        rep = check_trajectory(system, Trajectory.of(e), e.target_velocity_mps, from_velocity_mps=e.from_velocity_mps)
         failures = rep.failures(system)
         bad += bool(failures)
         ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({100 * rep.momentum_speed_error:.2f} % off), "
@@ -104,7 +104,25 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
                    "min_friction_margin_N": rep.min_friction_margin_N, "max_defect": rep.max_defect,
                    "max_torque_rigid_legs_Nm": rep.max_torque_rigid_legs_Nm}
         report(e.key, "failed" if failures else "ok", ok if not failures else "; ".join(failures), figures)
-    return bad
+    return bad + validate_chain(lib, report)
+
+
+def validate_chain(lib: MotionLibrary, report: ReportFn) -> int:
+    """Chain continuity (:mod:`.chain`): every end that meets a transition's start agrees with it
+    within the end's tolerances; one line for the library, one per junction that does not."""
+    from skatelib.pipeline.quadruped.chain import chain_gaps
+
+    gaps = chain_gaps(lib)
+    if not gaps:
+        return 0
+    bad = [g for g in gaps if g.failures()]
+    for g in bad:
+        report(f"{g.end} -> {g.start}", "failed", "; ".join(g.failures()), g.gaps)
+    worst = {k: max(g.gaps[k] / g.limits[k] for g in gaps if g.limits[k] > 0) for k in gaps[0].gaps}
+    report("chain", "failed" if bad else "ok",
+           f"{len(gaps) - len(bad)} of {len(gaps)} junctions (an end and a transition from its speed) agree within the "
+           f"end's tolerances; the closest to its tolerance: {max(worst, key=lambda k: worst[k])}", worst)
+    return len(bad)
 
 
 KIND = SubpackageKind("quadruped", QuadrupedConfig, "skatelib.pipeline.quadruped", print_model, validate_entries)

@@ -17,9 +17,12 @@ NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
 I_BOARD_XY = slice(NX, NX + 2)
 KNOT_NAMES = (*STATE_NAMES, "board_x", "board_y", *CONTROL_NAMES)
 
-# Stage parameters: desired board speed at knot k, terminal flag, rate flag, target speed.
-P_VDES, P_TERMINAL, P_RATE, P_TARGET = range(4)
-N_PARAMS = 4
+# Stage parameters: desired board speed at knot k, terminal flag, rate flag, target speed, the
+# direction the planted push foot drives the board (+1 a push, -1 a brake) and the speed the final
+# speed's tolerance is relative to (the target; for a stop, the stop tolerance over the relative one),
+# the friction coefficient the plan gives the foot on the ground (a brake plans with less).
+P_VDES, P_TERMINAL, P_RATE, P_TARGET, P_DRIVE, P_SPEED_SCALE, P_MU_GROUND = range(7)
+N_PARAMS = 7
 
 
 def columns(first: str, last: str | None = None) -> slice:

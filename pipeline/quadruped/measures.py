@@ -20,7 +20,7 @@ def riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, fl
     v_mom = float(momentum_speed(x, system.srb.mass_kg, system.board.mass_kg))
     return {
         "final_board_speed_mps": float(heading @ v_board), "final_robot_speed_mps": float(heading @ v_robot),
-        "momentum_speed_mps": v_mom, "momentum_speed_error": abs(v_mom - label) / label,
+        "momentum_speed_mps": v_mom, "momentum_speed_error": abs(v_mom - label) / (label or 1.0),
         "final_relative_speed_mps": float(np.linalg.norm(v_robot - v_board)),
         "final_vertical_speed_mps": float(abs(x[S_VEL][2])),
         "final_angular_speed_radps": float(np.abs(x[S_OMEGA]).max()),

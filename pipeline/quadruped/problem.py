@@ -1,18 +1,24 @@
-"""The transcribed push-off NLP for one config and stride count (paper Sec. IV-B): the system, the
-knot schedule, the cost, constraint and bound terms, and what turns a solution vector back into
-trajectories. Reused across target speeds: the target enters through the stage parameters.
+"""The transcribed push-off NLP for one config, stride count and knot window (paper Sec. IV-B): the
+system, the knot schedule, the cost, constraint and bound terms, and what turns a solution vector
+back into trajectories. Reused across speeds: the target enters through the stage parameters, the
+start speed through the initial state's bounds.
+
+A start-up begins at rest with the push foot on the ground; a transition from riding at ``v0``
+(:class:`Window` with a lead-in) begins in the riding state (:func:`riding_state`), the state every
+entry ends in, so that entries chain.
 """
 
 from __future__ import annotations
 
 import hashlib
 import time
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import NU, NX, S_POS, S_Q, S_RPY
+from skatelib.library.channels import NU, NX, S_BOARD_V, S_POS, S_Q, S_RPY, S_VEL
 from skatelib.pipeline.build.cache import cache_dir
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
@@ -22,14 +28,25 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.contact_terms import GentleContact, WheelLoads
 from skatelib.pipeline.quadruped.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
 from skatelib.pipeline.quadruped.guess import initial_guess
-from skatelib.pipeline.quadruped.knots import I_BOARD_XY, N_PARAMS, NXA, P_RATE, P_TARGET, P_TERMINAL, P_VDES
+from skatelib.pipeline.quadruped.knots import (
+    I_BOARD_XY,
+    N_PARAMS,
+    NXA,
+    P_DRIVE,
+    P_MU_GROUND,
+    P_RATE,
+    P_SPEED_SCALE,
+    P_TARGET,
+    P_TERMINAL,
+    P_VDES,
+)
 from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
 from skatelib.pipeline.quadruped.system import SkateSystem
 from skatelib.pipeline.quadruped.terms import (
     DynamicsDefect,
     FeetOnBoard,
-    FinalSpeed,
     FrictionCones,
     Propulsion,
     PushFoot,
@@ -38,16 +55,72 @@ from skatelib.pipeline.quadruped.terms import (
 )
 
 
-class PushoffProblem:
-    """The transcribed NLP for one config and stride count, reusable across target speeds."""
+@dataclass(frozen=True)
+class Window:
+    """The knot window of a problem besides its strides: ``lead_s`` with the push foot in the air
+    before its first touchdown (0 for a start-up, which starts with it on the ground) and the
+    ground phase of each stride (None: the schedule's push duty)."""
 
-    def __init__(self, config: QuadrupedConfig, n_strides: int):
+    lead_s: float = 0.0
+    ground_s: float | None = None
+
+    @property
+    def riding(self) -> bool:
+        """Whether the window starts riding (a transition) rather than at rest."""
+        return self.lead_s > 0.0
+
+
+START_UP = Window()  # a start-up's window: no lead-in, the schedule's push time
+
+
+def transition_window(config: QuadrupedConfig, v_from: float, v_to: float, drive: float) -> Window:
+    """The window of a transition from ``v_from`` to ``v_to`` whose planted foot drives ``drive``
+    (+1 pushes, -1 brakes: ``SkateSystem.drive``): the touchdown lead-in, and ground phases no
+    longer than the trunk takes to ride ``ground_sweep_m`` (``brake_sweep_m`` for a brake) at the
+    faster speed (a planted foot stays where it touched down: at 1 m/s the legs' reach holds it
+    about a quarter second), whole knots, at most the schedule's push time."""
+    tr, dt = config.transitions, config.optimization.dt_s
+    push = config.schedule.push_duty * config.schedule.period_s
+    sweep = tr.ground_sweep_m if drive > 0 else tr.brake_sweep_m
+    knots = min(round(push / dt), int(sweep / max(v_from, v_to) / dt + 1e-9))
+    return Window(lead_s=tr.touchdown_s, ground_s=max(knots, 1) * dt)
+
+
+def riding_state(system: SkateSystem, v: float) -> np.ndarray:
+    """The transcription state riding at ``v`` [m/s] along x: the riding stance on the board
+    (:mod:`.riding`: ``Stance.ride_trunk``, ``Stance.q_ride``), body and board moving together,
+    the deck level."""
+    x = np.zeros(NXA)
+    x[S_POS] = system.riding_com_m + np.array([0.0, 0.0, system.board.deck_height_m])
+    x[S_RPY.start:S_RPY.start + 2] = system.stance.ride_trunk[2:4]
+    x[S_Q] = system.stance.q_ride
+    x[S_VEL.start] = x[S_BOARD_V.start] = v
+    return x
+
+
+_SYSTEMS: dict[str, SkateSystem] = {}
+
+
+def system_for(config: QuadrupedConfig) -> SkateSystem:
+    """The system of ``config``, built once per process (its riding stance is a small NLP)."""
+    key = config.resolved_json()
+    if key not in _SYSTEMS:
+        _SYSTEMS[key] = SkateSystem.from_config(config)
+    return _SYSTEMS[key]
+
+
+class PushoffProblem:
+    """The transcribed NLP for one config, stride count and window, reusable across speeds."""
+
+    def __init__(self, config: QuadrupedConfig, n_strides: int, window: Window = START_UP):
         t0 = time.perf_counter()
         self.config = config
         self.n_strides = n_strides
+        self.window = window
         opt = config.optimization
-        self.system = system = SkateSystem.from_config(config)
-        self.schedule: KnotSchedule = knot_schedule(config.schedule, n_strides, opt.dt_s)
+        self.system = system = system_for(config)
+        self.schedule: KnotSchedule = knot_schedule(config.schedule, n_strides, opt.dt_s, window.lead_s,
+                                                    window.ground_s)
         N = self.schedule.n_intervals
         self.mode = modes_for(config.schedule.push_leg)["accelerating"]
         f = dynamics_function(system, self.mode)
@@ -72,12 +145,11 @@ class PushoffProblem:
             FrictionCones(system, self.schedule, self.mode.board_legs, mu_plan, opt.friction_model),
             Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),
             WheelLoads(system, board_legs), GentleContact(system, self.schedule, config.contact, opt.dt_s),
-            FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps),
+            FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps), RidingEnd(system, term.position_tol_m),
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
                                           self.constraints,
                                           compile_dir=cache_dir() if opt.compile else None)
-        self.bound_terms = bound_terms(config, system, self.schedule, self.x0)
         x_sym = ca.SX.sym("x", NX)
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
         self.build_time_s = time.perf_counter() - t0
@@ -86,6 +158,14 @@ class PushoffProblem:
     @property
     def n(self) -> int:
         return NXA + NU
+
+    def start_state(self, v_from: float) -> np.ndarray:
+        """Where the window starts: riding at ``v_from`` for a transition, else the start-up's rest."""
+        if self.window.riding:
+            return riding_state(self.system, v_from)
+        if v_from != 0.0:
+            raise ValueError(f"a start-up starts at rest, not at {v_from} m/s")
+        return self.x0
 
     def _initial_state(self) -> np.ndarray:
         """Static stance on the board at rest, the push foot on the ground (accelerating mode)."""
@@ -104,26 +184,33 @@ class PushoffProblem:
             self._solvers[key] = ca.nlpsol("pushoff", "ipopt", self.tr.nlp.nlp, opts)
         return self._solvers[key]
 
-    def parameters(self, v_target: float) -> np.ndarray:
+    def parameters(self, v_from: float, v_target: float) -> np.ndarray:
         N = self.schedule.n_intervals
         P = np.zeros((N, N_PARAMS))
-        P[:, P_VDES] = v_target * self.schedule.t[:N] / self.schedule.t[-1]
+        P[:, P_VDES] = v_from + (v_target - v_from) * self.schedule.t[:N] / self.schedule.t[-1]
         P[:, P_RATE] = 1.0
         P[-1, P_RATE] = 0.0
         P[-1, P_TERMINAL] = 1.0
         P[:, P_TARGET] = v_target
+        P[:, P_DRIVE] = drive = self.system.drive(v_from, v_target, float(self.schedule.t[-1]))
+        opt = self.config.optimization
+        margin = opt.friction_margin if drive > 0 else self.config.transitions.brake_friction_margin
+        P[:, P_MU_GROUND] = margin * self.system.friction_mu
+        P[:, P_SPEED_SCALE] = v_target if v_target > 0 else self.config.transitions.stop_speed_tol_mps / max(
+            opt.final_velocity_tol, 1e-9)
         return P.reshape(-1)  # row-major (N, n_p) == column-major (n_p, N)
 
-    def bounds(self, v_target: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Variable bounds (the bound terms' intersection) and constraint-row bounds; the same for every
-        target (the target enters through the stage parameters)."""
-        lbx, ubx = variable_bounds(self.bound_terms, len(self.schedule.t), self.n)
+    def bounds(self, v_from: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Variable bounds (the bound terms' intersection) and constraint-row bounds; the start speed
+        fixes the first knot, the targets enter through the stage parameters."""
+        terms = bound_terms(self.config, self.system, self.schedule, self.start_state(v_from))
+        lbx, ubx = variable_bounds(terms, len(self.schedule.t), self.n)
         return lbx, ubx, self.tr.lbg.copy(), self.tr.ubg.copy()
 
-    def initial_guess(self, v_target: float, kind: str) -> np.ndarray:
-        return initial_guess(self.system, self.schedule, self.x0, v_target, kind)
+    def initial_guess(self, v_from: float, v_target: float, kind: str) -> np.ndarray:
+        return initial_guess(self.system, self.schedule, self.start_state(v_from), v_from, v_target, kind)
 
-    def fingerprint(self, v_target: float, guess: str) -> str:
+    def fingerprint(self, v_from: float, v_target: float, guess: str) -> str:
         """SHA-256 of everything this problem feeds IPOPT for one target besides its options and warm
         start: the stage function (every cost and constraint term), the problem config (URDF by
         content), parameters, bounds and the cold initial guess."""
@@ -131,7 +218,8 @@ class PushoffProblem:
         h.update(self.tr.fingerprint.encode())
         h.update(self.config.problem_json().encode())
         h.update(str(self.n_strides).encode())
-        for a in (self.parameters(v_target), *self.bounds(v_target), self.initial_guess(v_target, guess)):
+        for a in (self.parameters(v_from, v_target), *self.bounds(v_from),
+                  self.initial_guess(v_from, v_target, guess)):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()
 

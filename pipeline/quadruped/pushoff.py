@@ -1,5 +1,7 @@
 """Push-off trajectory optimization (paper Sec. IV-B): from rest on the board to a target speed
-by pushing with one leg for a number of 1.2 s strides. Direct multiple shooting + IPOPT.
+by pushing with one leg for a number of 1.2 s strides, or from riding at one speed to another
+(a transition: pushes to speed up, brakes with the foot planted to slow down or stop). Direct
+multiple shooting + IPOPT.
 
 ``solve(spec) -> SolveResult`` is a pure, picklable module-level function; the built NLP and
 solver are cached per process (keyed by the config and the stride count), so a worker that
@@ -15,7 +17,7 @@ from typing import Any
 import numpy as np
 from skatelib.library.margins import forward_speed
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.problem import PushoffProblem
+from skatelib.pipeline.quadruped.problem import START_UP, PushoffProblem, Window, system_for, transition_window
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,7 @@ class PushoffSpec:
         guess: Initial-guess kind when cold: ``"ramp"`` (static stance, board speed ramp) or
             ``"hold"`` (static stance at rest), used by the retry ladder.
         ipopt: Extra IPOPT options as (name, value) pairs.
+        from_velocity_mps: The speed riding starts at (a transition); 0: a start-up from rest.
     """
 
     config: QuadrupedConfig
@@ -47,6 +50,16 @@ class PushoffSpec:
     warm: WarmStart | None = field(default=None, repr=False, compare=False)
     guess: str = "ramp"
     ipopt: tuple[tuple[str, Any], ...] = ()
+    from_velocity_mps: float = 0.0
+
+    @property
+    def window(self) -> Window:
+        v0, v1 = self.from_velocity_mps, self.target_velocity_mps
+        if v0 <= 0:
+            return START_UP
+        tr, period = self.config.transitions, self.config.schedule.period_s
+        drive = system_for(self.config).drive(v0, v1, tr.touchdown_s + self.n_strides * period)
+        return transition_window(self.config, v0, v1, drive)
 
 
 @dataclass(frozen=True)
@@ -71,21 +84,23 @@ class SolveResult:
     final_velocity_mps: float
     warm: WarmStart | None = field(default=None, repr=False)
     ipopt_options: dict[str, Any] = field(default_factory=dict)
+    from_velocity_mps: float = 0.0
 
     @property
     def final_velocity_error(self) -> float:
-        """Relative error of the final board speed against the target [-]."""
-        return abs(self.final_velocity_mps - self.target_velocity_mps) / self.target_velocity_mps
+        """Relative error of the final board speed against the target; for a stop, the final speed
+        over 1 m/s [-]."""
+        return abs(self.final_velocity_mps - self.target_velocity_mps) / (self.target_velocity_mps or 1.0)
 
 
-_PROBLEMS: dict[tuple[str, int], PushoffProblem] = {}
+_PROBLEMS: dict[tuple[str, int, Window], PushoffProblem] = {}
 
 
-def problem_for(config: QuadrupedConfig, n_strides: int) -> PushoffProblem:
-    """The cached problem of this process for (config, strides); built on first use."""
-    key = (config.resolved_json(), n_strides)
+def problem_for(config: QuadrupedConfig, n_strides: int, window: Window = START_UP) -> PushoffProblem:
+    """The cached problem of this process for (config, strides, window); built on first use."""
+    key = (config.resolved_json(), n_strides, window)
     if key not in _PROBLEMS:
-        _PROBLEMS[key] = PushoffProblem(config, n_strides)
+        _PROBLEMS[key] = PushoffProblem(config, n_strides, window)
     return _PROBLEMS[key]
 
 
@@ -107,20 +122,20 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
 def solve(spec: PushoffSpec) -> SolveResult:
     """Solve one push-off problem. Never raises on solver failure: the result says so."""
     t_build = time.perf_counter()
-    built_before = (spec.config.resolved_json(), spec.n_strides) in _PROBLEMS
-    prob = problem_for(spec.config, spec.n_strides)
+    built_before = (spec.config.resolved_json(), spec.n_strides, spec.window) in _PROBLEMS
+    prob = problem_for(spec.config, spec.n_strides, spec.window)
     build_time = 0.0 if built_before else time.perf_counter() - t_build
-    v = spec.target_velocity_mps
+    v, v0 = spec.target_velocity_mps, spec.from_velocity_mps
     options = solver_options(spec)
     solver = prob.solver(options)
-    P = prob.parameters(v)
-    bounds = prob.bounds(v)
+    P = prob.parameters(v0, v)
+    bounds = prob.bounds(v0)
     lbx, ubx, lbg, ubg = bounds
     args: dict[str, Any] = {"p": P, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
     if spec.warm is not None:
         args.update(x0=spec.warm.w, lam_g0=spec.warm.lam_g, lam_x0=spec.warm.lam_x)
     else:
-        args["x0"] = prob.initial_guess(v, spec.guess)
+        args["x0"] = prob.initial_guess(v0, v, spec.guess)
     t0 = time.perf_counter()
     sol = solver(**args)
     solve_time = time.perf_counter() - t0
@@ -136,5 +151,5 @@ def solve(spec: PushoffSpec) -> SolveResult:
         solve_time_s=solve_time, objective=float(sol["f"]), max_constraint_violation=viol,
         final_velocity_mps=final_v,
         warm=WarmStart(w=w, lam_g=np.asarray(sol["lam_g"]).reshape(-1), lam_x=np.asarray(sol["lam_x"]).reshape(-1)),
-        ipopt_options=options, **arrays,
+        ipopt_options=options, from_velocity_mps=v0, **arrays,
     )

@@ -48,24 +48,31 @@ class KnotSchedule:
         return runs
 
 
-def knot_schedule(cfg: ScheduleConfig, n_strides: int, dt: float) -> KnotSchedule:
-    """Contacts of the accelerating window on knots spaced ``dt`` apart.
+def knot_schedule(cfg: ScheduleConfig, n_strides: int, dt: float, lead_s: float = 0.0,
+                  ground_s: float | None = None) -> KnotSchedule:
+    """Contacts of the accelerating window on knots spaced ``dt`` apart: ``n_strides`` strides of the
+    push foot on the ground (``ground_s``, the schedule's ``push_duty`` x ``period_s`` when None)
+    then in the air to the end of the period; with ``lead_s`` the window starts that long earlier
+    with the foot in the air (a transition from riding: the foot comes down from beside the deck).
 
     Raises:
-        ValueError: When ``dt`` does not divide the period or the push time.
+        ValueError: When ``dt`` does not divide the period, the lead or the push time.
     """
     per = cfg.period_s / dt
-    n_push = cfg.push_duty * cfg.period_s / dt
-    if abs(per - round(per)) > 1e-6:
-        raise ValueError(f"dt {dt} s does not divide the period {cfg.period_s} s")
-    per_i, push_i = round(per), round(n_push)
+    n_push = (cfg.push_duty * cfg.period_s if ground_s is None else ground_s) / dt
+    n_lead = lead_s / dt
+    for what, value in (("the period", per), ("the lead-in", n_lead)):
+        if abs(value - round(value)) > 1e-6:
+            raise ValueError(f"dt {dt} s does not divide {what} ({value * dt} s)")
+    per_i, push_i, lead_i = round(per), round(n_push), round(n_lead)
     if push_i < 1 or push_i >= per_i:
         raise ValueError(f"push phase of {n_push:.2f} knots is empty or fills the period")
     p = LEGS.index(cfg.push_leg)
-    n = n_strides * per_i
+    n = lead_i + n_strides * per_i
     t = np.arange(n + 1) * dt
     contact = np.full((n + 1, 4), BOARD, dtype=np.int8)
-    local = np.arange(n + 1) % per_i
+    local = (np.arange(n + 1) - lead_i) % per_i
     contact[:, p] = np.where(local < push_i, GROUND, SWING)
+    contact[:lead_i, p] = SWING
     contact[-1, p] = SWING  # the window ends at the end of the last swing
     return KnotSchedule(t=t, contact=contact)

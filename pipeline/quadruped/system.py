@@ -10,8 +10,10 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
+from skatelib.pipeline.ocp.rotations import rpy_to_matrix
 from skatelib.pipeline.quadruped.board import BoardModel
 from skatelib.pipeline.quadruped.config import ContactConfig, QuadrupedConfig
+from skatelib.pipeline.quadruped.riding import riding_pose
 from skatelib.pipeline.quadruped.robot import DampedNewton, Quadruped, SingleRigidBody
 
 
@@ -25,6 +27,11 @@ class Stance:
         cr: (2, 4) contact points x, y of the feet in the board frame (Eq. 8) [m].
         trunk_height_m: Trunk origin height above the ground [m].
         push_foot_board_xy: Push foot x, y in the board frame when on the ground [m].
+        q_ride: Joint angles riding: three feet on the deck, the push foot lifted beside it at the
+            middle of the end's height band (where every entry ends, within ``[terminal]``'s
+            tolerances, and every transition from riding starts) [rad].
+        ride_trunk: Trunk origin x, y in the board frame [m] and its roll, pitch [rad] riding
+            (:mod:`.riding`).
     """
 
     q_board: np.ndarray
@@ -32,6 +39,11 @@ class Stance:
     cr: np.ndarray
     trunk_height_m: float
     push_foot_board_xy: np.ndarray
+    q_ride: np.ndarray
+    ride_trunk: np.ndarray
+
+
+END_BAND_M = 0.02  # the push foot ends at most this far above its least end height
 
 
 @dataclass(frozen=True)
@@ -55,6 +67,21 @@ class SkateSystem:
     @property
     def push_index(self) -> int:
         return LEGS.index(self.push_leg)
+
+    def drive(self, v_from: float, v_to: float, duration_s: float) -> float:
+        """Which way the planted push foot drives robot and board in an entry from ``v_from`` to
+        ``v_to`` lasting ``duration_s``: +1 (pushes forward) when rolling friction alone (as the plan
+        has it) would end slower than ``v_to``, -1 (brakes) when it would end faster. A slow-down
+        smaller than what the coast takes pushes a little; a start-up always pushes."""
+        coast = self.board.rolling_friction_N / (self.srb.mass_kg + self.board.mass_kg) * duration_s
+        return 1.0 if v_to >= v_from - coast else -1.0
+
+    @property
+    def riding_com_m(self) -> np.ndarray:
+        """The riding stance's centre of mass in the board frame (origin on the deck top) [m]."""
+        x, y, roll, pitch = self.stance.ride_trunk
+        trunk = np.array([x, y, self.stance.trunk_height_m - self.board.deck_height_m])
+        return trunk + np.asarray(rpy_to_matrix(np.array([roll, pitch, 0.0]))) @ self.srb.com_offset_m
 
     def stiff_linear_part(self, nx: int) -> np.ndarray:
         """``L`` with the deck's roll spring-damper (Eq. 6-7) on rows 26-27, zero elsewhere."""
@@ -86,10 +113,15 @@ class SkateSystem:
         push_targets[push] = [push_xy[0] - st.base_x_offset_m, push_xy[1], -h - cfg.board.deck_height_m + r]
         q_push = solve_leg_ik(robot, push_targets, q0=q_board)
         srb = robot.single_rigid_body(q_board)
+        ride_targets = push_targets.copy()
+        ride_targets[push, 2] += cfg.terminal.push_foot_height_m + END_BAND_M / 2
+        ride_trunk, q_ride = riding_pose(robot, ride_targets, srb.com_offset_m, push, q_board,
+                                         (st.ride_load_fraction, cfg.optimization.joint_limit_margin_rad))
         board = BoardModel.from_config(cfg.board, srb.mass_kg, cfg.robot.gravity_mps2, st.foot_y_m,
                                        cfg.optimization.rolling_friction_factor)
         stance = Stance(q_board=q_board, q_push=q_push, cr=cr,
-                        trunk_height_m=h + cfg.board.deck_height_m, push_foot_board_xy=push_xy)
+                        trunk_height_m=h + cfg.board.deck_height_m, push_foot_board_xy=push_xy, q_ride=q_ride,
+                        ride_trunk=ride_trunk + np.array([st.base_x_offset_m, 0.0, 0.0, 0.0]))
         return SkateSystem(
             robot=robot, srb=srb, board=board, stance=stance, gravity_mps2=cfg.robot.gravity_mps2,
             foot_radius_m=r, friction_mu=cfg.robot.friction_mu, torque_limit_Nm=cfg.robot.torque_limit_Nm,

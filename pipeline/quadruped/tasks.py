@@ -28,9 +28,10 @@ def entry_key(spec: PushoffSpec, predecessor: str | None) -> str:
     bounds, cold guess), the IPOPT options, target and strides, the key of the entry whose solution
     warm-starts it (``None`` when cold), the library format and the cache version.
     """
-    prob = problem_for(spec.config, spec.n_strides)
-    v = spec.target_velocity_mps
-    return cache_key(prob.fingerprint(v, spec.guess), solver_options(spec), round(v, 9), spec.n_strides, predecessor)
+    prob = problem_for(spec.config, spec.n_strides, spec.window)
+    v, v0 = spec.target_velocity_mps, spec.from_velocity_mps
+    parts = (round(v, 9), spec.n_strides, predecessor) + ((round(v0, 9),) if v0 else ())
+    return cache_key(prob.fingerprint(v0, v, spec.guess), solver_options(spec), *parts)
 
 
 @dataclass(frozen=True)
@@ -47,7 +48,8 @@ class EntryOutcome:
 
     @property
     def key(self) -> str:
-        return schema.entry_key(self.result.target_velocity_mps, self.result.n_strides)
+        r = self.result
+        return schema.entry_key(r.target_velocity_mps, r.n_strides, r.from_velocity_mps)
 
     @property
     def success(self) -> bool:
@@ -127,5 +129,10 @@ def tasks_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) 
 
 
 def ordered(outcomes: Iterable[EntryOutcome]) -> list[EntryOutcome]:
-    """Outcomes sorted by strides, then velocity (the library's entry order)."""
-    return sorted(outcomes, key=lambda o: (o.result.n_strides, o.result.target_velocity_mps))
+    """The library's entry order: start-ups by strides, then speed; then transitions by start speed,
+    then target speed."""
+    def order(o: EntryOutcome) -> tuple[float, int, float]:
+        r = o.result
+        return (r.from_velocity_mps, 0 if r.from_velocity_mps else r.n_strides, r.target_velocity_mps)
+
+    return sorted(outcomes, key=order)

@@ -15,21 +15,18 @@ from skatelib.library.channels import (
     GROUND,
     I_BOARD_ROLL,
     NX,
-    S_BOARD_V,
     S_OMEGA,
     S_RPY,
-    S_VEL,
     SWING,
 )
 from skatelib.pipeline.ocp.terms import Stage, fixed
 from skatelib.pipeline.quadruped.config import StanceConfig
 from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
-from skatelib.pipeline.quadruped.knots import NXA, P_TARGET, board_origin, forward_speed
+from skatelib.pipeline.quadruped.knots import NXA, P_DRIVE, P_MU_GROUND, board_origin, forward_speed
 from skatelib.pipeline.quadruped.schedule import KnotSchedule
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.system import END_BAND_M, SkateSystem
 
 INF = np.inf
-END_BAND_M = 0.02  # the push foot ends at most this far above its least end height
 
 
 @dataclass(frozen=True)
@@ -100,11 +97,13 @@ class PushFoot:
         r = self.system.foot_radius_m
         contact = self.schedule.contact[:, p]
         lo, hi = np.full((n, 5), -INF), np.full((n, 5), INF)
-        # Lift profile: a half sine over each swing run, at least r everywhere in the air.
+        # Lift profile: a half sine over each swing run (a quarter cosine over a lead-in, which starts
+        # with the foot lifted), at least r everywhere in the air.
         lift = np.zeros(n + 1)
         for k0, k1 in self.schedule.stance_intervals(p, SWING):
             s = (np.arange(k0, k1 + 1) - k0) / max(k1 - k0, 1)
-            lift[k0:k1 + 1] = np.maximum(lift[k0:k1 + 1], self.stance.swing_height_m * np.sin(np.pi * s))
+            shape = np.cos(0.5 * np.pi * s) if k0 == 0 else np.sin(np.pi * s)
+            lift[k0:k1 + 1] = np.maximum(lift[k0:k1 + 1], self.stance.swing_height_m * shape)
         for k in range(n):
             if contact[k] == GROUND:
                 lo[k, self.MOVE] = hi[k, self.MOVE] = 0.0  # no slip on the ground
@@ -127,7 +126,9 @@ class FrictionCones:
     ``model="cone"``: the exact cone as ``mu^2 f_n^2 - |f_t|^2 >= 0`` with ``f_n >= 0`` (smooth, unlike
     the sqrt form). ``model="polygon8"``: eight facets of the inscribed octagon,
     ``n_j . f_t <= mu cos(pi/8) f_n`` (inside the cone; implies ``f_n >= 0``).
-    ``mu`` is the planning coefficient (margin x the model's mu).
+    ``mu`` is the planning coefficient (margin x the model's mu) on the deck; on the ground it is the
+    stage parameter ``P_MU_GROUND`` (a brake plans with less, leaving the controller room to brake
+    harder on a board that rolls easier than planned).
     """
 
     system: SkateSystem
@@ -142,12 +143,12 @@ class FrictionCones:
         return 2 if self.model == "cone" else 8
 
     def rows(self, s: Stage) -> Any:
-        mu = self.mu
         R_B = board_rotation(s.x[I_BOARD_ROLL], s.x[S_RPY][2])
         out = []
         for i in range(4):
             f = s.u[3 * i: 3 * i + 3]
             fl = R_B.T @ f if self.board_legs[i] else f
+            mu = self.mu if self.board_legs[i] else s.p[P_MU_GROUND]
             if self.model == "cone":
                 out += [mu**2 * fl[2] ** 2 - fl[0] ** 2 - fl[1] ** 2, fl[2]]
             else:
@@ -166,7 +167,8 @@ class FrictionCones:
 
 @dataclass(frozen=True)
 class Propulsion:
-    """The ground pushes the push foot forward along the board heading, never backward."""
+    """The ground drives the planted push foot one way along the board heading: forward in a push,
+    backward in a brake (stage parameter ``P_DRIVE``, +1 or -1), never the other way."""
 
     system: SkateSystem
     schedule: KnotSchedule
@@ -175,7 +177,7 @@ class Propulsion:
     def rows(self, s: Stage) -> Any:
         p = self.system.push_index
         yaw = s.x[S_RPY][2]
-        return ca.cos(yaw) * s.u[3 * p] + ca.sin(yaw) * s.u[3 * p + 1]
+        return s.p[P_DRIVE] * (ca.cos(yaw) * s.u[3 * p] + ca.sin(yaw) * s.u[3 * p + 1])
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
@@ -217,29 +219,3 @@ class Steering:
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         return fixed(n, 1, 0.0, 0.0)
-
-
-@dataclass(frozen=True)
-class FinalSpeed:
-    """At the end, the board's and the robot COM's forward speeds both within a relative tolerance
-    of the target (stage parameter ``P_TARGET``), and the COM's lateral speed relative to the
-    board within ``lateral_tol_mps``: robot and board ride on together at the label speed."""
-
-    SPEEDS, LATERAL = slice(0, 2), 2
-
-    rel_tol: float
-    lateral_tol_mps: float
-    name: str = "final_speed"
-
-    def rows(self, s: Stage) -> Any:
-        x = s.x_next
-        yaw = x[S_RPY][2]
-        lateral = -ca.sin(yaw) * (x[S_VEL][0] - x[S_BOARD_V][0]) + ca.cos(yaw) * (x[S_VEL][1] - x[S_BOARD_V][1])
-        robot_fwd = ca.cos(yaw) * x[S_VEL][0] + ca.sin(yaw) * x[S_VEL][1]
-        return ca.vertcat(forward_speed(x) / s.p[P_TARGET] - 1, robot_fwd / s.p[P_TARGET] - 1, lateral)
-
-    def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = np.full((n, 3), -INF), np.full((n, 3), INF)
-        lo[-1, self.SPEEDS], hi[-1, self.SPEEDS] = -self.rel_tol, self.rel_tol
-        lo[-1, self.LATERAL], hi[-1, self.LATERAL] = -self.lateral_tol_mps, self.lateral_tol_mps
-        return lo, hi

@@ -98,6 +98,11 @@ def frontier_table(points: list[Any]) -> None:
     console.print(t)
 
 
+def speed_error(r: Any) -> str:
+    """A closed-loop verdict's speed error: in % of the label, or for a stop the speed left."""
+    return f"{100 * r.speed_error:+.1f}%" if r.label_mps else f"{r.delivered_mps:+.3f} m/s"
+
+
 def track_table(results: list[Any], perturb: str) -> int:
     """Print the closed-loop verdicts; returns how many failed."""
     t = Table(title=escape(f"closed loop, plant: {perturb}"))
@@ -106,7 +111,7 @@ def track_table(results: list[Any], perturb: str) -> int:
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
-                  f"{r.delivered_mps:.3f}", f"{100 * r.speed_error:+.1f}%", f"{r.max_deck_roll_rad:.3f}",
+                  f"{r.delivered_mps:.3f}", speed_error(r), f"{r.max_deck_roll_rad:.3f}",
                   f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
                   f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
                   f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
@@ -123,6 +128,23 @@ def track_table(results: list[Any], perturb: str) -> int:
     return sum(not r.passed for r in results)
 
 
+def ride_table(result: Any, perturb: str) -> bool:
+    """Print a ride's stages and its verdict; returns whether it passed."""
+    t = Table(title=escape(f"ride in closed loop, plant: {perturb}"))
+    for col in ("stage", "entries", "ends at [s]", "momentum speed [m/s]", "verdict"):
+        t.add_column(escape(col), justify="right")
+    for s in result.stages:
+        t.add_row(f"{s.v_from:g} -> {s.v_to:g}", escape(", ".join(s.keys)), f"{s.t_end_s:.2f}", f"{s.speed_mps:.3f}",
+                  "[green]pass[/]" if s.passed else "[red]FAIL[/]")
+    console.print(t)
+    r = result.run
+    console.print(escape(f"{r.key}: {'pass' if r.passed else 'FAIL: ' + r.reasons}; each stage within 5 % of its "
+                         f"target at its end (a stop below 0.05 m/s); after the last: delivered {r.delivered_mps:.3f} "
+                         f"m/s, deck roll max {r.max_deck_roll_rad:.3f} rad, slips {r.slips}, stance torque max "
+                         f"{r.max_joint_torque_Nm:.1f} N m"))
+    return bool(result.passed)
+
+
 def twin_table(results: list[Any], perturb: str) -> int:
     """Print the verdicts of the runs on the twin; returns how many failed."""
     t = Table(title=escape(f"full physics (MuJoCo twin, MPC 30 Hz + whole-body 510 Hz), errors: {perturb}"))
@@ -131,7 +153,7 @@ def twin_table(results: list[Any], perturb: str) -> int:
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
-                  f"{100 * r.speed_error:+.1f}%", f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
+                  speed_error(r), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
                   str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
                   f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}", f"{100 * r.saturated_share:.1f}%",
                   f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")

@@ -89,10 +89,12 @@ def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | N
     return roots
 
 
-def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Path) -> list[str]:
+def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Path,
+                     references: dict[str, Entry] | None = None) -> list[str]:
     """Each entry's reference beside its closed-loop run (``skatelib track --save``), with the views
     of ``inspect``: the reference at ``/<key>/reference``, the run 0.6 m beside it at
-    ``/<key>/closed_loop``. Written atomically."""
+    ``/<key>/closed_loop``. ``references``: the references that are not the library's entries (a
+    ride's joined entries). Written atomically."""
     log = kind_rerun(lib).rerun_logger(lib)
     rec = rr.RecordingStream(f"skatelib-track-{lib.path.stem}")
     roots = []
@@ -101,8 +103,9 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
     for n, (key, run) in enumerate(runs):
         offset = np.array([0.0, 2 * SPACING_M * n, 0.0])
         rec.log(f"/{key}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)  # its tab's 3D view
-        log(rec, lib[key], f"/{key}/reference", offset)
-        _log_summary(rec, f"/{key}/reference", lib[key])
+        ref = (references or {}).get(key) or lib[key]
+        log(rec, ref, f"/{key}/reference", offset)
+        _log_summary(rec, f"/{key}/reference", ref)
         beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
         log(rec, run, f"/{key}/closed_loop", beside)
         roots += [f"/{key}/reference", f"/{key}/closed_loop"]

@@ -1,0 +1,153 @@
+"""A chained ride in closed loop: stages such as 0 -> 0.5 -> 0.8 -> 0.3 -> 0 m/s, each ridden by the
+library's entries (``MotionLibrary.route``: one entry when one gets there), joined end to start into
+one reference and driven through the closed loop of :mod:`skatelib.control.closed_loop` as one
+entry: between stages the robot rides on three feet with the push foot lifted beside the deck (the
+next entry starts where the last one ends: the riding stance of ``[terminal]``); after the last
+stage come the transfer of the push leg onto the deck and four-leg riding, as after any entry.
+
+Each stage is judged at its end by the plant's momentum speed (robot and board together) against
+its target: within 5 %, a stop below 0.05 m/s; the whole ride by the entry verdict
+(:mod:`skatelib.control.verdict`: no fall, no slip, torques and reach).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.control.closed_loop import run_entry
+from skatelib.control.reference import STAGE_ENDS
+from skatelib.control.settings import ClosedLoop
+from skatelib.control.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS, TrackResult
+from skatelib.library import schema
+from skatelib.library.margins import momentum_speed
+from skatelib.runtime import Entry, MotionLibrary
+
+
+def parse_ride(text: str) -> list[tuple[float, float]]:
+    """``"0:0.5,0.5:0.8,0.8:0"`` as stages [(0, 0.5), (0.5, 0.8), (0.8, 0)] [m/s].
+
+    Raises:
+        ValueError: A stage that is not FROM:TO, a negative or repeated speed, or a stage that does
+            not start where the one before ends.
+    """
+    stages: list[tuple[float, float]] = []
+    for part in text.split(","):
+        try:
+            a, b = (float(x) for x in part.split(":"))
+        except ValueError:
+            raise ValueError(f"--ride {text!r}: stage {part!r} is not FROM:TO in m/s (e.g. 0:0.5,0.5:0)") from None
+        if a < 0 or b < 0 or a == b or not (np.isfinite(a) and np.isfinite(b)):
+            raise ValueError(f"--ride {text!r}: stage {part!r} needs two different speeds of at least 0 m/s")
+        if stages and abs(stages[-1][1] - a) > 1e-9:
+            raise ValueError(f"--ride {text!r}: stage {part!r} starts at {a} m/s, the one before ends at "
+                             f"{stages[-1][1]} m/s")
+        stages.append((a, b))
+    return stages
+
+
+def _rot(yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def _moved(e: Entry, anchor: np.ndarray, yaw: float, t0: float) -> dict[str, np.ndarray]:
+    """``e``'s arrays turned by ``yaw`` about its first board position, moved there to ``anchor`` and
+    in time to start at ``t0``."""
+    R, origin = _rot(yaw), np.asarray(e.board_pos)[0, 0:2]
+
+    def place(xy: np.ndarray) -> np.ndarray:
+        return anchor + (xy - origin) @ R.T
+
+    state = np.array(e.state, dtype=np.float64)
+    state[:, 0:2] = place(state[:, 0:2])
+    state[:, 5] += yaw
+    state[:, 6:8] = state[:, 6:8] @ R.T
+    state[:, 24:26] = state[:, 24:26] @ R.T
+    control = np.array(e.control, dtype=np.float64)
+    forces = control[:, :12].reshape(len(control), 4, 3)
+    forces[:, :, 0:2] = forces[:, :, 0:2] @ R.T
+    control[:, :12] = forces.reshape(len(control), 12)
+    feet = np.array(e.foot_pos, dtype=np.float64)
+    feet[:, :, 0:2] = place(feet[:, :, 0:2])
+    board = np.array(e.board_pos, dtype=np.float64)
+    board[:, 0:2] = place(board[:, 0:2])
+    board[:, 3] += yaw
+    t = np.asarray(e.t, dtype=np.float64) - float(e.t[0]) + t0
+    return {schema.D_T: t, schema.D_STATE: state, schema.D_CONTROL: control,
+            schema.D_CONTACT: np.asarray(e.contact), schema.D_FOOT_POS: feet, schema.D_BOARD_POS: board}
+
+
+def chain(entries: list[Entry], key: str) -> tuple[Entry, list[float]]:
+    """One entry that rides ``entries`` back to back (each turned and moved to start where the one
+    before ends; the joint knot is the earlier entry's last), and the times the entries end [s]."""
+    parts = [_moved(entries[0], np.asarray(entries[0].board_pos)[0, 0:2], 0.0, float(entries[0].t[0]))]
+    for e in entries[1:]:
+        last = parts[-1]
+        yaw = float(last[schema.D_BOARD_POS][-1, 3] - np.asarray(e.board_pos)[0, 3])
+        parts.append(_moved(e, last[schema.D_BOARD_POS][-1, 0:2], yaw, float(last[schema.D_T][-1])))
+    ends = [float(p[schema.D_T][-1]) for p in parts]
+    arrays = {name: np.concatenate([parts[0][name]] + [p[name][1:] for p in parts[1:]])
+              for name in (schema.D_T, schema.D_STATE, schema.D_CONTACT, schema.D_FOOT_POS, schema.D_BOARD_POS)}
+    arrays[schema.D_CONTROL] = np.concatenate([p[schema.D_CONTROL] for p in parts])
+    attrs = {**entries[-1].attrs, schema.A_FROM_VELOCITY: entries[0].from_velocity_mps,
+             schema.A_N_STRIDES: sum(e.n_strides for e in entries), STAGE_ENDS: np.array(ends)}
+    return Entry(key, attrs, arrays, dict(entries[0].columns), dict(entries[0].units)), ends
+
+
+@dataclass(frozen=True)
+class StageResult:
+    """One stage of a ride: its entries, its target and the momentum speed at its end."""
+
+    v_from: float
+    v_to: float
+    keys: tuple[str, ...]
+    t_end_s: float
+    speed_mps: float
+    passed: bool
+
+
+@dataclass(frozen=True)
+class RideResult:
+    """A ride's stages and the whole run's verdict (the entry verdict, the last stage's speed); with
+    ``keep_trace`` the run as an entry (for a recording) and the joined reference."""
+
+    stages: tuple[StageResult, ...]
+    run: TrackResult
+    entry: Entry | None = None
+    reference: Entry | None = None
+
+    @property
+    def passed(self) -> bool:
+        return self.run.passed and all(s.passed for s in self.stages)
+
+
+def stage_passed(target: float, speed: float) -> bool:
+    """A stage's end speed against its target: within 5 %, or below 0.05 m/s for a stop."""
+    return abs(speed) <= STOP_TOLERANCE_MPS if target == 0 else abs(speed - target) <= SPEED_TOLERANCE * target
+
+
+def ride(lib: MotionLibrary, stages: list[tuple[float, float]], loop: ClosedLoop, keep_trace: bool = False
+         ) -> RideResult:
+    """Ride ``stages`` in closed loop (see the module docstring).
+
+    Raises:
+        EntryNotFound: A stage no chain of the library's entries rides (naming what can be reached).
+    """
+    routes = [lib.route(a, b) for a, b in stages]
+    flat = [e for r in routes for e in r]
+    key = "ride_" + "_".join(f"{v:g}" for v in [stages[0][0], *(b for _, b in stages)])
+    joined, ends = chain(flat, key)
+    result, run = run_entry(lib, joined, loop, keep_trace)
+    m, mb = loop.plant.mass_kg, loop.plant.board_mass_kg
+    times = np.array([u[0] for u in run.updates])
+    out, i = [], 0
+    for (a, b), r in zip(stages, routes, strict=True):
+        i += len(r)
+        t_end = ends[i - 1]
+        k = int(np.argmin(np.abs(times - t_end)))
+        v = float(momentum_speed(run.updates[k][1][:28], m, mb)) if len(times) and times[k] <= t_end + 0.05 else \
+            float("nan")
+        out.append(StageResult(a, b, tuple(e.key for e in r), t_end, v, bool(np.isfinite(v)) and stage_passed(b, v)))
+    kept = run.trace.as_entry(key, stages[-1][1], loop.settings.plant_substeps) if run.trace is not None else None
+    return RideResult(tuple(out), result, kept, joined)
