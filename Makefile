@@ -11,7 +11,7 @@ OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
 CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library
+.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library check-default
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build] extra only"
@@ -21,6 +21,7 @@ help:
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
 	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
+	@echo "make check-default build the default library and validate it (physics checks, chain continuity)"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 define install
@@ -81,6 +82,12 @@ reference: venv
 
 check-library: venv
 	$(BIN)/skatelib build tests/configs/tiny.toml --check $(REFERENCE) --no-progress $(CHECK_TOLERANCE)
+
+# The default library as a user gets it, validated: every entry's physics checks and chain continuity
+# (every end against every transition from its speed). CI runs it (a few minutes on 2 cores).
+check-default: venv
+	$(BIN)/skatelib build -o $(LIB) --no-progress
+	$(BIN)/skatelib validate $(LIB)
 
 bench: venv
 	$(BIN)/python -m benchmarks.run

@@ -1,9 +1,11 @@
-"""The default library (18 entries), ``--no-cache`` with the compiled functions cached: two
-workers over warm-start chains against a serial, cold build (the baseline)."""
+"""The default library (18 start-ups and 25 transitions), ``--no-cache`` with the compiled functions
+cached, 2 workers, against the start-ups alone (the library without ``[transitions]``) built the
+same way; and a transition entry's solve time against a start-up's, both from the full build."""
 
 from __future__ import annotations
 
 import dataclasses
+import statistics
 import time
 from pathlib import Path
 from typing import Any
@@ -14,27 +16,38 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
 from benchmarks.figures import Figure, Measured
 
-LIBRARY = Figure("library", "default library, 18 entries, 2 workers, --no-cache", "s", 30.0, "serial, cold")
-FIGURES = (LIBRARY,)
+LIBRARY = Figure("library", "default library, 18 start-ups + 25 transitions, 2 workers, --no-cache", "s", 180.0,
+                 "the 18 start-ups alone")
+TRANSITION = Figure("transition-entry", "a transition entry's solves (all strides tried) over a start-up's, means",
+                    "x", 2.0, "start-up entry")
+FIGURES = (LIBRARY, TRANSITION)
 
 
 def measure(out: Path) -> list[Measured]:
-    """Build the default library twice into ``out`` (the parallel build is the one kept)."""
+    """Build the start-ups alone, then the default library into ``out`` (the one kept)."""
     from skatelib.pipeline.build.orchestrate import build_library
 
     cfg = load_config(None, QuadrupedConfig)
-    serial_cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, warm_start=False))
-    t_serial = time.perf_counter()
-    rs = build_library(serial_cfg, out, BuildOptions(jobs=1, cache=False))
-    t_serial = time.perf_counter() - t_serial
-    t_par = time.perf_counter()
-    rp = build_library(cfg, out, BuildOptions(jobs=2, cache=False))
-    t_par = time.perf_counter() - t_par
-    it_s = sum(_iterations(o) for o in rs.outcomes)
-    it_p = sum(_iterations(o) for o in rp.outcomes)
-    note = (f"{len(rp.outcomes) - len(rp.failed)} of {len(rp.outcomes)} valid, {it_p} IPOPT iterations "
-            f"(serial cold: {it_s})")
-    return [Measured(LIBRARY, t_par, t_serial, note)]
+    startups = dataclasses.replace(cfg, transitions=dataclasses.replace(cfg.transitions, speeds_mps=()))
+    t_start = time.perf_counter()
+    build_library(startups, out, BuildOptions(jobs=2, cache=False))
+    t_start = time.perf_counter() - t_start
+    t_full = time.perf_counter()
+    report = build_library(cfg, out, BuildOptions(jobs=2, cache=False))
+    t_full = time.perf_counter() - t_full
+    outcomes: list[Any] = list(report.outcomes)
+    up = [_time(o) for o in outcomes if not o.result.from_velocity_mps]
+    tr = [_time(o) for o in outcomes if o.result.from_velocity_mps]
+    ratio = statistics.mean(tr) / statistics.mean(up)
+    note = (f"{len(outcomes) - len(report.failed)} of {len(outcomes)} valid, {len(up)} start-ups and {len(tr)} "
+            f"transitions, {sum(_iterations(o) for o in outcomes)} IPOPT iterations")
+    return [Measured(LIBRARY, t_full, t_start, note),
+            Measured(TRANSITION, ratio, 1.0, f"transition {statistics.mean(tr):.2f} s, start-up "
+                                              f"{statistics.mean(up):.2f} s per entry (solves, every attempt)")]
+
+
+def _time(outcome: Any) -> float:
+    return float(outcome.result.solve_time_s)
 
 
 def _iterations(outcome: Any) -> int:

@@ -69,8 +69,8 @@ class EntryReference:
         com = np.asarray(entry.state, dtype=np.float64)[:, None, 0:3]
         loaded = contact != SWING
         self.max_reach = float(np.max(np.linalg.norm((feet - com)[loaded], axis=-1)))
-        stage_ends = [float(v) for v in np.atleast_1d(entry.attrs.get(STAGE_ENDS, []))]
-        self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end, stage_ends)
+        self.stage_ends = tuple(float(v) for v in np.atleast_1d(entry.attrs.get(STAGE_ENDS, [])))  # a ride's
+        self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end, list(self.stage_ends))
         drag = np.tanh(p.tanh_scale_s_per_m * momentum_speed(np.asarray(entry.state), p.mass_kg, p.board_mass_kg))
         self._friction_integral = np.r_[0.0, np.cumsum(0.5 * (drag[1:] + drag[:-1]) * np.diff(self._t))]
 

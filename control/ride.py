@@ -13,12 +13,13 @@ its target: within 5 %, a stop below 0.05 m/s; the whole ride by the entry verdi
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from skatelib.control.closed_loop import run_entry
 from skatelib.control.reference import STAGE_ENDS
 from skatelib.control.settings import ClosedLoop
-from skatelib.control.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS, TrackResult
+from skatelib.control.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS
 from skatelib.library import schema
 from skatelib.library.margins import momentum_speed
 from skatelib.runtime import Entry, MotionLibrary
@@ -96,6 +97,34 @@ def chain(entries: list[Entry], key: str) -> tuple[Entry, list[float]]:
 
 
 @dataclass(frozen=True)
+class RidePlan:
+    """A ride's stages, the entries of each (a route), the joined entry and when each stage ends [s]."""
+
+    key: str
+    stages: tuple[tuple[float, float], ...]
+    routes: tuple[tuple[Entry, ...], ...]
+    entry: Entry
+    ends: tuple[float, ...]
+
+
+def plan_ride(lib: MotionLibrary, stages: list[tuple[float, float]]) -> RidePlan:
+    """The entries that ride ``stages`` (``MotionLibrary.route`` per stage), joined.
+
+    Raises:
+        EntryNotFound: A stage no chain of the library's entries rides (naming what can be reached).
+    """
+    routes = tuple(tuple(lib.route(a, b)) for a, b in stages)
+    flat = [e for r in routes for e in r]
+    key = "ride_" + "_".join(f"{v:g}" for v in [stages[0][0], *(b for _, b in stages)])
+    joined, ends = chain(flat, key)
+    stage_ends, i = [], 0
+    for r in routes:
+        i += len(r)
+        stage_ends.append(ends[i - 1])
+    return RidePlan(key, tuple(stages), routes, joined, tuple(stage_ends))
+
+
+@dataclass(frozen=True)
 class StageResult:
     """One stage of a ride: its entries, its target and the momentum speed at its end."""
 
@@ -109,17 +138,18 @@ class StageResult:
 
 @dataclass(frozen=True)
 class RideResult:
-    """A ride's stages and the whole run's verdict (the entry verdict, the last stage's speed); with
-    ``keep_trace`` the run as an entry (for a recording) and the joined reference."""
+    """A ride's stages and the whole run's verdict (the entry verdict of either plant, the last
+    stage's speed); with ``keep_trace`` the run as an entry (for a recording) and the joined
+    reference."""
 
     stages: tuple[StageResult, ...]
-    run: TrackResult
+    run: Any
     entry: Entry | None = None
     reference: Entry | None = None
 
     @property
     def passed(self) -> bool:
-        return self.run.passed and all(s.passed for s in self.stages)
+        return bool(self.run.passed) and all(s.passed for s in self.stages)
 
 
 def stage_passed(target: float, speed: float) -> bool:
@@ -127,27 +157,32 @@ def stage_passed(target: float, speed: float) -> bool:
     return abs(speed) <= STOP_TOLERANCE_MPS if target == 0 else abs(speed - target) <= SPEED_TOLERANCE * target
 
 
+def judge_stages(plan: RidePlan, speeds: list[float]) -> tuple[StageResult, ...]:
+    """Each stage against its target at its end (``speeds``: the plant's momentum speed then; a
+    run that stopped early has fewer, its missing stages fail)."""
+    out = []
+    for n, ((a, b), r, t_end) in enumerate(zip(plan.stages, plan.routes, plan.ends, strict=True)):
+        v = speeds[n] if n < len(speeds) else float("nan")
+        out.append(StageResult(a, b, tuple(e.key for e in r), t_end, v, bool(np.isfinite(v)) and stage_passed(b, v)))
+    return tuple(out)
+
+
 def ride(lib: MotionLibrary, stages: list[tuple[float, float]], loop: ClosedLoop, keep_trace: bool = False
          ) -> RideResult:
-    """Ride ``stages`` in closed loop (see the module docstring).
+    """Ride ``stages`` in closed loop on the model plant (see the module docstring).
 
     Raises:
         EntryNotFound: A stage no chain of the library's entries rides (naming what can be reached).
     """
-    routes = [lib.route(a, b) for a, b in stages]
-    flat = [e for r in routes for e in r]
-    key = "ride_" + "_".join(f"{v:g}" for v in [stages[0][0], *(b for _, b in stages)])
-    joined, ends = chain(flat, key)
-    result, run = run_entry(lib, joined, loop, keep_trace)
+    plan = plan_ride(lib, stages)
+    result, run = run_entry(lib, plan.entry, loop, keep_trace)
     m, mb = loop.plant.mass_kg, loop.plant.board_mass_kg
     times = np.array([u[0] for u in run.updates])
-    out, i = [], 0
-    for (a, b), r in zip(stages, routes, strict=True):
-        i += len(r)
-        t_end = ends[i - 1]
-        k = int(np.argmin(np.abs(times - t_end)))
-        v = float(momentum_speed(run.updates[k][1][:28], m, mb)) if len(times) and times[k] <= t_end + 0.05 else \
-            float("nan")
-        out.append(StageResult(a, b, tuple(e.key for e in r), t_end, v, bool(np.isfinite(v)) and stage_passed(b, v)))
-    kept = run.trace.as_entry(key, stages[-1][1], loop.settings.plant_substeps) if run.trace is not None else None
-    return RideResult(tuple(out), result, kept, joined)
+    speeds = []
+    for t_end in plan.ends:
+        k = int(np.argmin(np.abs(times - t_end))) if len(times) else -1
+        if k < 0 or abs(times[k] - t_end) > 0.05:
+            break
+        speeds.append(float(momentum_speed(run.updates[k][1][:28], m, mb)))
+    kept = run.trace.as_entry(plan.key, stages[-1][1], loop.settings.plant_substeps) if run.trace is not None else None
+    return RideResult(judge_stages(plan, speeds), result, kept, plan.entry)

@@ -66,12 +66,14 @@ class Ride:
     speed_mps: float = 0.0
 
 
-def entry_ride(lib: Any, key: str, loop: ClosedLoop, foot_radius_m: float) -> Ride:
-    """An entry, its transfer and the ride after it."""
-    entry = lib[key]
+def entry_ride(lib: Any, key: str | Any, loop: ClosedLoop, foot_radius_m: float) -> Ride:
+    """An entry (by key, or an entry made of the library's: a chained ride), its transfer and the
+    ride after it; a transition starts rolling at its start speed."""
+    entry = lib[key] if isinstance(key, str) else key
     ref = EntryReference(lib, entry, loop.model, loop.settings)
     return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64),
-                np.asarray(entry.board_pos[0], dtype=np.float64), np.asarray(entry.board_pos[-1], dtype=np.float64))
+                np.asarray(entry.board_pos[0], dtype=np.float64), np.asarray(entry.board_pos[-1], dtype=np.float64),
+                speed_mps=entry.from_velocity_mps)
 
 
 @dataclass
@@ -112,7 +114,7 @@ class TwinLoop:
         self.observer = DisturbanceObserver(loop.mpc.disturbance_gain)
         self.coast = CoastObserver(loop.mpc.coast_gain)
         self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
-        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm)
+        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, getattr(self.ref, "stage_ends", ()))
         self.run = TwinRun(self.meter.m)
         self.forces = np.zeros((3, 4))  # the MPC's, held over an update
         self._qp: MpcProblem | None = None

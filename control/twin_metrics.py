@@ -37,6 +37,7 @@ class TwinMeasures:
     friction_loss_Ns: float = 0.0
     momentum_at_end_mps: float = float("nan")
     momentum_after_1s_mps: float = float("nan")
+    stage_speeds_mps: list[float] = field(default_factory=list)  # a ride's: the momentum speed at each stage's end
     heading_at_end_rad: float = float("nan")
     lateral_at_end_m: float = float("nan")
     heading_at_stop_rad: float = float("nan")
@@ -49,8 +50,9 @@ class TwinMeasures:
 class Meter:
     """Updates :class:`TwinMeasures` from each tick's true state."""
 
-    def __init__(self, tick_s: float, torque_limit_Nm: float):
+    def __init__(self, tick_s: float, torque_limit_Nm: float, stage_ends: tuple[float, ...] = ()):
         self.m = TwinMeasures()
+        self.stage_ends = stage_ends
         self.tick_s = tick_s
         self.limit = torque_limit_Nm
         self.slip = np.zeros((3, 4))  # the open stances' integrated slip
@@ -111,6 +113,8 @@ class Meter:
             m.momentum_at_end_mps = float(st.system_v[0:2] @ heading)
         if np.isnan(m.momentum_after_1s_mps) and t >= t_end + 1.0:
             m.momentum_after_1s_mps = float(st.system_v[0:2] @ heading)
+        if len(m.stage_speeds_mps) < len(self.stage_ends) and t >= self.stage_ends[len(m.stage_speeds_mps)] - 1e-9:
+            m.stage_speeds_mps.append(float(st.system_v[0:2] @ heading))
 
 
     def drift(self, st: Any, t: float, t_end: float, board_end: np.ndarray) -> None:

@@ -1,5 +1,5 @@
 """A config of your own, built and validated: the shipped default config with a sweep of your own
-(here 0.3 and 0.5 m/s in 2 strides). Any other key of ``configs/cyberdog2.toml`` can be set the
+(here 0.3 and 0.5 m/s in 2 strides, and the transitions between them and to rest). Any other key of ``configs/cyberdog2.toml`` can be set the
 same way; an unknown key or a value out of range is refused, naming the file and the key.
 
     python examples/custom_config.py [--out out/custom.h5] [--speeds 0.3 0.5] [--strides 2]
@@ -34,6 +34,10 @@ compile = {str(compile_c).lower()}
 [sweep]
 velocities_mps = [{", ".join(f"{v:g}" for v in speeds)}]
 strides = [{strides}]
+
+[transitions]  # between the same speeds, and a stop from each
+speeds_mps = [{", ".join(f"{v:g}" for v in speeds)}]
+strides = [{strides}, {strides + 1}]
 ''')
     return path
 

@@ -3,6 +3,7 @@ from its cache, records failures, and gives the same library through a dask clus
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -236,7 +237,9 @@ def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
 
     monkeypatch.setattr(frontier_module, "FrontierSearch",
                         lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.2, max_mps=1.75))
-    report = build_library(load_config(TINY), tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
+    cfg = load_config(TINY)  # a probe past the frontier runs to the iteration limit: a lower one keeps it short
+    cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, max_iter=120))
+    report = build_library(cfg, tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
     stored = json.loads(MotionLibrary.open(report.path).attrs["frontier_json"])
     (point,) = stored["points"]
     ok = {p["velocity_mps"] for p in point["probes"] if p["ok"]}

@@ -90,7 +90,7 @@ def test_solution_sits_in_every_named_bound(small_cfg, solved):
     control = np.vstack([solved.control, np.zeros((1, len(CONTROL_NAMES)))])  # u_N, a placeholder held at 0
     by_name |= {n: control[:, i] for i, n in enumerate(CONTROL_NAMES)}
     names = list(by_name)
-    for term in prob.bound_terms:
+    for term in prob.bound_terms(0.0):
         lo, hi = term.bounds(K)
         cols = np.column_stack([by_name[n] for n in names[term.columns]])
         # IPOPT widens every variable bound by bound_relax_factor (1e-8) times max(1, |bound|) and
@@ -98,7 +98,7 @@ def test_solution_sits_in_every_named_bound(small_cfg, solved):
         slack_lo = 1e-7 + 1e-8 * np.maximum(1.0, np.abs(np.where(np.isfinite(lo), lo, 0.0)))
         slack_hi = 1e-7 + 1e-8 * np.maximum(1.0, np.abs(np.where(np.isfinite(hi), hi, 0.0)))
         assert np.all(cols >= lo - slack_lo) and np.all(cols <= hi + slack_hi), term.name
-    end = next(t for t in prob.bound_terms if t.name == "end_height")
+    end = next(t for t in prob.bound_terms(0.0) if t.name == "end_height")
     assert end.columns == slice(2, 3) and np.isfinite(end.bounds(K)[0][-1]).all()
     assert not np.isfinite(end.bounds(K)[0][:-1]).any()
 

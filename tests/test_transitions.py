@@ -205,3 +205,14 @@ def test_ride_arguments_are_checked(ride_path):
     assert bad.returncode == 2 and "starts at 0.3" in bad.stderr.replace("\n", " ")
     far = subprocess.run([*CLI, "track", str(ride_path), "--ride", "0:0.9"], capture_output=True, text=True)
     assert far.returncode != 0 and "reaches" in (far.stdout + far.stderr).replace("\n", " ")
+
+
+def test_a_chained_ride_passes_on_the_twin(ride_path):
+    """The same ride in full physics (MuJoCo twin, whole-body controller, the default model errors):
+    each stage within 5 % of its target at its end, the stop below 0.05 m/s, the twin's verdict
+    (slip, floor contacts, wheel lift-off) passed."""
+    pytest.importorskip("mujoco")
+    out = subprocess.run([*CLI, "track", str(ride_path), "--ride", "0:0.4,0.4:0.3,0.3:0", "--plant", "mujoco"],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "MuJoCo" in out.stdout and out.stdout.count("pass") >= 4

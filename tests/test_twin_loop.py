@@ -46,7 +46,8 @@ def libs(tmp_path_factory):
     return {
         "one": _solve(tmp, cache, "one", 0.4, 1),
         "margin": _solve(tmp, cache, "margin", 0.7, 2),
-        "edge": _solve(tmp, cache, "edge", 0.7, 2, "[contact]\nmin_deck_load_fraction = 0.0\n"),
+        "edge": _solve(tmp, cache, "edge", 0.7, 2,
+                       "[contact]\nmin_deck_load_fraction = 0.0\n[stance]\nride_load_fraction = 0.0\n"),
         # The public truck's pivot (1.1904 rad from the ground) read as the angle from the vertical,
         # as configs once were: the plan steers with K_board = 0.613 m, the truck with 0.098 m.
         "old_steering": _solve(tmp, cache, "old", 0.5, 3, "[board]\npivot_from_horizontal_rad = 0.3804\n"),

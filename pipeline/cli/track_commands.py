@@ -57,7 +57,7 @@ def track(
              "the physical twin (skatelib.sim), the MPC over a 510 Hz whole-body controller.")] = PlantKind.model,
     ride: Annotated[str | None, typer.Option(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
-             "library's entries (a route of several where no single one gets there), on the model plant.")] = None,
+             "library's entries (a route of several where no single one gets there), on either plant.")] = None,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
@@ -73,8 +73,9 @@ def track(
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
     _refuse_unsolved(library, maneuver is Maneuver.entries and not entry)
     if ride is not None:
-        alone = plant is PlantKind.model and maneuver is Maneuver.entries and not entry and video is None
-        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), save, alone)
+        alone = maneuver is Maneuver.entries and not entry and video is None
+        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), save,
+                    (alone, plant is PlantKind.mujoco))
         return
     if plant is PlantKind.mujoco:
         _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), maneuver,
@@ -114,13 +115,13 @@ def _recording(library: Path, save: Path | None) -> Any:
 
 
 def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any], save: Path | None,
-                alone: bool) -> None:
-    """A chained ride (:mod:`skatelib.control.ride`) on the model plant, its stages' table. ``errors``:
-    the plant's perturbation and its name; ``controller``: the MPC's and the run's settings; ``alone``:
-    no option that rides something else (the twin, the steering maneuver, entries, a video)."""
+                how: tuple[bool, bool]) -> None:
+    """A chained ride (:mod:`skatelib.control.ride`), its stages' table. ``errors``: the plant's
+    perturbation and its name; ``controller``: the MPC's and the run's settings; ``how``: no option
+    that rides something else (the steering maneuver, entries, a video), and whether on the twin."""
+    alone, on_twin = how
     if not alone:
-        raise SkatelibError("--ride rides its stages on the model plant: leave out --plant mujoco, --maneuver, "
-                            "--entry and --video")
+        raise SkatelibError("--ride rides its stages: leave out --maneuver, --entry and --video")
     (plant_error, perturb), (mpc, settings) = errors, controller
     from skatelib.control.ride import parse_ride, ride
     from skatelib.control.track import JobSpec, _quadruped
@@ -131,8 +132,17 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
     except ValueError as e:
         raise typer.BadParameter(str(e), param_hint="--ride") from None
     save_closed_loop = _recording(library, save)
-    lib = _quadruped(library, plant_error, "a ride")
-    result = ride(lib, stages, JobSpec(str(library), plant_error, mpc, settings).loop(lib), keep_trace=save is not None)
+    if on_twin:
+        from skatelib.pipeline.twin_ride import twin_ride
+        from skatelib.runtime import MotionLibrary
+
+        lib = MotionLibrary.open(library)
+        result = twin_ride(library, stages, plant_error, mpc, settings, keep=save is not None)
+        perturb = f"{perturb} (MuJoCo twin, whole-body controller)"
+    else:
+        lib = _quadruped(library, plant_error, "a ride")
+        result = ride(lib, stages, JobSpec(str(library), plant_error, mpc, settings).loop(lib),
+                      keep_trace=save is not None)
     if save is not None and save_closed_loop is not None and result.entry is not None:
         save_closed_loop(lib, [(result.run.key, result.entry)], save, {result.run.key: result.reference})
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))

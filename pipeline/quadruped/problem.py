@@ -200,11 +200,14 @@ class PushoffProblem:
             opt.final_velocity_tol, 1e-9)
         return P.reshape(-1)  # row-major (N, n_p) == column-major (n_p, N)
 
+    def bound_terms(self, v_from: float) -> list[Any]:
+        """The bound terms of a start at ``v_from`` (:mod:`skatelib.pipeline.quadruped.bounds`)."""
+        return bound_terms(self.config, self.system, self.schedule, self.start_state(v_from))
+
     def bounds(self, v_from: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Variable bounds (the bound terms' intersection) and constraint-row bounds; the start speed
         fixes the first knot, the targets enter through the stage parameters."""
-        terms = bound_terms(self.config, self.system, self.schedule, self.start_state(v_from))
-        lbx, ubx = variable_bounds(terms, len(self.schedule.t), self.n)
+        lbx, ubx = variable_bounds(self.bound_terms(v_from), len(self.schedule.t), self.n)
         return lbx, ubx, self.tr.lbg.copy(), self.tr.ubg.copy()
 
     def initial_guess(self, v_from: float, v_target: float, kind: str) -> np.ndarray:

@@ -138,10 +138,12 @@ def ride_table(result: Any, perturb: str) -> bool:
                   "[green]pass[/]" if s.passed else "[red]FAIL[/]")
     console.print(t)
     r = result.run
-    console.print(escape(f"{r.key}: {'pass' if r.passed else 'FAIL: ' + r.reasons}; each stage within 5 % of its "
-                         f"target at its end (a stop below 0.05 m/s); after the last: delivered {r.delivered_mps:.3f} "
-                         f"m/s, deck roll max {r.max_deck_roll_rad:.3f} rad, slips {r.slips}, stance torque max "
-                         f"{r.max_joint_torque_Nm:.1f} N m"))
+    late = [f"{s.v_from:g} -> {s.v_to:g}" for s in result.stages if not s.passed]
+    verdict = "pass" if result.passed else "FAIL: " + "; ".join(
+        ([f"stage {', '.join(late)} off its target"] if late else []) + ([r.reasons] if r.reasons else []))
+    console.print(escape(f"{r.key}: {verdict} (each stage within 5 % of its target at its end, a stop below "
+                         f"0.05 m/s); after the last: delivered {r.delivered_mps:.3f} m/s, deck roll max "
+                         f"{r.max_deck_roll_rad:.3f} rad"))
     return bool(result.passed)
 
 

@@ -9,6 +9,7 @@ from typing import Any
 from rich.markup import escape
 from skatelib.library import schema
 from skatelib.pipeline.views.console import console, count, entry_table, fmt, parameter_table
+from skatelib.pipeline.views.transitions_view import transitions_json, transitions_summary
 
 PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_commit", "git_dirty",
               "casadi_version", "ipopt_version", "pinocchio_version")
@@ -22,6 +23,7 @@ STORED_FIGURES = (*CLOSED_LOOP, ("wholebody", schema.A_WHOLEBODY))  # JSON attri
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
     """``skatelib info --json``: provenance, model and one record per entry."""
     entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
+                "from_velocity_mps": e.from_velocity_mps,
                 "success": e.success, "status": str(e.attrs[schema.A_STATUS]),
                 "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
                 "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
@@ -31,8 +33,9 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
     provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
     provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
                    if f"{name}_{k}" in lib.attrs}
+    transitions = transitions_json(lib) if lib.kind == "quadruped" else {}
     return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
-            "model": dict(lib.model), "entries": entries}
+            "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
 
 
 def library_summary(lib: Any, path: Any) -> None:
@@ -50,14 +53,16 @@ def library_summary(lib: Any, path: Any) -> None:
                                                 "Coulomb margin [N]", "defect"))
     for e in lib:
         ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
-        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / e.target_velocity_mps:+.2%}"
-               if "momentum_speed_mps" in ph and e.target_velocity_mps else "-")
+        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / (e.target_velocity_mps or 1.0):+.2%}"
+               if "momentum_speed_mps" in ph else "-")  # a stop: the speed left, over 1 m/s
         t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
                   escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
                   f"{e.duration_s:.2f}",
                   fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
                   off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
     console.print(t)
+    if lib.kind == "quadruped":
+        transitions_summary(lib)
     _wholebody_summary(lib)
     _closed_loop_summary(lib)
 

@@ -52,6 +52,7 @@ class Entry {
  public:
   std::string key;
   double target_velocity_mps = 0.0;
+  double from_velocity_mps = 0.0;  // format 1.4: a transition's start speed; 0 for a start-up from rest
   int n_strides = 0;
   bool success = false;
   std::string status;
@@ -255,6 +256,7 @@ class MotionLibrary {
         const auto& at = je.at("attrs");
         e.target_velocity_mps = at.at("target_velocity_mps").get<double>();
         e.n_strides = at.at("n_strides").get<int>();
+        e.from_velocity_mps = at.value("from_velocity_mps", 0.0);
         e.success = at.at("success").get<bool>();
         e.status = at.at("status").get<std::string>();
         const auto& r = je.at("rows");
@@ -287,11 +289,13 @@ class MotionLibrary {
     return std::any_of(entries.begin(), entries.end(), [&](const Entry& e) { return e.key == key; });
   }
 
-  // The successful entry whose target speed is nearest (fewest strides on ties; strides <= 0: any).
-  const Entry& select(double velocity, int strides = 0) const {
+  // The successful entry from `from_velocity` (0: a start-up from rest; speeds as keys name them, two
+  // decimals) whose target speed is nearest (fewest strides on ties; strides <= 0: any).
+  const Entry& select(double velocity, int strides = 0, double from_velocity = 0.0) const {
     const Entry* best = nullptr;
     for (const auto& e : entries) {
       if (!e.success || (strides > 0 && e.n_strides != strides)) continue;
+      if (std::round(e.from_velocity_mps * 100.0) != std::round(from_velocity * 100.0)) continue;
       if (best == nullptr) {
         best = &e;
         continue;
@@ -299,7 +303,7 @@ class MotionLibrary {
       const double de = std::fabs(e.target_velocity_mps - velocity), db = std::fabs(best->target_velocity_mps - velocity);
       if (de < db || (de == db && e.n_strides < best->n_strides)) best = &e;
     }
-    if (best == nullptr) throw std::out_of_range(path + ": no successful entry with those strides");
+    if (best == nullptr) throw std::out_of_range(path + ": no successful entry from that speed with those strides");
     return *best;
   }
 };
