@@ -1,6 +1,7 @@
 """A config of your own, built and validated: the shipped default config with a sweep of your own
-(here 0.3 and 0.5 m/s in 2 strides, and the transitions between them and to rest). Any other key of ``configs/cyberdog2.toml`` can be set the
-same way; an unknown key or a value out of range is refused, naming the file and the key.
+(here 0.3 and 0.5 m/s in 2 strides, and the transitions between them and to rest). Any other key
+of ``configs/cyberdog2.toml`` can be set the same way; an unknown key or a value out of range is
+refused, naming the file and the key.
 
     python examples/custom_config.py [--out out/custom.h5] [--speeds 0.3 0.5] [--strides 2]
 
