@@ -91,8 +91,10 @@ def chain(entries: list[Entry], key: str) -> tuple[Entry, list[float]]:
     arrays = {name: np.concatenate([parts[0][name]] + [p[name][1:] for p in parts[1:]])
               for name in (schema.D_T, schema.D_STATE, schema.D_CONTACT, schema.D_FOOT_POS, schema.D_BOARD_POS)}
     arrays[schema.D_CONTROL] = np.concatenate([p[schema.D_CONTROL] for p in parts])
-    attrs = {**entries[-1].attrs, schema.A_FROM_VELOCITY: entries[0].from_velocity_mps,
-             schema.A_N_STRIDES: sum(e.n_strides for e in entries), STAGE_ENDS: np.array(ends)}
+    attrs = {schema.A_TARGET_VELOCITY: entries[-1].target_velocity_mps, schema.A_SUCCESS: True,
+             schema.A_FROM_VELOCITY: entries[0].from_velocity_mps, STAGE_ENDS: np.array(ends),
+             schema.A_N_STRIDES: sum(e.n_strides for e in entries),
+             schema.A_STATUS: "a ride of " + " + ".join(e.key for e in entries)}
     return Entry(key, attrs, arrays, dict(entries[0].columns), dict(entries[0].units)), ends
 
 

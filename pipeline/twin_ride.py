@@ -10,9 +10,11 @@ from typing import Any
 
 
 def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: Any, settings: Any,
-              keep: bool = False) -> Any:
+              outputs: tuple[bool, Path | None] = (False, None)) -> Any:
     """Ride ``stages`` on the twin with ``perturb``'s errors; a :class:`skatelib.control.ride.RideResult`
-    whose ``run`` is the twin's verdict (with ``keep`` the run as an entry, for a recording)."""
+    whose ``run`` is the twin's verdict. ``outputs``: whether to keep the run as an entry (for a
+    recording), and a video to render it to (MuJoCo's offscreen renderer)."""
+    keep, video = outputs
     from skatelib.control.params import SkateParams
     from skatelib.control.ride import RideResult, judge_stages, plan_ride
     from skatelib.control.settings import ClosedLoop
@@ -31,9 +33,13 @@ def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: 
 
     radius = LegKinematics.from_library(lib).foot_radius_m
     twin = TwinLoop(lib, entry_ride(lib, plan.entry, loop, radius), loop, plant,
-                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s)), keep=keep)
+                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s)), keep=keep or video is not None)
     with threadpool_limits(limits=1, user_api="blas"):
         run = twin.ride()
     result = twin_result(plan.key, stages[-1][1], run)
     kept = run.record.as_entry(plan.key, stages[-1][1]) if keep and len(run.record.forces) > 1 else None
+    if video is not None:
+        from skatelib.sim.video import write_run
+
+        write_run(plant.m, run.qpos, video, fps=1.0 / twin.dt)
     return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), result, kept, plan.entry)

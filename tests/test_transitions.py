@@ -190,13 +190,17 @@ def test_route_takes_the_fastest_chain(ride_lib):
     assert [e.key for e in route(entries, 0.0, 0.3)] == ["v0.40_s1", "v0.40-0.30_s1"]
 
 
-def test_a_chained_ride_passes_in_closed_loop(ride_path):
+def test_a_chained_ride_passes_in_closed_loop(ride_path, tmp_path):
     """0 -> 0.4 -> 0.3 -> 0 on the model plant with the default model errors: each stage within 5 % of
-    its target, the stop below 0.05 m/s, no fall, no slip (the command's exit code and table)."""
-    out = subprocess.run([*CLI, "track", str(ride_path), "--ride", "0:0.4,0.4:0.3,0.3:0", "--no-progress"],
-                         capture_output=True, text=True)
+    its target, the stop below 0.05 m/s, no fall, no slip (the command's exit code and table); the
+    joined reference beside the run in a Rerun recording."""
+    pytest.importorskip("rerun")
+    rrd = tmp_path / "ride.rrd"
+    out = subprocess.run([*CLI, "track", str(ride_path), "--ride", "0:0.4,0.4:0.3,0.3:0", "--no-progress",
+                          "--save", str(rrd)], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
     assert out.stdout.count("pass") >= 4 and "v0.40-0.30_s1" in out.stdout
+    assert rrd.stat().st_size > 10_000
 
 
 def test_ride_arguments_are_checked(ride_path):

@@ -73,8 +73,8 @@ def track(
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
     _refuse_unsolved(library, maneuver is Maneuver.entries and not entry)
     if ride is not None:
-        alone = maneuver is Maneuver.entries and not entry and video is None
-        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), save,
+        alone = maneuver is Maneuver.entries and not entry
+        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), (save, video),
                     (alone, plant is PlantKind.mujoco))
         return
     if plant is PlantKind.mujoco:
@@ -114,14 +114,18 @@ def _recording(library: Path, save: Path | None) -> Any:
     return save_closed_loop
 
 
-def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any], save: Path | None,
-                how: tuple[bool, bool]) -> None:
+def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any],
+                outputs: tuple[Path | None, Path | None], how: tuple[bool, bool]) -> None:
     """A chained ride (:mod:`skatelib.control.ride`), its stages' table. ``errors``: the plant's
-    perturbation and its name; ``controller``: the MPC's and the run's settings; ``how``: no option
-    that rides something else (the steering maneuver, entries, a video), and whether on the twin."""
+    perturbation and its name; ``controller``: the MPC's and the run's settings; ``outputs``: a
+    recording and a video (the twin's) to write; ``how``: no option that rides something else (the
+    steering maneuver, entries), and whether on the twin."""
     alone, on_twin = how
+    save, video = outputs
     if not alone:
-        raise SkatelibError("--ride rides its stages: leave out --maneuver, --entry and --video")
+        raise SkatelibError("--ride rides its stages: leave out --maneuver and --entry")
+    if video is not None and not on_twin:
+        raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     (plant_error, perturb), (mpc, settings) = errors, controller
     from skatelib.control.ride import parse_ride, ride
     from skatelib.control.track import JobSpec, _quadruped
@@ -132,12 +136,16 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
     except ValueError as e:
         raise typer.BadParameter(str(e), param_hint="--ride") from None
     save_closed_loop = _recording(library, save)
+    if video is not None:
+        from skatelib.pipeline.build.preflight import check_output
+
+        check_output(video, [library], what="video")
     if on_twin:
         from skatelib.pipeline.twin_ride import twin_ride
         from skatelib.runtime import MotionLibrary
 
         lib = MotionLibrary.open(library)
-        result = twin_ride(library, stages, plant_error, mpc, settings, keep=save is not None)
+        result = twin_ride(library, stages, plant_error, mpc, settings, (save is not None, video))
         perturb = f"{perturb} (MuJoCo twin, whole-body controller)"
     else:
         lib = _quadruped(library, plant_error, "a ride")
@@ -146,6 +154,8 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
     if save is not None and save_closed_loop is not None and result.entry is not None:
         save_closed_loop(lib, [(result.run.key, result.entry)], save, {result.run.key: result.reference})
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
+    if video is not None:
+        console.print(escape(f"wrote {video}"))
     if not ride_table(result, perturb):
         raise typer.Exit(1)
 
