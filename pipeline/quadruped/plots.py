@@ -21,7 +21,7 @@ from skatelib.library.channels import GROUND
 from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.pipeline.views.console import console
-from skatelib.pipeline.views.figures import by_strides, library_name, panels, solved
+from skatelib.pipeline.views.figures import by_panel, library_name, panel_label, panels, solved
 from skatelib.runtime import Entry, MotionLibrary
 
 
@@ -43,40 +43,42 @@ def figures(lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[st
 
 
 def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
-    """Board speed (solid) and momentum speed (dashed) against time, per stride count."""
+    """Board speed (solid) and momentum speed (dashed) against time, per panel (start-ups by strides,
+    transitions by start speed)."""
     m = lib.model
-    groups = by_strides(lib)
+    groups = by_panel(lib)
     fig, axes = panels(plt, len(groups), f"{library_name(lib)}: board speed (solid) and momentum speed (dashed)")
     cmap = plt.get_cmap("viridis")
     speeds = sorted({e.target_velocity_mps for e in solved(lib)})
-    for ax, (n, entries) in zip(axes, groups.items(), strict=True):
+    for ax, (title, entries) in zip(axes, groups.items(), strict=True):
         for e in entries:
             c = cmap(speeds.index(e.target_velocity_mps) / max(1, len(speeds) - 1))
-            ax.plot(e.t, forward_speed(e.state), color=c, label=f"{e.target_velocity_mps:.2f} m/s")
+            ax.plot(e.t, forward_speed(e.state), color=c, label=panel_label(e))
             ax.plot(e.t, momentum_speed(e.state, m["robot_mass_kg"], m["board_mass_kg"]), "--", color=c, lw=1)
             ax.axhline(e.target_velocity_mps, color=c, lw=0.5, alpha=0.5)
-        ax.set_title(f"{n} stride{'s' if n != 1 else ''}", fontsize=10)
+        ax.set_title(title, fontsize=10)
         ax.set_ylabel("speed [m/s]")
         ax.grid(alpha=0.3)
-    axes[0].legend(title="label", fontsize=8, ncols=2)
+        ax.legend(title="label", fontsize=7, ncols=2, loc="center right")
     axes[-1].set_xlabel("time [s]")
     return fig
 
 
 def plot_deck_roll(lib: MotionLibrary, plt: Any) -> Any:
-    """Deck roll against time, per stride count, with the wheel-collision limit."""
+    """Deck roll against time, per panel (start-ups by strides, transitions by start speed), with the
+    wheel-collision limit."""
     limit = float(lib.model.get("board_roll_limit_rad", np.nan))
-    groups = by_strides(lib)
+    groups = by_panel(lib)
     fig, axes = panels(plt, len(groups), f"{library_name(lib)}: deck roll")
-    for ax, (n, entries) in zip(axes, groups.items(), strict=True):
+    for ax, (title, entries) in zip(axes, groups.items(), strict=True):
         for e in entries:
-            ax.plot(e.t, e.channel("board_roll"), label=f"{e.target_velocity_mps:.2f} m/s")
+            ax.plot(e.t, e.channel("board_roll"), label=panel_label(e))
         for sign in (-1, 1):
             ax.axhline(sign * limit, color="red", lw=0.8, ls=":")
-        ax.set_title(f"{n} stride{'s' if n != 1 else ''} (dotted: wheel-collision limit)", fontsize=10)
+        ax.set_title(f"{title} (dotted: wheel-collision limit)", fontsize=10)
         ax.set_ylabel("roll [rad]")
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8, ncols=3)
+        ax.legend(fontsize=7, ncols=3)
     axes[-1].set_xlabel("time [s]")
     return fig
 

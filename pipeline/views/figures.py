@@ -50,10 +50,28 @@ def solved(lib: MotionLibrary) -> list[Entry]:
     return [e for e in lib if e.success]
 
 
-def by_strides(lib: MotionLibrary) -> dict[int, list[Entry]]:
+def by_panel(lib: MotionLibrary) -> dict[str, list[Entry]]:
+    """The solved entries per panel: start-ups by stride count, then transitions by start speed."""
+    groups: dict[str, list[Entry]] = {}
+    for n, entries in by_strides(lib, starts_only=True).items():
+        groups[f"start-ups, {n} stride{'s' if n != 1 else ''}"] = entries
+    for e in sorted((e for e in solved(lib) if e.from_velocity_mps), key=lambda e: e.from_velocity_mps):
+        groups.setdefault(f"transitions from {e.from_velocity_mps:.2f} m/s", []).append(e)
+    return groups
+
+
+def panel_label(e: Entry) -> str:
+    """An entry's line label in a panel of :func:`by_panel`."""
+    if e.from_velocity_mps:
+        return f"to {e.target_velocity_mps:.2f} m/s, {e.n_strides} stride{'s' if e.n_strides != 1 else ''}"
+    return f"{e.target_velocity_mps:.2f} m/s"
+
+
+def by_strides(lib: MotionLibrary, starts_only: bool = False) -> dict[int, list[Entry]]:
     groups: dict[int, list[Entry]] = {}
     for e in solved(lib):
-        groups.setdefault(e.n_strides, []).append(e)
+        if not (starts_only and e.from_velocity_mps):
+            groups.setdefault(e.n_strides, []).append(e)
     return dict(sorted(groups.items()))
 
 
