@@ -15,6 +15,7 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.tasks import BuildTask, EntryOutcome, ordered, tasks_for
 from skatelib.pipeline.quadruped.transition_tasks import TransitionTask
 from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table
+from skatelib.pipeline.views.info_view import off_label
 
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
@@ -87,8 +88,7 @@ def summary(written: Written) -> None:
         figures = ["-"] * 6  # a failed solve's speeds and margins mean nothing: its status says why
         if r.success:
             momentum = (ph or {}).get("momentum_speed_mps")
-            label = r.target_velocity_mps
-            off = "-" if momentum is None else f"{(momentum - label) / (label or 1):+.2%}"  # a stop: over 1 m/s
+            off = off_label(momentum, r.target_velocity_mps)
             figures = [f"{r.final_velocity_mps:.4f}", fmt(ph, "momentum_speed_mps", "{:.4f}"), off,
                        fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
                        fmt(ph, "max_defect", "{:.1e}")]

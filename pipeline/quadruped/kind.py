@@ -98,7 +98,8 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         rep = check_trajectory(system, Trajectory.of(e), e.target_velocity_mps, from_velocity_mps=e.from_velocity_mps)
         failures = rep.failures(system)
         bad += bool(failures)
-        ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({100 * rep.momentum_speed_error:.2f} % off), "
+        off = f"{100 * rep.momentum_speed_error:.2f} % off" if e.target_velocity_mps else "a stop"
+        ok = (f"ok: rides at {rep.momentum_speed_mps:.3f} m/s ({off}), "
               f"Coulomb margin {rep.min_friction_margin_N:.2f} N, defect {rep.max_defect:.1e}")
         figures = {"momentum_speed_mps": rep.momentum_speed_mps, "momentum_speed_error": rep.momentum_speed_error,
                    "min_friction_margin_N": rep.min_friction_margin_N, "max_defect": rep.max_defect,

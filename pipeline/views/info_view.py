@@ -38,6 +38,13 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
             "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
 
 
+def off_label(momentum: float | None, label: float) -> str:
+    """How far the momentum speed ends from the label: in % of it, or for a stop the speed left."""
+    if momentum is None:
+        return "-"
+    return f"{(momentum - label) / label:+.2%}" if label else f"{momentum:+.3f} m/s"
+
+
 def library_summary(lib: Any, path: Any) -> None:
     """``skatelib info``: provenance, the model's parameters and the entry table."""
     a = lib.attrs
@@ -53,8 +60,7 @@ def library_summary(lib: Any, path: Any) -> None:
                                                 "Coulomb margin [N]", "defect"))
     for e in lib:
         ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
-        off = (f"{(ph['momentum_speed_mps'] - e.target_velocity_mps) / (e.target_velocity_mps or 1.0):+.2%}"
-               if "momentum_speed_mps" in ph else "-")  # a stop: the speed left, over 1 m/s
+        off = off_label(ph.get("momentum_speed_mps"), e.target_velocity_mps)
         t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
                   escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
                   f"{e.duration_s:.2f}",
@@ -94,7 +100,8 @@ def _closed_loop_summary(lib: Any) -> None:
         t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
                         ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
         for key, v in stored.items():
+            error = fmt(v, "speed_error", "{:+.1%}") if v.get("label_mps") else fmt(v, "delivered_mps", "{:+.3f} m/s")
             t.add_row(key, fmt(v, "label_mps", "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
-                      fmt(v, "speed_error", "{:+.1%}"), "pass" if v.get("passed") else "FAIL",
+                      error, "pass" if v.get("passed") else "FAIL",
                       escape(str(v.get("reasons") or "")))
         console.print(t)
