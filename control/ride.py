@@ -1,7 +1,8 @@
 """A chained ride in closed loop: stages such as 0 -> 0.5 -> 0.8 -> 0.3 -> 0 m/s, each ridden by the
 library's entries (``MotionLibrary.route``: one entry when one gets there), joined end to start into
 one reference and driven through the closed loop of :mod:`skatelib.control.closed_loop` as one
-entry (on the twin: ``skatelib.pipeline.twin_ride``, the same joined entry through the twin's loop): between stages the robot rides on three feet with the push foot lifted beside the deck (the
+entry (on the twin: ``skatelib.pipeline.twin_ride``, the same joined entry through the twin's
+loop). Between stages the robot rides on three feet with the push foot lifted beside the deck (the
 next entry starts where the last one ends: the riding stance of ``[terminal]``); after the last
 stage come the transfer of the push leg onto the deck and four-leg riding, as after any entry.
 

@@ -21,7 +21,7 @@ import numpy as np
 from skatelib.library.errors import ModelError
 from skatelib.pipeline.ocp.rotations import rpy_to_matrix
 
-ATTITUDE_MAX_RAD = 0.02  # the riding trunk's roll and pitch: near level (the end's tolerance is wider)
+ATTITUDE_MAX_RAD = 0.02  # the riding trunk's roll and pitch: near level, inside the end's tolerance
 
 
 def barycentric(triangle: np.ndarray, point: np.ndarray) -> np.ndarray:
@@ -31,25 +31,6 @@ def barycentric(triangle: np.ndarray, point: np.ndarray) -> np.ndarray:
     T = np.column_stack([b - a, c - a])
     lb, lc = np.linalg.solve(T, point - a)
     return np.array([1.0 - lb - lc, lb, lc])
-
-
-def _closest_on_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    s = float(np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0))
-    return a + s * (b - a)
-
-
-def loaded_point(triangle: np.ndarray, point: np.ndarray, fraction: float) -> np.ndarray:
-    """The point nearest ``point`` whose barycentric coordinates in ``triangle`` are all at least
-    ``fraction`` (< 1/3): ``point`` itself when they are, else its projection onto the inner
-    triangle of those points."""
-    if fraction >= 1.0 / 3.0:
-        raise ValueError(f"a share of {fraction} for each of three feet is more than a third")
-    if barycentric(triangle, point).min() >= fraction:
-        return point.copy()
-    centroid = triangle.mean(axis=0)
-    inner = centroid + (1.0 - 3.0 * fraction) * (triangle - centroid)  # vertices with shares (1-2f, f, f)
-    candidates = [_closest_on_segment(point, inner[i], inner[(i + 1) % 3]) for i in range(3)]
-    return min(candidates, key=lambda c: float(np.linalg.norm(c - point)))
 
 
 def riding_pose(robot: Any, targets: np.ndarray, com_offset: np.ndarray, push: int, q_nominal: np.ndarray,
