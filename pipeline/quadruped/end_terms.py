@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import S_BOARD_V, S_POS, S_RPY, S_VEL
 from skatelib.pipeline.ocp.terms import Stage
-from skatelib.pipeline.quadruped.knots import P_SPEED_SCALE, P_TARGET, board_origin, forward_speed
+from skatelib.pipeline.quadruped.knots import P_SPEED_SCALE, P_TARGET, board_origin, forward_speed, heading_frame
 from skatelib.pipeline.quadruped.system import SkateSystem
 
 INF = np.inf
@@ -34,10 +34,8 @@ class FinalSpeed:
     def rows(self, s: Stage) -> Any:
         x = s.x_next
         yaw = x[S_RPY][2]
-        dv = x[S_VEL][0:2] - x[S_BOARD_V]
-        lateral = -ca.sin(yaw) * dv[0] + ca.cos(yaw) * dv[1]
-        along = ca.cos(yaw) * dv[0] + ca.sin(yaw) * dv[1]
-        robot_fwd = ca.cos(yaw) * x[S_VEL][0] + ca.sin(yaw) * x[S_VEL][1]
+        along, lateral = heading_frame(yaw, x[S_VEL][0:2] - x[S_BOARD_V])
+        robot_fwd = heading_frame(yaw, x[S_VEL])[0]
         scale = s.p[P_SPEED_SCALE]
         return ca.vertcat((forward_speed(x) - s.p[P_TARGET]) / scale, (robot_fwd - s.p[P_TARGET]) / scale, along,
                           lateral)
@@ -52,8 +50,8 @@ class FinalSpeed:
 @dataclass(frozen=True)
 class RidingEnd:
     """At the end the centre of mass is over the deck where the riding stance has it: x and y in the
-    board's heading frame within ``tol_m`` of the stance's (``SkateSystem.riding_com_m``), so that a transition
-    from riding starts where this entry ends."""
+    board's heading frame within ``tol_m`` of the stance's (``SkateSystem.riding_com_m``), so that a
+    transition from riding starts where this entry ends."""
 
     system: SkateSystem
     tol_m: float
@@ -61,9 +59,7 @@ class RidingEnd:
 
     def rows(self, s: Stage) -> Any:
         x = s.x_next
-        yaw = x[S_RPY][2]
-        rel = x[S_POS] - board_origin(self.system, x)
-        return ca.vertcat(ca.cos(yaw) * rel[0] + ca.sin(yaw) * rel[1], -ca.sin(yaw) * rel[0] + ca.cos(yaw) * rel[1])
+        return ca.vertcat(*heading_frame(x[S_RPY][2], x[S_POS] - board_origin(self.system, x)))
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         com = self.system.riding_com_m[:2]

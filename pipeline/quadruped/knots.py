@@ -35,7 +35,11 @@ def board_origin(system: SkateSystem, x: Any) -> Any:
     return ca.vertcat(x[I_BOARD_XY], system.board.deck_height_m)
 
 
+def heading_frame(yaw: Any, xy: Any) -> tuple[Any, Any]:
+    """A horizontal vector ``xy`` along and across the heading ``yaw`` (across: to the left), symbolic."""
+    return ca.cos(yaw) * xy[0] + ca.sin(yaw) * xy[1], -ca.sin(yaw) * xy[0] + ca.cos(yaw) * xy[1]
+
+
 def forward_speed(x: Any) -> Any:
     """The board's speed along its heading (the robot's yaw) [m/s], symbolic."""
-    yaw = x[S_RPY][2]
-    return ca.cos(yaw) * x[S_BOARD_V][0] + ca.sin(yaw) * x[S_BOARD_V][1]
+    return heading_frame(x[S_RPY][2], x[S_BOARD_V])[0]

@@ -22,7 +22,7 @@ from skatelib.library.channels import (
 from skatelib.pipeline.ocp.terms import Stage, fixed
 from skatelib.pipeline.quadruped.config import StanceConfig
 from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
-from skatelib.pipeline.quadruped.knots import NXA, P_DRIVE, P_MU_GROUND, board_origin, forward_speed
+from skatelib.pipeline.quadruped.knots import NXA, P_DRIVE, P_MU_GROUND, board_origin, forward_speed, heading_frame
 from skatelib.pipeline.quadruped.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.system import END_BAND_M, SkateSystem
 
@@ -86,9 +86,7 @@ class PushFoot:
         p = self.system.push_index
         c0 = foot_centres_world(self.system, s.x[:NX])[:, p]
         c1 = foot_centres_world(self.system, s.x_next[:NX])[:, p]
-        yaw = s.x_next[S_RPY][2]
-        rel = c1 - board_origin(self.system, s.x_next)
-        lateral = -ca.sin(yaw) * rel[0] + ca.cos(yaw) * rel[1]
+        lateral = heading_frame(s.x_next[S_RPY][2], c1 - board_origin(self.system, s.x_next))[1]
         side = float(np.sign(self.system.stance.push_foot_board_xy[1]))
         return ca.vertcat(c1 - c0, c1[2], side * lateral)
 
@@ -176,8 +174,7 @@ class Propulsion:
 
     def rows(self, s: Stage) -> Any:
         p = self.system.push_index
-        yaw = s.x[S_RPY][2]
-        return s.p[P_DRIVE] * (ca.cos(yaw) * s.u[3 * p] + ca.sin(yaw) * s.u[3 * p + 1])
+        return s.p[P_DRIVE] * heading_frame(s.x[S_RPY][2], s.u[3 * p: 3 * p + 2])[0]
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = np.full((n, 1), -INF), np.full((n, 1), INF)
