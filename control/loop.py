@@ -175,6 +175,9 @@ class _Loop:
         if np.isnan(run.speed_after_1s_mps) and t >= self.t_1s - 1e-9:
             run.speed_after_1s_mps = float(forward_speed(s))
             run.momentum_after_1s_mps = self.plant.momentum_speed(s)
+        ends = self.ref.stage_ends
+        if len(run.stage_speeds_mps) < len(ends) and t >= ends[len(run.stage_speeds_mps)] - 1e-9:
+            run.stage_speeds_mps.append(self.plant.momentum_speed(s))
 
     def record(self, x_ref0: np.ndarray, forces: np.ndarray, qd: np.ndarray, c: np.ndarray) -> None:
         s = self.s

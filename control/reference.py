@@ -195,6 +195,7 @@ class Reference(Protocol):
     t0: float  # start [s]
     t_end: float  # end of the planned motion [s] (speeds are judged from here)
     t_stop: float  # end of the run [s]
+    stage_ends: tuple[float, ...]  # a ride's: when each stage ends [s] (empty otherwise)
     deck_z: float  # height of the deck's top [m]
     max_reach: float  # the farthest the plan puts a loaded foot from the COM [m]
 

@@ -22,7 +22,6 @@ from skatelib.control.reference import STAGE_ENDS
 from skatelib.control.settings import ClosedLoop
 from skatelib.control.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS
 from skatelib.library import schema
-from skatelib.library.margins import momentum_speed
 from skatelib.runtime import Entry, MotionLibrary
 
 
@@ -179,13 +178,5 @@ def ride(lib: MotionLibrary, stages: list[tuple[float, float]], loop: ClosedLoop
     """
     plan = plan_ride(lib, stages)
     result, run = run_entry(lib, plan.entry, loop, keep_trace)
-    m, mb = loop.plant.mass_kg, loop.plant.board_mass_kg
-    times = np.array([u[0] for u in run.updates])
-    speeds = []
-    for t_end in plan.ends:
-        k = int(np.argmin(np.abs(times - t_end))) if len(times) else -1
-        if k < 0 or abs(times[k] - t_end) > 0.05:
-            break
-        speeds.append(float(momentum_speed(run.updates[k][1][:28], m, mb)))
     kept = run.trace.as_entry(plan.key, stages[-1][1], loop.settings.plant_substeps) if run.trace is not None else None
-    return RideResult(judge_stages(plan, speeds), result, kept, plan.entry)
+    return RideResult(judge_stages(plan, run.stage_speeds_mps), result, kept, plan.entry)

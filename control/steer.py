@@ -72,6 +72,7 @@ class SteerReference:
         last = np.asarray(lib.select(speed_mps, clamp=True).state[-1], dtype=np.float64)
         self.p = p
         self.t0, self.t_end, self.t_stop = 0.0, 0.0, duration_s
+        self.stage_ends: tuple[float, ...] = ()
         self.speed = speed_mps
         wave = wave or RollWave()
         self.amplitude, self.period = wave.amplitude_rad, wave.period_s

@@ -65,6 +65,7 @@ class Run:
     max_joint_limit_excess_rad: float = 0.0
     friction_loss_Ns: float = 0.0  # rolling friction's impulse from the end of the plan to 1 s later
     momentum_at_end_mps: float = float("nan")
+    stage_speeds_mps: list[float] = field(default_factory=list)  # a ride's: the momentum speed at each stage's end
     speed_after_1s_mps: float = float("nan")
     momentum_after_1s_mps: float = float("nan")
     updates: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)

@@ -114,7 +114,7 @@ class TwinLoop:
         self.observer = DisturbanceObserver(loop.mpc.disturbance_gain)
         self.coast = CoastObserver(loop.mpc.coast_gain)
         self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
-        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, getattr(self.ref, "stage_ends", ()))
+        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, self.ref.stage_ends)
         self.run = TwinRun(self.meter.m)
         self.forces = np.zeros((3, 4))  # the MPC's, held over an update
         self._qp: MpcProblem | None = None
