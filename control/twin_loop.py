@@ -93,9 +93,10 @@ class TwinRun:
 
 
 class TwinLoop:
-    """One ride (an entry's by default: ``key``; or ``ride``) on a multibody plant."""
+    """One ride on a multibody plant: an entry's (``key``: its key, or an entry made of the library's,
+    a chained ride; :func:`entry_ride`) or a :class:`Ride`."""
 
-    def __init__(self, lib: Any, key: str | Ride, loop: ClosedLoop, plant: MultibodyPlant,
+    def __init__(self, lib: Any, key: Any, loop: ClosedLoop, plant: MultibodyPlant,
                  settings: TwinLoopSettings | None = None, keep: bool = False):
         self.loop, self.plant, self.keep = loop, plant, keep
         self.cfg = settings or TwinLoopSettings()

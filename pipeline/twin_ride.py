@@ -14,32 +14,14 @@ def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: 
     """Ride ``stages`` on the twin with ``perturb``'s errors; a :class:`skatelib.control.ride.RideResult`
     whose ``run`` is the twin's verdict. ``outputs``: whether to keep the run as an entry (for a
     recording), and a video to render it to (MuJoCo's offscreen renderer)."""
-    keep, video = outputs
-    from skatelib.control.params import SkateParams
     from skatelib.control.ride import RideResult, judge_stages, plan_ride
-    from skatelib.control.settings import ClosedLoop
-    from skatelib.control.twin_feedback import Sensors
-    from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings, entry_ride
     from skatelib.control.twin_verdict import twin_result
-    from skatelib.pipeline.twin_track import _check, _plant
-    from threadpoolctl import threadpool_limits
+    from skatelib.pipeline.twin_track import check_twin, ride_twin
 
-    lib = _check(path, perturb)
+    lib = check_twin(path, perturb)
     plan = plan_ride(lib, stages)
-    nominal = SkateParams.from_library(lib)
-    plant, errors = _plant(lib, perturb, nominal.mu)
-    loop = ClosedLoop(nominal, nominal, mpc=mpc, settings=settings)
-    from skatelib.control.kinematics import LegKinematics
-
-    radius = LegKinematics.from_library(lib).foot_radius_m
-    twin = TwinLoop(lib, entry_ride(lib, plan.entry, loop, radius), loop, plant,
-                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s)), keep=keep or video is not None)
-    with threadpool_limits(limits=1, user_api="blas"):
-        run = twin.ride()
-    result = twin_result(plan.key, stages[-1][1], run)
-    kept = run.record.as_entry(plan.key, stages[-1][1]) if keep and len(run.record.forces) > 1 else None
-    if video is not None:
-        from skatelib.sim.video import write_run
-
-        write_run(plant.m, run.qpos, video, fps=1.0 / twin.dt)
-    return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), result, kept, plan.entry)
+    run, _ = ride_twin(lib, plan.entry, perturb, (mpc, settings), outputs)
+    label = stages[-1][1]
+    kept = run.record.as_entry(plan.key, label) if outputs[0] and len(run.record.forces) > 1 else None
+    return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), twin_result(plan.key, label, run), kept,
+                      plan.entry)

@@ -31,31 +31,42 @@ class TwinJob:
     keep_run: bool = False
 
     def __call__(self) -> tuple[Any, str | None, Any]:
-        from skatelib.control.params import SkateParams
-        from skatelib.control.settings import ClosedLoop
-        from skatelib.control.twin_feedback import Sensors
-        from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings
         from skatelib.control.twin_verdict import twin_result
         from skatelib.library import schema
 
         lib = MotionLibrary.open(self.path)
-        nominal = SkateParams.from_library(lib)
-        plant, errors = _plant(lib, self.perturb, nominal.mu)
-        loop_settings = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s))
-        loop = TwinLoop(lib, self.key, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
-                        loop_settings, keep=self.video is not None or self.keep_run)
-        from threadpoolctl import threadpool_limits
-
-        with threadpool_limits(limits=1, user_api="blas"):
-            run = loop.ride()
         label = float(lib[self.key].attrs[schema.A_TARGET_VELOCITY])
-        result = twin_result(self.key, label, run)
+        run, written = ride_twin(lib, self.key, self.perturb, (self.mpc, self.settings),
+                                 (self.keep_run, None if self.video is None else Path(self.video)))
         entry = run.record.as_entry(self.key, label) if self.keep_run and len(run.record.forces) > 1 else None
-        if self.video is None:
-            return result, None, entry
-        from skatelib.sim.video import write_run
+        return twin_result(self.key, label, run), written, entry
 
-        return result, str(write_run(plant.m, run.qpos, Path(self.video), fps=1.0 / loop.dt)), entry
+
+def ride_twin(lib: MotionLibrary, what: Any, perturb: str, controller: tuple[Any, Any],
+              outputs: tuple[bool, Path | None] = (False, None)) -> tuple[Any, str | None]:
+    """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
+    with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread.
+    ``outputs``: whether to keep the run's record, and a video to render it to. Returns the run
+    (:class:`skatelib.control.twin_loop.TwinRun`) and the video's path or None."""
+    from skatelib.control.params import SkateParams
+    from skatelib.control.settings import ClosedLoop
+    from skatelib.control.twin_feedback import Sensors
+    from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings
+    from threadpoolctl import threadpool_limits
+
+    keep, video = outputs
+    mpc, settings = controller
+    nominal = SkateParams.from_library(lib)
+    plant, errors = _plant(lib, perturb, nominal.mu)
+    loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
+                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s)), keep=keep or video is not None)
+    with threadpool_limits(limits=1, user_api="blas"):
+        run = loop.ride()
+    if video is None:
+        return run, None
+    from skatelib.sim.video import write_run
+
+    return run, str(write_run(plant.m, run.qpos, video, fps=1.0 / loop.dt))
 
 
 @dataclass(frozen=True)
@@ -94,7 +105,8 @@ def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[Any, Any]:
     return TwinPlant(TwinFigures.from_library(lib), errors), errors
 
 
-def _check(path: Path, perturb: str) -> MotionLibrary:
+def check_twin(path: Path, perturb: str) -> MotionLibrary:
+    """The library at ``path`` for the twin: a quadruped one, ``perturb`` valid and MuJoCo there."""
     try:
         from skatelib.control.params import SkateParams
         from skatelib.sim.errors import parse_twin_perturbation
@@ -110,7 +122,7 @@ def _check(path: Path, perturb: str) -> MotionLibrary:
 
 def twin_steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: Any, settings: Any) -> list[TwinSteerJob]:
     """One steering job per speed on the twin."""
-    _check(path, perturb)
+    check_twin(path, perturb)
     return [TwinSteerJob(str(path), v, perturb, mpc, settings) for v in speeds]
 
 
@@ -129,7 +141,7 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = N
             entry key (naming the valid ones), or MuJoCo missing, before any work.
     """
     video, keep_runs = outputs
-    lib = _check(path, perturb)
+    lib = check_twin(path, perturb)
     from skatelib.control.mpc import MpcConfig
     from skatelib.control.settings import TrackSettings
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from skatelib.library.channels import I_BOARD_ROLL, S_BOARD_V, S_OMEGA, S_Q, S_RPY, S_VEL, U_QD
+from skatelib.library.channels import I_BOARD_ROLL, LEGS, S_BOARD_V, S_OMEGA, S_Q, S_RPY, S_VEL, U_QD
 from skatelib.pipeline.quadruped.system import END_BAND_M
 from skatelib.runtime import Entry, MotionLibrary
 from skatelib.runtime.routes import speed_key
@@ -74,7 +74,7 @@ def tolerances(lib: MotionLibrary, v: float) -> dict[str, float]:
 def chain_gaps(lib: MotionLibrary) -> list[ChainGap]:
     """Every (end, start) pair of successful entries that meet at a riding speed (see the module
     docstring); empty for a library without transitions."""
-    p = ["FL", "FR", "RL", "RR"].index(str(lib.model["push_leg"]))
+    p = LEGS.index(str(lib.model["push_leg"]))
     ok = [e for e in lib if e.success]
     out = []
     for b in (e for e in ok if e.from_velocity_mps > 0):

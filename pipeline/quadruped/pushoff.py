@@ -122,8 +122,9 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
 def solve(spec: PushoffSpec) -> SolveResult:
     """Solve one push-off problem. Never raises on solver failure: the result says so."""
     t_build = time.perf_counter()
-    built_before = (spec.config.resolved_json(), spec.n_strides, spec.window) in _PROBLEMS
-    prob = problem_for(spec.config, spec.n_strides, spec.window)
+    window = spec.window
+    built_before = (spec.config.resolved_json(), spec.n_strides, window) in _PROBLEMS
+    prob = problem_for(spec.config, spec.n_strides, window)
     build_time = 0.0 if built_before else time.perf_counter() - t_build
     v, v0 = spec.target_velocity_mps, spec.from_velocity_mps
     options = solver_options(spec)
