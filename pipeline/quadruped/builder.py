@@ -14,8 +14,7 @@ from skatelib.pipeline.build.contract import BuildOptions, Outcome, Written
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.tasks import BuildTask, EntryOutcome, ordered, tasks_for
 from skatelib.pipeline.quadruped.transition_tasks import TransitionTask
-from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table
-from skatelib.pipeline.views.info_view import off_label
+from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table, label_error
 
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
@@ -88,7 +87,7 @@ def summary(written: Written) -> None:
         figures = ["-"] * 6  # a failed solve's speeds and margins mean nothing: its status says why
         if r.success:
             momentum = (ph or {}).get("momentum_speed_mps")
-            off = off_label(momentum, r.target_velocity_mps)
+            off = label_error(r.target_velocity_mps, momentum, 2)
             figures = [f"{r.final_velocity_mps:.4f}", fmt(ph, "momentum_speed_mps", "{:.4f}"), off,
                        fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_torque_rigid_legs_Nm", "{:.2f}"),
                        fmt(ph, "max_defect", "{:.1e}")]

@@ -98,9 +98,12 @@ def frontier_table(points: list[Any]) -> None:
     console.print(t)
 
 
-def speed_error(r: Any) -> str:
-    """A closed-loop verdict's speed error: in % of the label, or for a stop the speed left."""
-    return f"{100 * r.speed_error:+.1f}%" if r.label_mps else f"{r.delivered_mps:+.3f} m/s"
+def label_error(label: float, speed: float | None, digits: int = 1) -> str:
+    """How far ``speed`` ends from its ``label``: in % of the label, or for a stop (label 0) the speed
+    left [m/s]; "-" when there is no speed."""
+    if speed is None:
+        return "-"
+    return f"{(speed - label) / label:+.{digits}%}" if label else f"{speed:+.3f} m/s"
 
 
 def track_table(results: list[Any], perturb: str) -> int:
@@ -111,7 +114,7 @@ def track_table(results: list[Any], perturb: str) -> int:
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
-                  f"{r.delivered_mps:.3f}", speed_error(r), f"{r.max_deck_roll_rad:.3f}",
+                  f"{r.delivered_mps:.3f}", label_error(r.label_mps, r.delivered_mps), f"{r.max_deck_roll_rad:.3f}",
                   f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
                   f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
                   f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
@@ -155,7 +158,7 @@ def twin_table(results: list[Any], perturb: str) -> int:
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
-                  speed_error(r), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
+                  label_error(r.label_mps, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
                   str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
                   f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}", f"{100 * r.saturated_share:.1f}%",
                   f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")

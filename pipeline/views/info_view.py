@@ -8,7 +8,7 @@ from typing import Any
 
 from rich.markup import escape
 from skatelib.library import schema
-from skatelib.pipeline.views.console import console, count, entry_table, fmt, parameter_table
+from skatelib.pipeline.views.console import console, count, entry_table, fmt, label_error, parameter_table
 from skatelib.pipeline.views.transitions_view import transitions_json, transitions_summary
 
 PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_commit", "git_dirty",
@@ -38,13 +38,6 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
             "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
 
 
-def off_label(momentum: float | None, label: float) -> str:
-    """How far the momentum speed ends from the label: in % of it, or for a stop the speed left."""
-    if momentum is None:
-        return "-"
-    return f"{(momentum - label) / label:+.2%}" if label else f"{momentum:+.3f} m/s"
-
-
 def library_summary(lib: Any, path: Any) -> None:
     """``skatelib info``: provenance, the model's parameters and the entry table."""
     a = lib.attrs
@@ -60,7 +53,7 @@ def library_summary(lib: Any, path: Any) -> None:
                                                 "Coulomb margin [N]", "defect"))
     for e in lib:
         ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
-        off = off_label(ph.get("momentum_speed_mps"), e.target_velocity_mps)
+        off = label_error(e.target_velocity_mps, ph.get("momentum_speed_mps"), 2)
         t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
                   escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
                   f"{e.duration_s:.2f}",
@@ -100,7 +93,7 @@ def _closed_loop_summary(lib: Any) -> None:
         t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
                         ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
         for key, v in stored.items():
-            error = fmt(v, "speed_error", "{:+.1%}") if v.get("label_mps") else fmt(v, "delivered_mps", "{:+.3f} m/s")
+            error = label_error(v.get("label_mps", 0.0), v.get("delivered_mps"))
             t.add_row(key, fmt(v, "label_mps", "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
                       error, "pass" if v.get("passed") else "FAIL",
                       escape(str(v.get("reasons") or "")))
