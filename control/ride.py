@@ -20,7 +20,7 @@ import numpy as np
 from skatelib.control.closed_loop import run_entry
 from skatelib.control.reference import STAGE_ENDS
 from skatelib.control.settings import ClosedLoop
-from skatelib.control.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS
+from skatelib.control.verdict import speed_verdict
 from skatelib.library import schema
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -156,7 +156,7 @@ class RideResult:
 
 def stage_passed(target: float, speed: float) -> bool:
     """A stage's end speed against its target: within 5 %, or below 0.05 m/s for a stop."""
-    return abs(speed) <= STOP_TOLERANCE_MPS if target == 0 else abs(speed - target) <= SPEED_TOLERANCE * target
+    return not speed_verdict(target, speed)[1]
 
 
 def judge_stages(plan: RidePlan, speeds: list[float]) -> tuple[StageResult, ...]:
@@ -165,7 +165,7 @@ def judge_stages(plan: RidePlan, speeds: list[float]) -> tuple[StageResult, ...]
     out = []
     for n, ((a, b), r, t_end) in enumerate(zip(plan.stages, plan.routes, plan.ends, strict=True)):
         v = speeds[n] if n < len(speeds) else float("nan")
-        out.append(StageResult(a, b, tuple(e.key for e in r), t_end, v, bool(np.isfinite(v)) and stage_passed(b, v)))
+        out.append(StageResult(a, b, tuple(e.key for e in r), t_end, v, stage_passed(b, v)))
     return tuple(out)
 
 

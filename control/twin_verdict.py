@@ -22,9 +22,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from skatelib.control.twin_loop import TwinRun
+from skatelib.control.verdict import speed_verdict
 
-SPEED_TOLERANCE = 0.05
-STOP_TOLERANCE_MPS = 0.05  # a stop (label 0) delivers at most this speed
 SLIP_LIMIT_M = 0.01
 HEADING_LIMIT_RAD = 0.1
 
@@ -67,13 +66,8 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
     """The verdict on one run (module docstring)."""
     m = run.measures
     delivered = m.momentum_after_1s_mps + m.friction_loss_Ns / m.system_mass_kg
-    err = (delivered - label) / label if label else delivered  # a stop: the speed left, over 1 m/s
+    err, reasons = speed_verdict(label, delivered)
     slip = m.max_slip_m()
-    reasons = []
-    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
-        reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
-    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
-        reasons.append(f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})")
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     if slip > SLIP_LIMIT_M:

@@ -86,15 +86,21 @@ def slip_reason(plant: Plant) -> str:
             f"{plant.p.mu:.2f})") if log.slips else ""
 
 
+def speed_verdict(label: float, delivered: float) -> tuple[float, list[str]]:
+    """A delivered speed against its label: the error (relative; for a stop, the speed left in m/s)
+    and the reason it fails (more than 5 % off, a stop above 0.05 m/s, no speed at all), if any."""
+    err = (delivered - label) / label if label else delivered
+    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
+        return err, [f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}"]
+    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
+        return err, [f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})"]
+    return err, []
+
+
 def track_result(key: str, label: float, run: Run, plant_params: SkateParams, torque_limit_Nm: float) -> TrackResult:
     """The verdict on one entry's run (see the module docstring)."""
     delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
-    err = (delivered - label) / label if label else delivered  # a stop: the speed left, over 1 m/s
-    reasons = []
-    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
-        reasons.append(f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}")
-    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
-        reasons.append(f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})")
+    err, reasons = speed_verdict(label, delivered)
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     if run.plant.log.slips:
