@@ -17,7 +17,6 @@ QP is DAQP's (dense dual active set), chosen in ``make bench`` against the other
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +25,6 @@ from skatelib.control.qp import QpSolveFailed
 
 NV = 18
 EQUALITY = 5  # DAQP's sense of a row held at equality (active and immutable)
-FLOOR_NORMAL = np.array([0.0, 0.0, 1.0])
 
 
 @dataclass(frozen=True)
@@ -66,7 +64,8 @@ class WbcTargets:
     Attributes:
         stance: (4,) feet held on their surface.
         on_deck: (4,) feet on (or bound for) the deck; the others' surface is the floor.
-        deck_normal: (3,) the deck's normal.
+        deck_R: (3, 3) the deck's rotation (its z axis the normal; the friction pyramid's facets
+            face its x and y axes).
         stance_acc: (3, 4) the stance feet's accelerations (their deck point's, with feedback).
         com_acc / angular_acc: The model COM point's acceleration; the trunk's angular
             acceleration in the trunk frame.
@@ -77,18 +76,13 @@ class WbcTargets:
 
     stance: np.ndarray
     on_deck: np.ndarray
-    deck_normal: np.ndarray
+    deck_R: np.ndarray
     stance_acc: np.ndarray
     com_acc: np.ndarray
     angular_acc: np.ndarray
     swing_acc: np.ndarray
     forces: np.ndarray
     posture_acc: np.ndarray
-
-    @property
-    def normals(self) -> np.ndarray:
-        """(3, 4) the surface normal under each foot."""
-        return np.where(self.on_deck, self.deck_normal[:, None], FLOOR_NORMAL[:, None])
 
 
 @dataclass
@@ -99,16 +93,18 @@ class WbcOutput:
     iterations: int
 
 
-def pyramid(normal: np.ndarray | list[float], mu: float) -> list[list[float]]:
-    """(4, 3) rows r with r . f <= 0 inside the 4-facet pyramid of ``mu`` about ``normal`` (a unit
-    vector away from the y axis: a floor's or a deck's), as nested lists (one tick builds a few)."""
-    x, y, z = (float(c) for c in normal)
-    s = math.hypot(x, z)  # t1 = normal x e_y / |..| = (-z, 0, x) / s; t2 = normal x t1
-    t1x, t1z = -z / s, x / s
-    t2x, t2y, t2z = y * x / s, -(z * z + x * x) / s, y * z / s
-    a, b, c = mu * x, mu * y, mu * z
-    return [[t1x - a, -b, t1z - c], [-t1x - a, -b, -t1z - c],
-            [t2x - a, t2y - b, t2z - c], [-t2x - a, -t2y - b, -t2z - c]]
+def surface_coefficients(mu: float, friction_rows: bool = True) -> np.ndarray:
+    """(1 + 4, 3) a stance foot's rows on a surface of rotation R, as ``coefficients @ R.T``: its
+    normal (R's z axis), then (with ``friction_rows``) the 4-facet pyramid of ``mu`` about it, facing
+    R's x and y axes (r . f <= 0 inside)."""
+    facets = [[1.0, 0.0, -mu], [-1.0, 0.0, -mu], [0.0, 1.0, -mu], [0.0, -1.0, -mu]]
+    return np.array([[0.0, 0.0, 1.0], *(facets if friction_rows else [])])
+
+
+def pyramid(frame: np.ndarray, mu: float) -> np.ndarray:
+    """(4, 3) rows r with r . f <= 0 inside the 4-facet pyramid of ``mu`` about the z axis of the
+    rotation ``frame``."""
+    return surface_coefficients(mu)[1:] @ frame.T
 
 
 class _Layout:
@@ -161,8 +157,8 @@ class WholeBodyController:
         import daqp
 
         self._daqp = daqp.solve
-        self._floor_rows = self._surface_rows(FLOOR_NORMAL)
-        self._deck: tuple[bytes, np.ndarray] = (b"", self._floor_rows)  # the last deck normal's rows
+        self._coefficients = surface_coefficients(mu, self.s.friction_rows)
+        self._floor_rows = self._coefficients.copy()  # on the floor R = I
 
     def solve(self, T: DynamicsTerms, tg: WbcTargets) -> WbcOutput:
         """Torques of this tick.
@@ -206,11 +202,6 @@ class WholeBodyController:
             out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s)
         return out
 
-    def _surface_rows(self, normal: np.ndarray) -> np.ndarray:
-        """(1 + 4, 3) a stance foot's rows on a surface: its normal, then the pyramid's facets (or
-        the normal alone without the friction rows)."""
-        return np.array([normal.tolist(), *(pyramid(normal, self.mu) if self.s.friction_rows else [])])
-
     def _constraints(self, L: _Layout, T: DynamicsTerms, tg: WbcTargets, JcT: np.ndarray) -> None:
         """This tick's rows and bounds into ``L``'s arrays (``JcT``: the stance feet's stacked
         Jacobians, transposed)."""
@@ -222,10 +213,8 @@ class WholeBodyController:
         rows[6:6 + nf, :NV] = JcT.T  # stance feet
         up[6:6 + nf] = lo[6:6 + nf] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
         if len(legs):
-            key = tg.deck_normal.tobytes()
-            if key != self._deck[0]:
-                self._deck = (key, self._surface_rows(tg.deck_normal))
-            blocks = np.where(tg.on_deck[legs, None, None], self._deck[1], self._floor_rows)
+            deck = self._coefficients @ tg.deck_R.T
+            blocks = np.where(tg.on_deck[legs, None, None], deck, self._floor_rows)
             rows.reshape(-1)[L.flat] = blocks.ravel()
         rows[r:, :NV] = T.M[j]  # joint torques within the limit
         rows[r:, NV:] = -JcT[j]

@@ -101,7 +101,7 @@ class TaskMaker:
         stance_acc = np.where(st.foot_touch == ON_FLOOR, -g.stance_gain * feet_v,
                               W @ spin + g.stance_gain * (st.deck_v[:, None] + spin - feet_v))
         posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
-        return WbcTargets(stance=self.stance.copy(), on_deck=on_deck, deck_normal=deck_R[:, 2], stance_acc=stance_acc,
+        return WbcTargets(stance=self.stance.copy(), on_deck=on_deck, deck_R=deck_R, stance_acc=stance_acc,
                           com_acc=com_acc, angular_acc=ang_acc, swing_acc=swing_acc, forces=forces,
                           posture_acc=posture)
 

@@ -117,7 +117,7 @@ def _standing(pair, **wbc):
 
 def _targets(com_acc, forces=None):
     return WbcTargets(stance=np.ones(4, dtype=bool), on_deck=np.zeros(4, dtype=bool),
-                      deck_normal=np.array([0.0, 0.0, 1.0]), stance_acc=np.zeros((3, 4)),
+                      deck_R=np.eye(3), stance_acc=np.zeros((3, 4)),
                       com_acc=np.asarray(com_acc, dtype=float), angular_acc=np.zeros(3), swing_acc=np.zeros((3, 4)),
                       forces=np.zeros((3, 4)) if forces is None else forces, posture_acc=np.zeros(12))
 
@@ -136,7 +136,7 @@ def test_wbc_holds_newton_euler_and_the_friction_pyramid(pair):
     assert np.allclose(gen[:6], 0.0, atol=1e-6) and np.allclose(gen[dyn.v_index], out.tau, atol=1e-9)
     ask = [0.0, 3.0, 0.0]
     inside = ctl.solve(T, _targets(ask))
-    rows = pyramid(np.array([0.0, 0.0, 1.0]), MU)
+    rows = pyramid(np.eye(3), MU)
     assert np.max(rows @ inside.forces) <= 1e-7
     assert inside.forces[1].sum() <= MU * inside.forces[2].sum() + 1e-6
     assert inside.forces[1].sum() / dyn.mass_kg < 2.5
