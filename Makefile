@@ -4,8 +4,10 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.skatelib-installed
 BUILD_STAMP := $(VENV)/.skatelib-build-installed
-# make library installs what building needs; the other targets everything (viewer, controller, dask, tools).
+# make library installs what building needs; the other targets everything (viewer, plots, dask, tools).
 ALL_EXTRAS := build,viz,plot,control,sim,video,dask,export,dev
+# make library: the build, and the controller and the twin that judge the default library's transitions
+BUILD_EXTRAS := build,control,sim
 CONFIG ?=
 OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
@@ -37,7 +39,7 @@ $(STAMP): pyproject.toml
 	touch $@ $(BUILD_STAMP)
 
 $(BUILD_STAMP): pyproject.toml
-	$(call install,build)
+	$(call install,$(BUILD_EXTRAS))
 	touch $@
 
 # PYTHON=... given on the command line or in the environment: a .venv of another Python version

@@ -19,9 +19,12 @@ from skatelib.pipeline.views.console import console, entry_table, err_console, f
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     """Compiled stage functions are cached in the cache folder too: it must be writable even with
-    ``--no-cache`` (with the cache on, ``build.check_options`` has checked it already)."""
+    ``--no-cache`` (with the cache on, ``build.check_options`` has checked it already). A twin
+    judge must be able to run."""
     from skatelib.pipeline.build.preflight import check_cache_dir
+    from skatelib.pipeline.quadruped.twin_judge import check_twin_judge
 
+    check_twin_judge(cfg)
     if cfg.optimization.compile and not opts.cache:
         check_cache_dir(entries_too=False)
 
@@ -60,14 +63,14 @@ def write(cfg: QuadrupedConfig, out: Path, finished: Sequence[Outcome], opts: Bu
     ``opts.frontier`` search the reachable-speed frontier of every stride count and store it.
     The frontier (or None) is the result's ``extra``."""
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
-    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json, library_searches
     from skatelib.pipeline.quadruped.system import SkateSystem
 
     outcomes = ordered(cast("list[EntryOutcome]", list(finished)))
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]
     solver_options = outcomes[0].result.ipopt_options if outcomes else {}
     search = FrontierSearch() if opts.frontier else None
-    points = find_frontier(cfg, cfg.sweep.strides, search, opts.jobs) if search is not None else None
+    points = find_frontier(cfg, library_searches(cfg), search, opts.jobs) if search is not None else None
     stored = frontier_json(points, search) if points is not None and search is not None else None
     path = write_quadruped_library(out, cfg, SkateSystem.from_config(cfg), entries, solver_options, stored)
     return Written(path, outcomes, points)

@@ -151,7 +151,7 @@ class QuadrupedConfig:
         d = json.loads(self.resolved_json())
         d.pop("meta")
         d.pop("sweep")
-        for key in ("speeds_mps", "stops", "strides"):  # what is built, not how a transition is posed
+        for key in ("speeds_mps", "stops", "strides", "twin_judge"):  # what is built and judged, not how it is posed
             d["transitions"].pop(key)
         d["optimization"].pop("compile")
         d["robot"]["urdf"] = hashlib.sha256(self.urdf_path.read_bytes()).hexdigest()

@@ -51,6 +51,10 @@ class TransitionsConfig:
                                       "easier than planned [-].", default=0.65)
     stop_speed_tol_mps: float = _f(1e-3, 0.2, "A stop ends with board and robot below this speed [m/s].",
                                    default=0.02)
+    twin_judge: tuple[str, ...] = _f(doc="Model-error sets (skatelib track --perturb's, for the twin; 'none': the "
+                                     "board as it is) under each of which a transition that passes the physics "
+                                     "checks is ridden on the MuJoCo twin; a stride count it fails is not kept (the "
+                                     "next is tried). Empty: the physics checks alone.", default=())
 
     def pairs(self) -> list[tuple[float, float]]:
         """(from, to) of every transition: each speed to each other, then to rest when ``stops``."""

@@ -1,10 +1,11 @@
 """The build tasks of the transitions (``[transitions]``): one per start speed, its targets solved
 from the nearest outwards, each with the fewest strides that pass the independent physics checks
-(``[transitions] strides`` tried in order) and warm-started from the last success of the same
-stride count and knot window in the task (the transitions from the fastest speed share one window;
-a window's kept constraint rows, and so the multipliers a warm start carries, differ from another's).
-A cell that passes with no stride count is stored as the failure of the last count tried, with its
-status."""
+(``[transitions] strides`` tried in order) and, with ``[transitions] twin_judge``, the closed
+loop on the physical twin (:mod:`skatelib.pipeline.quadruped.twin_judge`); warm-started from the
+last success of the same stride count and knot window in the task (the transitions from the
+fastest speed share one window; a window's kept constraint rows, and so the multipliers a warm
+start carries, differ from another's). A cell that passes with no stride count is stored as the
+failure of the last count tried, with its status."""
 
 from __future__ import annotations
 
@@ -18,7 +19,9 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem import Window
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
 from skatelib.pipeline.quadruped.tasks import EntryOutcome, _solve, entry_key
+from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, twin_refusals
 from skatelib.pipeline.quadruped.verify import judge
+from skatelib.pipeline.views.console import count
 
 
 @dataclass(frozen=True)
@@ -53,6 +56,7 @@ class TransitionTask:
                         ) -> EntryOutcome:
         outcome = None
         v0 = self.from_velocity_mps
+        refused: list[str] = []
         for n in self.config.transitions.strides:
             spec = PushoffSpec(self.config, v, n, ipopt=self.ipopt, from_velocity_mps=v0)
             cell = (n, spec.window)
@@ -64,7 +68,13 @@ class TransitionTask:
             if result.success and result.warm is not None:
                 warm[cell] = (result.warm, key)
             judged, physics = judge(self.config, result)
-            outcome = EntryOutcome(replace(judged, warm=None), payload["attempts"], cached, physics, key, note)
+            if judged.success and self.config.transitions.twin_judge:
+                reasons, _ = twin_refusals(self.config, judged, key, use_cache)
+                if reasons:
+                    judged = replace(judged, success=False, status=f"{TWIN_REFUSED}: {reasons}")
+                    refused.append(f"v{v0:.2f}-{v:.2f}: the twin refused {count(n, 'stride')} ({reasons})")
+            outcome = EntryOutcome(replace(judged, warm=None), payload["attempts"], cached, physics, key,
+                                   "; ".join(filter(None, [note, *refused])))
             if judged.success:
                 break
         assert outcome is not None  # strides is never empty (config check)

@@ -1,0 +1,107 @@
+"""The physical twin as a build's judge of transitions (``[transitions] twin_judge``): a candidate
+that passes the independent physics checks is ridden in closed loop on the MuJoCo twin
+(:func:`skatelib.pipeline.twin_track.ride_twin`: the MPC over the whole-body controller, the
+transfer and 1.5 s of riding) under each of the configured model-error sets, and judged as
+``skatelib track --plant mujoco`` judges an entry (:func:`skatelib.control.twin_verdict.twin_result`).
+A stride count the twin refuses is not kept: the next is tried.
+
+Verdicts are cached beside the solves, under the candidate's cache key, the error sets and a
+fingerprint of the controller's, the twin's and the judge's code and MuJoCo's version: a changed controller
+or twin rides every candidate again."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from skatelib.library import schema
+from skatelib.library.errors import ConfigError
+from skatelib.pipeline.build.cache import cache_key, cached_or_solved
+
+if TYPE_CHECKING:
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
+    from skatelib.pipeline.quadruped.pushoff import SolveResult
+
+FIELD = "transitions.twin_judge"
+TWIN_REFUSED = "Twin_Refused"  # the status of a candidate the twin refused
+
+
+def check_twin_judge(config: QuadrupedConfig) -> None:
+    """Refuse, before any solve, a judge that cannot run: MuJoCo or the controller missing, or an
+    error set that does not parse.
+
+    Raises:
+        ConfigError: Naming the config file and the field, and what to do.
+    """
+    sets = config.transitions.twin_judge
+    if not sets:
+        return
+    try:
+        from skatelib.sim.errors import parse_twin_perturbation
+    except ImportError as e:
+        raise ConfigError(config.path, FIELD, f"judging on the twin needs MuJoCo and the controller ({e}): "
+                                              "pip install 'skatelib[control,sim]', or set twin_judge = []") from e
+    for text in sets:
+        try:
+            parse_twin_perturbation(_errors(text), config.robot.friction_mu)
+        except ValueError as e:
+            raise ConfigError(config.path, FIELD, f"{text!r}: {e}") from e
+
+
+def _errors(text: str) -> str:
+    """A model-error set as ``track --perturb`` reads it: 'none' is the plant as planned."""
+    return "" if text == "none" else text
+
+
+@functools.cache
+def twin_fingerprint() -> str:
+    """A hash of the controller's and the twin's source, the ride's and this judge's, and MuJoCo's version."""
+    import mujoco
+    import skatelib.control
+    import skatelib.pipeline.twin_track
+    import skatelib.sim
+
+    h = hashlib.sha256(mujoco.__version__.encode())
+    files = [p for package in (skatelib.control, skatelib.sim) for folder in package.__path__
+             for p in sorted(Path(folder).rglob("*.py"))]
+    for path in [*files, Path(skatelib.pipeline.twin_track.__file__), Path(__file__)]:
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def twin_refusals(config: QuadrupedConfig, result: SolveResult, solve_key: str, use_cache: bool) -> tuple[str, bool]:
+    """Why the twin refuses ``result`` (the first error set of ``[transitions] twin_judge`` it fails
+    under, and how; '' when it passes under every one), and whether the verdict came from the cache."""
+    sets = tuple(config.transitions.twin_judge)
+    key = cache_key("twin_judge", solve_key, sets, twin_fingerprint())
+    payload, cached, _ = cached_or_solved(key, ("reasons",), lambda: {"reasons": _ride(config, result, sets)},
+                                          use_cache)
+    return str(payload["reasons"]), cached
+
+
+def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> str:
+    """Ride ``result`` on the twin under each of ``sets`` in turn; the first that fails and its
+    reasons ('' when none fails)."""
+    from skatelib.control.mpc import MpcConfig
+    from skatelib.control.settings import TrackSettings
+    from skatelib.control.twin_verdict import twin_result
+    from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
+    from skatelib.pipeline.quadruped.problem import system_for
+    from skatelib.pipeline.twin_track import ride_twin
+    from skatelib.runtime import MotionLibrary
+
+    key = schema.entry_key(result.target_velocity_mps, result.n_strides, result.from_velocity_mps)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = write_quadruped_library(Path(tmp) / "candidate.h5", config, system_for(config),
+                                       [entry_from_result(result)], result.ipopt_options)
+        lib = MotionLibrary.open(path)
+        for text in sets:
+            run, _ = ride_twin(lib, key, _errors(text), (MpcConfig(), TrackSettings()))
+            verdict: Any = twin_result(key, result.target_velocity_mps, run)
+            if not verdict.passed:
+                return f"{text}: {verdict.reasons}"
+    return ""

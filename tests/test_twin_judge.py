@@ -1,0 +1,51 @@
+"""The physical twin as the build's judge of transitions (``[transitions] twin_judge``): a real build
+of one speed-up and one slow-down (0.3 <-> 0.4 m/s, one stride), judged on the MuJoCo twin under
+the default model-error set, then under a floor too slippery to push or brake on (the negative
+control: the twin refuses both and the build stores them failed, with the twin's reasons)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from skatelib.library.errors import ConfigError
+from skatelib.pipeline.build.contract import BuildOptions
+from skatelib.pipeline.build.orchestrate import build_library
+from skatelib.pipeline.config import load_config
+from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, check_twin_judge
+from skatelib.runtime import MotionLibrary
+
+pytest.importorskip("mujoco")
+
+TINY_RIDE = Path(__file__).parent / "configs" / "tiny_ride.toml"
+DEFAULT_ERRORS = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
+
+
+def _config(tmp_path: Path, judge: list[str]):
+    path = tmp_path / f"judge{len(list(tmp_path.glob('*.toml')))}.toml"
+    sets = ", ".join(f'"{s}"' for s in judge)
+    path.write_text(f'extends = "{TINY_RIDE}"\n\n[meta]\nname = "judge"\n\n[transitions]\nstops = false\n'
+                    f"twin_judge = [{sets}]\n")
+    return load_config(path)
+
+
+def test_a_bad_error_set_is_refused_before_any_solve(tmp_path):
+    cfg = _config(tmp_path, ["mass=+10%", "gravity=2"])
+    with pytest.raises(ConfigError, match=r"transitions\.twin_judge.*gravity") as e:
+        check_twin_judge(cfg)
+    assert str(cfg.path) in str(e.value)
+
+
+def test_the_twin_keeps_what_it_rides_and_refuses_what_it_cannot(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))  # the second build reuses the solves
+    opts = BuildOptions(jobs=1, cache=True, progress=False)
+    good = build_library(_config(tmp_path, [DEFAULT_ERRORS]), tmp_path / "good.h5", opts)
+    lib = MotionLibrary.open(good.path)
+    keys = ["v0.30-0.40_s1", "v0.40-0.30_s1"]
+    assert all(lib[k].success for k in keys), [lib[k].attrs["status"] for k in keys]
+    slippery = build_library(_config(tmp_path, ["mu=0.05"]), tmp_path / "bad.h5", opts)
+    lib = MotionLibrary.open(slippery.path)
+    for k in keys:
+        status = str(lib[k].attrs["status"])
+        assert not lib[k].success and status.startswith(f"{TWIN_REFUSED}: mu=0.05: "), status
+    assert any("the twin refused 1 stride" in o.note for o in slippery.outcomes)
