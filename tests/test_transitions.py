@@ -220,3 +220,22 @@ def test_a_chained_ride_passes_on_the_twin(ride_path):
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "MuJoCo" in out.stdout and out.stdout.count("pass") >= 4
+
+
+def test_the_frontier_of_speed_ups_brackets_the_fastest_and_agrees_with_the_build(ride_lib):
+    """The fastest speed-up from 0.3 m/s in one stride (a coarse search, cold solves): the fastest is
+    a probe that passed and the first failure one that did not, within the resolution; the build's
+    own 0.3 -> 0.4 entry, which passed the same checks, lies below it."""
+    import dataclasses as dc
+
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, Lane, frontier_for
+
+    cfg = load_config(TINY_RIDE)  # a probe past the frontier runs to the iteration limit: a lower one keeps it short
+    cfg = dc.replace(cfg, optimization=dc.replace(cfg.optimization, max_iter=120))
+    point = frontier_for(cfg, 1, FrontierSearch(step_mps=0.4, resolution_mps=0.2, max_mps=1.5), Lane(0.3))
+    ok = {p.velocity_mps for p in point.probes if p.ok}
+    bad = {p.velocity_mps for p in point.probes if not p.ok}
+    assert point.lane.label == "speed-up from 0.30" and min(ok | bad) == pytest.approx(0.7)
+    assert point.fastest_mps in ok and point.first_failure_mps in bad
+    assert 0 < point.first_failure_mps - point.fastest_mps <= 0.2
+    assert ride_lib["v0.30-0.40_s1"].success and point.fastest_mps >= 0.4

@@ -72,7 +72,9 @@ def build(
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
     frontier: Annotated[bool, typer.Option(
-        "--frontier", help="Also search the reachable-speed frontier of every stride count and store it.")] = False,
+        "--frontier", help="Also search the reachable-speed frontier of every stride count (with transitions: the "
+                           "fastest speed-up from each riding speed, the fastest a stop stops from) and store it.")
+                                ] = False,
     force: Annotated[bool, typer.Option("--force", help="Overwrite an output file that is not a skatelib library.")
                      ] = False,
     check: Annotated[Path | None, typer.Option(
@@ -131,7 +133,12 @@ def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[floa
 def frontier(
     config: ConfigArg = None,
     strides: Annotated[list[int] | None, typer.Option("--strides", "-s", help="Stride counts (repeatable); "
-                                                      "default: the config's sweep.")] = None,
+                                                      "default: the config's sweep (with --from or --stops: "
+                                                      "its transitions').")] = None,
+    from_speeds: Annotated[list[float] | None, typer.Option(
+        "--from", min=0.05, max=3.0, help="Search the fastest speed-up from this riding speed instead of the "
+                                          "start-ups (repeatable) [m/s].")] = None,
+    stops: Annotated[bool, typer.Option("--stops", help="Search the fastest speed a stop stops from.")] = False,
     start: Annotated[float, typer.Option(min=0.05, max=3.0, help="First speed tried [m/s].")] = 0.5,
     step: Annotated[float, typer.Option(min=0.01, max=1.0, help="Climbing step [m/s].")] = 0.25,
     resolution: Annotated[float, typer.Option(min=0.001, max=0.5, help="Bisection resolution [m/s].")] = 0.02,
@@ -140,12 +147,13 @@ def frontier(
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
-    (warm-started climb, then bisection)."""
+    (climb, then bisection): of the start-ups, or of the speed-ups from riding speeds (--from) and
+    the stops (--stops)."""
     from skatelib.library.atomic import write_atomic
     from skatelib.pipeline.build.preflight import check_cache_dir, check_output
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
-    from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.frontier import FrontierSearch, Lane, find_frontier, frontier_json
 
     cfg = load_config(config, QuadrupedConfig)
     if out is not None:
@@ -153,15 +161,18 @@ def frontier(
     if cfg.optimization.compile:
         check_cache_dir(entries_too=False)
     search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
-    counts = sorted(set(strides or cfg.sweep.strides))
-    console.print(f"searching the frontier of {count(len(counts), 'stride count')} ({', '.join(map(str, counts))}; "
-                  "each a climb and a bisection of solves on its own worker, about 10-30 s each)")
+    lanes = [Lane(v) for v in sorted(set(from_speeds or ()))] + ([Lane(stop=True)] if stops else [])
+    counts = sorted(set(strides or (cfg.transitions.strides if lanes else cfg.sweep.strides)))
+    searches = [(lane, n) for lane in lanes or [Lane()] for n in counts]
+    kinds = ", ".join(sorted({lane.label for lane, _ in searches}))
+    console.print(f"searching {count(len(searches), 'frontier')} ({kinds}; {', '.join(map(str, counts))} strides; "
+                  "each a climb and a bisection of solves on its own worker, about 10-60 s each)")
 
     def done(point: Any, finished: int) -> None:
-        console.print(escape(f"  {point.n_strides} strides: {point.fastest_mps:.3f} m/s, stopped by {point.limit} "
-                             f"({finished}/{len(counts)} done)"))
+        console.print(escape(f"  {point.lane.label}, {point.n_strides} strides: {point.fastest_mps:.3f} m/s, stopped "
+                             f"by {point.limit} ({finished}/{len(searches)} done)"))
 
-    points = find_frontier(cfg, counts, search, jobs, done)
+    points = find_frontier(cfg, searches, search, jobs, done)
     frontier_table(points)
     if out is not None:
         write_atomic(out, frontier_json(points, search).encode())

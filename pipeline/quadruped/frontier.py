@@ -1,18 +1,22 @@
 """The reachable-speed frontier: per stride count, the fastest label that converges and passes the
-independent physics checks.
+independent physics checks; for transitions, per start speed the fastest speed-up, and the fastest
+speed a stop of so many strides stops from.
 
-Per stride count, a warm-start chain climbs in steps of ``step_mps`` from ``start_mps`` until a
-speed fails (IPOPT does not converge from the warm start nor cold, or the physics checks refuse
-the result); then it bisects between the last success and the first failure, warm-starting from
-the last success, until the gap is at most ``resolution_mps``. Stride counts run in parallel
-processes, like the sweep.
+Each lane (:class:`Lane`: the start-ups, the speed-ups from one riding speed, or the stops) and
+stride count is one search: it climbs in steps of ``step_mps`` from ``start_mps`` (a speed-up: from
+its start speed plus a step) until a speed fails (IPOPT does not converge, warm nor cold, or the
+physics checks refuse the result); then it bisects between the last success and the first failure
+until the gap is at most ``resolution_mps``. Start-ups warm-start along the search; transitions
+solve cold (their knot window changes with the speeds, and with it the multipliers a warm start
+would carry). Searches run in parallel processes, like the sweep. The twin does not judge here
+(``[transitions] twin_judge`` judges a build's candidates): the frontier is the plan's reach.
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
@@ -41,15 +45,39 @@ class FrontierSearch:
 
 
 @dataclass(frozen=True)
+class Lane:
+    """What a search varies: a start-up's label (the default), a speed-up's target from
+    ``from_mps``, or (``stop``) the speed a stop starts from."""
+
+    from_mps: float = 0.0
+    stop: bool = False
+
+    @property
+    def label(self) -> str:
+        return "stop (from)" if self.stop else f"speed-up from {self.from_mps:.2f}" if self.from_mps else "start-up"
+
+    def spec(self, config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None) -> PushoffSpec:
+        """The problem of the probe at ``v``."""
+        if self.stop:
+            return PushoffSpec(config, 0.0, strides, from_velocity_mps=v)
+        return PushoffSpec(config, v, strides, warm=warm, from_velocity_mps=self.from_mps)
+
+    def start(self, search: FrontierSearch) -> float:
+        return round(self.from_mps + search.step_mps, 6) if self.from_mps and not self.stop else search.start_mps
+
+
+@dataclass(frozen=True)
 class FrontierPoint:
     """The frontier of one stride count.
 
     Attributes:
         n_strides: Push strides.
-        fastest_mps: Fastest label that converged and validated (0 when even the start failed).
+        fastest_mps: Fastest label that converged and validated (0 when even the start failed); for
+            a stop, the fastest start speed.
         first_failure_mps: Slowest label tried that failed above it (``None``: ``max_mps`` was reached).
         limit: The status of that failure (what stopped it), or ``"search limit"``.
         probes: Every label tried, in order.
+        from_mps / stop: The lane (:class:`Lane`).
     """
 
     n_strides: int
@@ -57,58 +85,78 @@ class FrontierPoint:
     first_failure_mps: float | None
     limit: str
     probes: tuple[Probe, ...]
+    from_mps: float = 0.0
+    stop: bool = False
+
+    @property
+    def lane(self) -> Lane:
+        return Lane(self.from_mps, self.stop)
 
 
-def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None) -> tuple[SolveResult, Probe]:
+def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None, lane: Lane
+         ) -> tuple[SolveResult, Probe]:
     """Solve warm (when given) and else cold; judge the converged result with the physics checks."""
-    result = solve(PushoffSpec(config, v, strides, warm=warm))
+    result = solve(lane.spec(config, v, strides, warm))
     if not result.success and warm is not None:
-        result = solve(PushoffSpec(config, v, strides))
+        result = solve(lane.spec(config, v, strides, None))
     judged, physics = judge(config, result)
     probe = Probe(v, judged.success, judged.status, result.iterations, physics.get("momentum_speed_mps", float("nan")))
     return result, probe
 
 
-def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch) -> FrontierPoint:
-    """Climb, then bisect, along one warm-start chain (a module-level function for worker processes)."""
+def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch, lane: Lane = Lane()) -> FrontierPoint:
+    """Climb, then bisect, one lane and stride count (a module-level function for worker processes)."""
     probes: list[Probe] = []
     best, best_warm, fail, limit = 0.0, None, None, "search limit"
-    v = search.start_mps
+    warms = lane == Lane()  # start-ups only (module docstring)
+    v = lane.start(search)
     while v <= search.max_mps + 1e-9:
-        result, probe = _try(config, v, strides, best_warm)
+        result, probe = _try(config, v, strides, best_warm, lane)
         probes.append(probe)
         if not probe.ok:
             fail, limit = v, probe.status
             break
-        best, best_warm = v, result.warm
+        best, best_warm = v, result.warm if warms else None
         v = round(v + search.step_mps, 6)
     lo = best
     while fail is not None and fail - lo > search.resolution_mps:
         mid = round((lo + fail) / 2, 6)
-        result, probe = _try(config, mid, strides, best_warm)
+        result, probe = _try(config, mid, strides, best_warm, lane)
         probes.append(probe)
         if probe.ok:
-            lo, best, best_warm = mid, mid, result.warm
+            lo, best, best_warm = mid, mid, result.warm if warms else None
         else:
             fail, limit = mid, probe.status
-    return FrontierPoint(strides, best, fail, limit, tuple(probes))
+    return FrontierPoint(strides, best, fail, limit, tuple(probes), lane.from_mps, lane.stop)
 
 
-def find_frontier(config: QuadrupedConfig, strides: Sequence[int], search: FrontierSearch = FrontierSearch(),
-                  jobs: int = 2, done: Callable[[FrontierPoint, int], None] | None = None) -> list[FrontierPoint]:
-    """The frontier of every stride count, one worker process per stride count; ``done(point,
-    finished)`` is called as each stride count finishes."""
+def find_frontier(config: QuadrupedConfig, searches: Sequence[tuple[Lane, int]],
+                  search: FrontierSearch = FrontierSearch(), jobs: int = 2,
+                  done: Callable[[FrontierPoint, int], None] | None = None) -> list[FrontierPoint]:
+    """The frontier of every (lane, stride count) of ``searches``, one worker process each;
+    ``done(point, finished)`` is called as each finishes."""
     from joblib import Parallel, delayed, parallel_config
 
-    cfg = replace(config, sweep=replace(config.sweep, strides=tuple(strides)))
     points: list[FrontierPoint] = []
+    order = sorted(searches, key=lambda ls: -ls[1])  # most strides first: the longest solves
     with parallel_config(backend="loky", inner_max_num_threads=1):  # BLAS/OpenMP at 1 thread in the workers only
-        for point in Parallel(n_jobs=min(jobs, len(strides)), backend="loky", return_as="generator_unordered")(
-                delayed(frontier_for)(cfg, s, search) for s in sorted(strides, reverse=True)):
+        for point in Parallel(n_jobs=min(jobs, len(order)), backend="loky", return_as="generator_unordered")(
+                delayed(frontier_for)(config, s, search, lane) for lane, s in order):
             points.append(point)
             if done is not None:
                 done(point, len(points))
-    return sorted(points, key=lambda p: p.n_strides)
+    return sorted(points, key=lambda p: (p.stop, p.from_mps, p.n_strides))
+
+
+def library_searches(config: QuadrupedConfig) -> list[tuple[Lane, int]]:
+    """What ``build --frontier`` searches: the start-ups of every sweep stride count, and with
+    transitions the speed-ups from each riding speed and the stops, of every transition stride count."""
+    out = [(Lane(), s) for s in sorted(config.sweep.strides)]
+    t = config.transitions
+    if t.speeds_mps:
+        out += [(Lane(v), s) for v in sorted(t.speeds_mps) for s in t.strides]
+        out += [(Lane(stop=True), s) for s in t.strides] if t.stops else []
+    return out
 
 
 def frontier_json(points: Sequence[FrontierPoint], search: FrontierSearch) -> str:

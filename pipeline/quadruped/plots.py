@@ -5,9 +5,9 @@
 * ``deck_roll``: the deck roll over time, the same panels, with the wheel-collision limit;
 * ``push_forces``: per entry, the ground foot's tangential force |f_t| against Coulomb's limit
   mu f_n (and the planning limit mu_plan f_n) while it pushes;
-* ``frontier``: per stride count, the labels tried by the frontier search (converged and passing
-  the physics checks, or not) and the fastest that passes; from the library's ``frontier_json``
-  (``build --frontier``) or a ``skatelib frontier -o`` file.
+* ``frontier``: per search (start-ups, speed-ups, stops) and stride count, the labels tried by the
+  frontier search (converged and passing the physics checks, or not) and the fastest that passes;
+  from the library's ``frontier_json`` (``build --frontier``) or a ``skatelib frontier -o`` file.
 """
 
 from __future__ import annotations
@@ -122,21 +122,27 @@ def plot_push_forces(lib: MotionLibrary, plt: Any) -> Any:
 
 
 def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
-    """Tried labels per stride count (dot: passes, cross: fails) and the fastest that passes."""
-    fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
-    for p in frontier["points"]:
-        n = p["n_strides"]
+    """Tried labels per search and stride count (dot: passes, cross: fails) and the fastest that
+    passes (a stop: the start speed)."""
+    from skatelib.pipeline.quadruped.frontier import Lane
+
+    points = frontier["points"]
+    fig, ax = plt.subplots(figsize=(7, 1.5 + 0.5 * len(points)), layout="constrained")
+    ticks = []
+    for y, p in enumerate(points):
+        lane = Lane(p.get("from_mps", 0.0), p.get("stop", False))  # files of start-ups only lack them
+        ticks.append(f"{p['n_strides']}" if lane == Lane() else f"{lane.label}, {p['n_strides']}")
         ok = [q["velocity_mps"] for q in p["probes"] if q["ok"]]
         bad = [q["velocity_mps"] for q in p["probes"] if not q["ok"]]
-        ax.scatter(ok, [n] * len(ok), marker="o", color="C2", s=18, zorder=3)
-        ax.scatter(bad, [n] * len(bad), marker="x", color="C3", s=22, zorder=3)
+        ax.scatter(ok, [y] * len(ok), marker="o", color="C2", s=18, zorder=3)
+        ax.scatter(bad, [y] * len(bad), marker="x", color="C3", s=22, zorder=3)
         if p["fastest_mps"] is not None:
-            ax.barh(n, p["fastest_mps"], height=0.5, color="C0", alpha=0.35)
-            ax.annotate(f"{p['fastest_mps']:.3f} m/s", (p["fastest_mps"], n), xytext=(4, 6),
+            ax.barh(y, p["fastest_mps"], height=0.5, color="C0", alpha=0.35)
+            ax.annotate(f"{p['fastest_mps']:.3f} m/s", (p["fastest_mps"], y), xytext=(4, 6),
                         textcoords="offset points", fontsize=8)
-    ax.set_xlabel("label [m/s]")
+    ax.set_xlabel("label [m/s] (a stop: the speed it stops from)")
     ax.set_ylabel("strides")
-    ax.set_yticks([p["n_strides"] for p in frontier["points"]])
+    ax.set_yticks(range(len(points)), ticks, fontsize=8)
     ax.set_title(f"{name}: reachable-speed frontier (bar: fastest label that passes; o passes, x fails)",
                  fontsize=10)
     ax.grid(axis="x", alpha=0.3)

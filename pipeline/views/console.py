@@ -88,13 +88,16 @@ def parameter_table(title: str, rows: list[tuple[str, Any]], number: str = "{:.4
 
 
 def frontier_table(points: list[Any]) -> None:
-    """The reachable-speed frontier per stride count."""
-    t = Table(title="reachable-speed frontier: fastest label that converges and passes the physics checks")
-    for col in ("strides", "fastest [m/s]", "first failure [m/s]", "what stops it", "probes"):
-        t.add_column(escape(col), justify="left" if col == "what stops it" else "right")
+    """The reachable-speed frontier per search (start-ups, speed-ups from a speed, stops) and stride
+    count."""
+    t = Table(title="reachable-speed frontier: fastest label that converges and passes the physics checks "
+                    "(a stop: the fastest speed it stops from)")
+    for col in ("search", "strides", "fastest [m/s]", "first failure [m/s]", "what stops it", "probes"):
+        t.add_column(escape(col), justify="left" if col in ("search", "what stops it") else "right")
     for p in points:
         fail = "-" if p.first_failure_mps is None else f"{p.first_failure_mps:.3f}"
-        t.add_row(str(p.n_strides), f"{p.fastest_mps:.3f}", fail, escape(p.limit), str(len(p.probes)))
+        t.add_row(escape(p.lane.label), str(p.n_strides), f"{p.fastest_mps:.3f}", fail, escape(p.limit),
+                  str(len(p.probes)))
     console.print(t)
 
 
