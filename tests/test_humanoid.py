@@ -120,6 +120,25 @@ def test_library_round_trip_and_cli(tmp_path):
     assert v.returncode == 0 and "all entries valid" in v.stdout
 
 
+def test_a_motion_that_fails_before_its_whole_body_is_stored_as_failed(tmp_path):
+    """A reach limit the 1.0 m/s push cannot keep (the COM within 0.85 m of the feet): its GPM step
+    fails, so it has no whole body while the 0.5 m/s entry has one; the library is still written,
+    that entry stored failed with the step's status and the whole body's datasets empty, and it
+    validates as failed."""
+    p = tmp_path / "reach.toml"
+    p.write_text(f'extends = "{SKATE.as_posix()}"\n[humanoid]\nleg_max_m = 0.85\n'
+                 '[sweep]\nvelocities_mps = [0.5, 1.0]\n')
+    rep = build_library(load_config(p), tmp_path / "r.h5", BuildOptions(jobs=1, cache=False))
+    lib = MotionLibrary.open(rep.path)
+    assert lib["skate_v0.50"].success and not lib["skate_v1.00"].success
+    assert str(lib["skate_v1.00"].attrs["status"]).startswith("push: ")
+    assert lib["skate_v1.00"].arrays["joints"].shape == (0, lib["skate_v0.50"].arrays["joints"].shape[1])
+    env = {**os.environ, "COLUMNS": "200"}
+    cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
+    v = subprocess.run([*cli, "validate", str(rep.path)], capture_output=True, text=True, env=env)
+    assert v.returncode == 0 and "skate_v1.00: stored as failed" in v.stdout, v.stdout + v.stderr
+
+
 def test_build_report_marks_all_entries(tmp_path):
     """The walking build writes one successful entry: six walking steps between start and stop
     (eight GPM phases), named for what it is."""

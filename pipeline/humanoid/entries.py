@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -104,4 +105,21 @@ def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[Ent
                            {"solver": config.gpm.solver, "nodes": config.gpm.nodes})
     urdf = config.wholebody.urdf_path(config.path).read_text()
     return write_library(out, root, model, {}, {schema.D_ROBOT_URDF: urdf},
-                         [entry_from_motion(o, config) for o in outcomes])
+                         same_datasets([entry_from_motion(o, config) for o in outcomes]))
+
+
+def same_datasets(records: list[EntryRecord]) -> list[EntryRecord]:
+    """Every entry with the same datasets, as a library needs: one whose steps failed before the
+    whole body was made gets the whole body's datasets with no rows (its status says why)."""
+    full = next((r for r in records if schema.D_JOINTS in r.arrays), None)
+    if full is None:
+        return records
+    out = []
+    for r in records:
+        missing = [k for k in full.arrays if k not in r.arrays]
+        if missing:
+            r = replace(r, arrays={**r.arrays, **{k: np.zeros((0, *np.shape(full.arrays[k])[1:])) for k in missing}},
+                        columns={**r.columns, **{k: full.columns[k] for k in missing if k in full.columns}},
+                        units={**r.units, **{k: full.units[k] for k in missing if k in full.units}})
+        out.append(r)
+    return out
