@@ -4,12 +4,13 @@ speed a stop of so many strides stops from.
 
 Each lane (:class:`Lane`: the start-ups, the speed-ups from one riding speed, or the stops) and
 stride count is one search: it climbs in steps of ``step_mps`` from ``start_mps`` (a speed-up: from
-its start speed plus a step) until a speed fails (IPOPT does not converge, warm nor cold, or the
-physics checks refuse the result); then it bisects between the last success and the first failure
-until the gap is at most ``resolution_mps``. Start-ups warm-start along the search; transitions
-solve cold (their knot window changes with the speeds, and with it the multipliers a warm start
-would carry). Searches run in parallel processes, like the sweep. The twin does not judge here
-(``[transitions] twin_judge`` judges a build's candidates): the frontier is the plan's reach.
+its start speed plus a step) until a speed fails (IPOPT does not converge, or the physics checks
+refuse the result); then it bisects between the last success (a speed-up: at first its start
+speed) and the first failure until the gap is at most ``resolution_mps``. Start-ups warm-start
+along the search (and cold when that fails); transitions solve cold with the build's retry ladder
+(their knot window changes with the speeds, and with it the multipliers a warm start would carry).
+Searches run in parallel processes, like the sweep. The twin does not judge here (``[transitions]
+twin_judge`` judges a build's candidates): the frontier is the plan's reach.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import json
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
+from skatelib.pipeline.quadruped.attempts import solve_with_retries
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
 from skatelib.pipeline.quadruped.verify import judge
@@ -62,6 +64,11 @@ class Lane:
             return PushoffSpec(config, 0.0, strides, from_velocity_mps=v)
         return PushoffSpec(config, v, strides, warm=warm, from_velocity_mps=self.from_mps)
 
+    @property
+    def floor(self) -> float:
+        """Where a bisection's lower end starts: a speed-up's start speed (it is no speed-up below)."""
+        return 0.0 if self.stop else self.from_mps
+
     def start(self, search: FrontierSearch) -> float:
         return round(self.from_mps + search.step_mps, 6) if self.from_mps and not self.stop else search.start_mps
 
@@ -72,8 +79,8 @@ class FrontierPoint:
 
     Attributes:
         n_strides: Push strides.
-        fastest_mps: Fastest label that converged and validated (0 when even the start failed); for
-            a stop, the fastest start speed.
+        fastest_mps: Fastest label that converged and validated (0, or a speed-up's start speed, when
+            even the first failed); for a stop, the fastest start speed.
         first_failure_mps: Slowest label tried that failed above it (``None``: ``max_mps`` was reached).
         limit: The status of that failure (what stopped it), or ``"search limit"``.
         probes: Every label tried, in order.
@@ -95,10 +102,14 @@ class FrontierPoint:
 
 def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None, lane: Lane
          ) -> tuple[SolveResult, Probe]:
-    """Solve warm (when given) and else cold; judge the converged result with the physics checks."""
-    result = solve(lane.spec(config, v, strides, warm))
-    if not result.success and warm is not None:
-        result = solve(lane.spec(config, v, strides, None))
+    """Solve a start-up warm (when given) and else cold, a transition with the build's retries;
+    judge the converged result with the physics checks."""
+    if lane == Lane():
+        result = solve(lane.spec(config, v, strides, warm))
+        if not result.success and warm is not None:
+            result = solve(lane.spec(config, v, strides, None))
+    else:  # cold: the build's retry ladder, so that the frontier holds what a build would solve
+        result, _ = solve_with_retries(lane.spec(config, v, strides, None))
     judged, physics = judge(config, result)
     probe = Probe(v, judged.success, judged.status, result.iterations, physics.get("momentum_speed_mps", float("nan")))
     return result, probe
@@ -107,7 +118,7 @@ def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None
 def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch, lane: Lane = Lane()) -> FrontierPoint:
     """Climb, then bisect, one lane and stride count (a module-level function for worker processes)."""
     probes: list[Probe] = []
-    best, best_warm, fail, limit = 0.0, None, None, "search limit"
+    best, best_warm, fail, limit = lane.floor, None, None, "search limit"
     warms = lane == Lane()  # start-ups only (module docstring)
     v = lane.start(search)
     while v <= search.max_mps + 1e-9:
