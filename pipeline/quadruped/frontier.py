@@ -75,7 +75,7 @@ class Lane:
 
 @dataclass(frozen=True)
 class FrontierPoint:
-    """The frontier of one stride count.
+    """The frontier of one lane and stride count.
 
     Attributes:
         n_strides: Push strides.

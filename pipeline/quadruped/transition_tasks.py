@@ -69,7 +69,7 @@ class TransitionTask:
                 warm[cell] = (result.warm, key)
             judged, physics = judge(self.config, result)
             if judged.success and self.config.transitions.twin_judge:
-                reasons, _ = twin_refusals(self.config, judged, key, use_cache)
+                reasons = twin_refusals(self.config, judged, key, use_cache)
                 if reasons:
                     judged = replace(judged, success=False, status=f"{TWIN_REFUSED}: {reasons}")
                     refused.append(f"v{v0:.2f}-{v:.2f}: the twin refused {count(n, 'stride')} ({reasons})")

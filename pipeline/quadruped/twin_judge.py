@@ -73,14 +73,13 @@ def twin_fingerprint() -> str:
     return h.hexdigest()[:16]
 
 
-def twin_refusals(config: QuadrupedConfig, result: SolveResult, solve_key: str, use_cache: bool) -> tuple[str, bool]:
+def twin_refusals(config: QuadrupedConfig, result: SolveResult, solve_key: str, use_cache: bool) -> str:
     """Why the twin refuses ``result`` (the first error set of ``[transitions] twin_judge`` it fails
-    under, and how; '' when it passes under every one), and whether the verdict came from the cache."""
+    under, and how; '' when it passes under every one); the verdict is cached under ``solve_key``."""
     sets = tuple(config.transitions.twin_judge)
     key = cache_key("twin_judge", solve_key, sets, twin_fingerprint())
-    payload, cached, _ = cached_or_solved(key, ("reasons",), lambda: {"reasons": _ride(config, result, sets)},
-                                          use_cache)
-    return str(payload["reasons"]), cached
+    payload, _, _ = cached_or_solved(key, ("reasons",), lambda: {"reasons": _ride(config, result, sets)}, use_cache)
+    return str(payload["reasons"])
 
 
 def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> str:
