@@ -6,8 +6,8 @@ transfer and 1.5 s of riding) under each of the configured model-error sets, and
 A stride count the twin refuses is not kept: the next is tried.
 
 Verdicts are cached beside the solves, under the candidate's cache key, the error sets and a
-fingerprint of the controller's, the twin's and the judge's code and MuJoCo's version: a changed controller
-or twin rides every candidate again."""
+fingerprint of the controller's, the twin's and the judge's code and MuJoCo's version: a changed
+controller or twin rides every candidate again."""
 
 from __future__ import annotations
 
