@@ -16,7 +16,7 @@ CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 .PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library check-default
 
 help:
-	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build] extra only"
+	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build], [control] and [sim] extras (the twin judges the transitions)"
 	@echo "make venv      install every extra into .venv (viewer, plots, controller, twin, videos, dask, dev tools)"
 	@echo "make test      run the test suite (installs every extra)"
 	@echo "make lint      ruff + mypy"
