@@ -123,7 +123,7 @@ def _doctored(e, **change):
 
 def test_negative_controls_refuse_doctored_transitions(ride_lib, system):
     """A braking force outside the Coulomb cone, a braking foot that pushes, a transition that starts at
-    another speed, and an end moved off the riding stance: each refused."""
+    another speed, and a stop that still rolls at its end: each refused."""
     e = ride_lib["v0.40-0.00_s1"]
     planted = np.flatnonzero(np.asarray(e.contact)[:-1, 2] == GROUND)
     k = planted[len(planted) // 2]
@@ -137,6 +137,10 @@ def test_negative_controls_refuse_doctored_transitions(ride_lib, system):
     assert any("braking foot pushes" in f for f in rep.failures(system))
     rep = check_trajectory(system, Trajectory.of(e), 0.0, from_velocity_mps=0.5)
     assert any("starts riding at" in f for f in rep.failures(system))
+    x = np.array(e.state)
+    x[-1, [6, 24]] += 0.05  # robot and board still roll at 5 cm/s at the end
+    rep = check_trajectory(system, _doctored(e, state=x), 0.0, from_velocity_mps=0.4)
+    assert any(f.startswith("still rides at 0.0") and "a stop ends below 0.020 m/s" in f for f in rep.failures(system))
     honest = check_trajectory(system, Trajectory.of(e), 0.0, from_velocity_mps=0.4)
     assert honest.failures(system) == []
 

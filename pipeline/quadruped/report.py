@@ -93,6 +93,7 @@ class PhysicsReport:
     start_momentum_speed_mps: float = 0.0
     from_velocity_mps: float = 0.0
     braking: bool = False  # a slow-down or stop: the planted foot brakes
+    stop: bool = False  # a stop (label 0): the momentum speed's error is the speed left [m/s]
 
     def as_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in asdict(self).items()}
@@ -123,9 +124,7 @@ class PhysicsReport:
              f"joint speed {self.max_joint_velocity_radps:.2f} rad/s over the limit"),
             (self.max_board_roll_rad > system.board.roll_limit_rad * (1 + 1e-6),
              f"deck roll {self.max_board_roll_rad:.3f} rad over the limit"),
-            (self.momentum_speed_error > tol.momentum_speed_rel,
-             f"rides at {self.momentum_speed_mps:.3f} m/s (momentum speed), {100 * self.momentum_speed_error:.1f} % "
-             f"off the label"),
+            (self.momentum_speed_error > tol.momentum_speed_rel, self._speed_failure(tol)),
             (self.final_relative_speed_mps > tol.relative_speed_mps,
              f"robot and board differ by {self.final_relative_speed_mps:.3f} m/s at the end"),
             (self.final_vertical_speed_mps > tol.vertical_speed_mps,
@@ -139,6 +138,13 @@ class PhysicsReport:
             *self._near_ground(system, tol),
         ]
         return [msg for bad, msg in checks if bad]
+
+    def _speed_failure(self, tol: Tolerances) -> str:
+        if self.stop:
+            return (f"still rides at {self.momentum_speed_mps:.3f} m/s (momentum speed); a stop ends below "
+                    f"{tol.momentum_speed_rel:.3f} m/s")
+        return (f"rides at {self.momentum_speed_mps:.3f} m/s (momentum speed), {100 * self.momentum_speed_error:.1f} % "
+                "off the label")
 
     def _drive_failure(self) -> str:
         if self.braking:

@@ -103,7 +103,7 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
         max_near_ground_speed_mps=near[0], max_near_ground_descent_mps=near[1],
         final_push_foot_height_m=float(foot_pos[-1, p, 2]),
         start_momentum_speed_mps=float(momentum_speed(state[0], system.srb.mass_kg, system.board.mass_kg)),
-        from_velocity_mps=from_velocity_mps, braking=drive < 0,
+        from_velocity_mps=from_velocity_mps, braking=drive < 0, stop=target_velocity_mps == 0,
     )
 
 
