@@ -141,9 +141,9 @@ def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
             ax.annotate(f"{p['fastest_mps']:.3f} m/s", (p["fastest_mps"], y), xytext=(4, 6),
                         textcoords="offset points", fontsize=8)
     ax.set_xlabel("label [m/s] (a stop: the speed it stops from)")
-    ax.set_ylabel("strides")
+    ax.set_ylabel("strides" if all(t.isdigit() for t in ticks) else "search, strides")
     ax.set_yticks(range(len(points)), ticks, fontsize=8)
-    ax.set_title(f"{name}: reachable-speed frontier (bar: fastest label that passes; o passes, x fails)",
+    ax.set_title(f"{name}: reachable-speed frontier\n(bar: fastest label that passes; o passes, x fails)",
                  fontsize=10)
     ax.grid(axis="x", alpha=0.3)
     return fig
