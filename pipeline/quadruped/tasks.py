@@ -105,7 +105,7 @@ class BuildTask:
             key = entry_key(spec, warm_key if use_warm is not None else None)
             if events is not None:
                 events.put(EntryEvent(schema.entry_key(v, self.n_strides), done=False))
-            payload, cached, note = cached_or_solved(key, ("result", "attempts"), partial(_solve, spec), use_cache)
+            payload, cached, note = cached_solve(spec, key, use_cache)
             result, attempts = payload["result"], payload["attempts"]
             if result.success:
                 solved[v] = (result.warm, key)
@@ -120,6 +120,12 @@ class BuildTask:
 def _solve(spec: PushoffSpec) -> dict[str, Any]:
     result, attempts = solve_with_retries(spec)
     return {"result": result, "attempts": attempts}
+
+
+def cached_solve(spec: PushoffSpec, key: str, use_cache: bool) -> tuple[dict[str, Any], bool, str]:
+    """The entry of ``spec`` cached under ``key`` (its ``result`` and ``attempts``), or solved with
+    the retry ladder and cached; whether it came from the cache, and a note for the user."""
+    return cached_or_solved(key, ("result", "attempts"), partial(_solve, spec), use_cache)
 
 
 def tasks_for(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask]:

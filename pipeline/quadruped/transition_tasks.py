@@ -10,15 +10,13 @@ failure of the last count tried, with its status."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import partial
 from typing import Any
 
-from skatelib.pipeline.build.cache import cached_or_solved
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem import Window
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
-from skatelib.pipeline.quadruped.tasks import EntryOutcome, _solve, entry_key
+from skatelib.pipeline.quadruped.tasks import EntryOutcome, cached_solve, entry_key
 from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, twin_refusals
 from skatelib.pipeline.quadruped.verify import judge
 from skatelib.pipeline.views.console import count
@@ -63,7 +61,7 @@ class TransitionTask:
             start, start_key = warm.get(cell, (None, None)) if self.config.sweep.warm_start else (None, None)
             spec = replace(spec, warm=start)
             key = entry_key(spec, start_key)
-            payload, cached, note = cached_or_solved(key, ("result", "attempts"), partial(_solve, spec), use_cache)
+            payload, cached, note = cached_solve(spec, key, use_cache)
             result = payload["result"]
             if result.success and result.warm is not None:
                 warm[cell] = (result.warm, key)
