@@ -16,9 +16,9 @@ from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, check_twin_judg
 from skatelib.runtime import MotionLibrary
 
 pytest.importorskip("mujoco")
+from skatelib.sim.errors import DEFAULT_TWIN_PERTURBATION
 
 TINY_RIDE = Path(__file__).parent / "configs" / "tiny_ride.toml"
-DEFAULT_ERRORS = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 
 
 def _config(tmp_path: Path, judge: list[str]):
@@ -39,7 +39,7 @@ def test_a_bad_error_set_is_refused_before_any_solve(tmp_path):
 def test_the_twin_keeps_what_it_rides_and_refuses_what_it_cannot(tmp_path, monkeypatch):
     monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))  # the second build reuses the solves
     opts = BuildOptions(jobs=1, cache=True, progress=False)
-    good = build_library(_config(tmp_path, [DEFAULT_ERRORS]), tmp_path / "good.h5", opts)
+    good = build_library(_config(tmp_path, [DEFAULT_TWIN_PERTURBATION]), tmp_path / "good.h5", opts)
     lib = MotionLibrary.open(good.path)
     keys = ["v0.30-0.40_s1", "v0.40-0.30_s1"]
     assert all(lib[k].success for k in keys), [lib[k].attrs["status"] for k in keys]
