@@ -110,9 +110,12 @@ def pyramid(frame: np.ndarray, mu: float) -> np.ndarray:
 class _Layout:
     """The QP's arrays for one stance set, their fixed parts filled once: the cost's diagonal
     (regularization, attitude, posture and force weights), the constraint matrix's zeros, the
-    bounds of the normal, friction and equality rows, and where each stance foot's surface rows go."""
+    bounds of the normal, friction and equality rows, and where each stance foot's surface rows go.
 
-    def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings):
+    Rows: the 18 rows of M qdd + h - J_c^T f (the base's 6 held at zero, the joints' 12 within the
+    torque limit), the stance feet's accelerations, then each stance foot's normal and facets."""
+
+    def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings, tau_max: float):
         self.legs, self.swing = legs, np.setdiff1d(np.arange(4), legs)
         nf = 3 * len(legs)
         n = NV + nf
@@ -124,13 +127,13 @@ class _Layout:
         self.A, self.b = np.zeros((3 + 3 * len(self.swing), NV)), np.zeros(3 + 3 * len(self.swing))  # task rows
         self.w = np.sqrt([s.w_com] * 3 + [s.w_swing] * 3 * len(self.swing))  # their square-root weights
         per_leg = 1 + 4 * s.friction_rows
-        self.surface = 6 + nf  # the first normal row
-        self.torque = self.surface + per_leg * len(legs)  # the first torque row
-        m = self.torque + 12
+        self.surface = NV + nf  # the first normal row
+        m = self.surface + per_leg * len(legs)
         self.rows = np.zeros((m, n))
         self.up, self.lo = np.full(m, 1e30), np.full(m, -1e30)
+        self.tau_band = np.r_[np.zeros(6), np.full(NV - 6, tau_max)]  # the dynamics rows' bounds, less h
         self.sense = np.zeros(m, dtype=np.intc)
-        self.sense[:self.surface] = EQUALITY
+        self.sense[:6] = self.sense[NV:self.surface] = EQUALITY
         k = np.arange(len(legs))
         r = self.surface + per_leg * k  # each leg's normal row, then its facets
         self.up[r], self.lo[r] = s.normal_max_N, s.normal_min_N
@@ -189,34 +192,30 @@ class WholeBodyController:
         x, _, flag, info = self._daqp(L.H, g, L.rows, L.up, L.lo, L.sense)
         if flag != 1:
             raise QpSolveFailed(f"whole-body QP: DAQP exit flag {flag}")
-        qdd, f = x[:NV], x[NV:]
-        tau = T.M[j] @ qdd + T.h[j] - JcT[j] @ f
+        tau = (L.rows[:NV] @ x + T.h)[j]
         forces = np.zeros((3, 4))
-        forces[:, legs] = f.reshape(-1, 3).T
-        return WbcOutput(tau=tau, forces=forces, qdd=qdd, iterations=int(info["iterations"]))
+        forces[:, legs] = x[NV:].reshape(-1, 3).T
+        return WbcOutput(tau=tau, forces=forces, qdd=x[:NV], iterations=int(info["iterations"]))
 
     def _layout(self, stance: np.ndarray) -> _Layout:
         key = np.asarray(stance, dtype=bool).tobytes()
         out = self._layouts.get(key)
         if out is None:
-            out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s)
+            out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s, self.tau_max)
         return out
 
     def _constraints(self, L: _Layout, T: DynamicsTerms, tg: WbcTargets, JcT: np.ndarray) -> None:
         """This tick's rows and bounds into ``L``'s arrays (``JcT``: the stance feet's stacked
         Jacobians, transposed)."""
-        rows, up, lo, j, legs = L.rows, L.up, L.lo, self._j, L.legs
-        nf, r = JcT.shape[1], L.torque
-        rows[:6, :NV] = T.M[:6]  # floating base: M qdd + h - Jc^T f = 0
-        rows[:6, NV:] = -JcT[:6]
-        up[:6] = lo[:6] = -T.h[:6]
-        rows[6:6 + nf, :NV] = JcT.T  # stance feet
-        up[6:6 + nf] = lo[6:6 + nf] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
+        rows, up, lo, legs = L.rows, L.up, L.lo, L.legs
+        rows[:NV, :NV] = T.M  # M qdd + h - Jc^T f: zero on the base, within the limit on the joints
+        rows[:NV, NV:] = -JcT
+        np.subtract(L.tau_band, T.h, out=up[:NV])
+        np.subtract(-L.tau_band, T.h, out=lo[:NV])
+        s = L.surface
+        rows[NV:s, :NV] = JcT.T  # stance feet
+        up[NV:s] = lo[NV:s] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
         if len(legs):
             deck = self._coefficients @ tg.deck_R.T
             blocks = np.where(tg.on_deck[legs, None, None], deck, self._floor_rows)
             rows.reshape(-1)[L.flat] = blocks.ravel()
-        rows[r:, :NV] = T.M[j]  # joint torques within the limit
-        rows[r:, NV:] = -JcT[j]
-        up[r:] = self.tau_max - T.h[j]
-        lo[r:] = -self.tau_max - T.h[j]
