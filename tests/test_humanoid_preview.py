@@ -1,13 +1,14 @@
 """Kajita's preview controller: its Riccati solution against SciPy's independent solver, the gain
 laws that follow from it, and the servo's behaviour on the cart-table (it tracks a staircase
-ZMP of steps, moving the COM before each step; without the preview it lags)."""
+ZMP of steps, moving the COM before each step; without the preview it lags; a reference that does
+not start at zero is met from the first sample when the servo starts at its best offset)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from scipy.linalg import solve_discrete_are
-from skatelib.pipeline.humanoid.preview import CartTable, preview_gains, track, zmp_of
+from skatelib.pipeline.humanoid.preview import CartTable, preview_gains, track, track_offset, zmp_of
 
 DT, ZC = 0.005, 0.814  # Kajita et al. 2003's example: 5 ms, COM at 0.814 m, 1.6 s of preview
 
@@ -54,3 +55,22 @@ def test_servo_tracks_a_staircase_of_steps(servo):
     assert states[first - int(0.3 / DT), 0] > 0.01  # anticipates the step by at least 0.3 s
     short = track(model, preview_gains(model, 1), p_ref)
     assert np.abs(zmp_of(model, short) - p_ref)[away].max() > 3 * err[away].max()
+
+
+def test_a_reference_away_from_zero_is_met_from_the_start(servo):
+    """A ZMP reference 2 cm off from the first sample: started at zero the servo first moves its
+    ZMP the other way by centimetres (the cart-table is non-minimum phase); started from rest at
+    its best offset it meets the reference within 0.2 mm at every sample (the finite preview's
+    gains hold a constant reference not quite exactly), and for a reference that settles
+    after a start transient its squared error is never above the servo's from zero."""
+    model, gains = servo
+    const = np.full(600, -0.02)
+    from_zero = zmp_of(model, track(model, gains, const))
+    assert from_zero[1:20].max() > 0.01  # the wrong way first
+    offset = track_offset(model, gains, const)
+    np.testing.assert_allclose(zmp_of(model, offset), const, atol=2e-4)
+    assert offset[0, 0] == pytest.approx(-0.02, abs=2e-4) and np.all(offset[0, 1:] == 0.0)  # from rest
+    settles = np.r_[np.linspace(-0.03, 0.01, 8), np.full(592, 0.01)]
+    err = [np.sum((zmp_of(model, x) - settles) ** 2) for x in (track(model, gains, settles),
+                                                                track_offset(model, gains, settles))]
+    assert err[1] <= err[0]

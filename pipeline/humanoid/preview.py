@@ -98,6 +98,17 @@ def track(model: CartTable, gains: PreviewGains, p_ref: np.ndarray, x0: np.ndarr
     return out
 
 
+def track_offset(model: CartTable, gains: PreviewGains, p_ref: np.ndarray) -> np.ndarray:
+    """:func:`track` from rest at the constant position that brings the cart's ZMP closest to
+    ``p_ref`` (least squares over the run; the servo is linear, so two runs give the fit). A
+    servo started at zero under a reference that does not start there must first move its ZMP
+    the other way (the cart-table is non-minimum phase), centimetres off at the first samples."""
+    free = zmp_of(model, track(model, gains, p_ref))
+    unit = zmp_of(model, track(model, gains, np.zeros_like(p_ref), np.array([1.0, 0.0, 0.0])))
+    c0 = -float(np.dot(free - p_ref, unit) / np.dot(unit, unit))
+    return track(model, gains, p_ref, np.array([c0, 0.0, 0.0]))
+
+
 def zmp_of(model: CartTable, states: np.ndarray) -> np.ndarray:
     """The cart-table's ZMP along its states (K, 3)."""
     return states @ model.C[0]

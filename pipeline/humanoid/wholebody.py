@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from skatelib.pipeline.humanoid.preview import CartTable, preview_gains, track
+from skatelib.pipeline.humanoid.preview import CartTable, preview_gains, track_offset
 
 SOLES = ("R_sole", "L_sole")
 WAIST = "waist"
@@ -109,14 +109,13 @@ class Humanoid:
 
     def zmp(self, q: np.ndarray, dt: float, g: float = 9.81) -> np.ndarray:
         """The multibody ZMP (K, 2) of the configurations ``q`` sampled every ``dt`` (velocities
-        and accelerations by central differences on the configuration manifold)."""
+        and accelerations by second-order differences on the configuration manifold, one-sided at
+        the ends: a motion that starts from rest with an acceleration has it at its first knot)."""
         model, data = self.model, self.data
         K = len(q)
-        v = np.zeros((K, model.nv))
-        for k in range(K - 1):
-            v[k + 1] = pin.difference(model, q[k], q[k + 1]) / dt  # the velocity over [k, k+1]
-        vk = np.vstack([(v[1:2]), (v[1:-1] + v[2:]) / 2, v[-1:]])  # at the knots
-        a = np.gradient(vk, dt, axis=0)
+        d = np.array([pin.difference(model, q[k], q[k + 1]) / dt for k in range(K - 1)])  # over [k, k+1]
+        vk = np.vstack([(3 * d[0] - d[1]) / 2, (d[:-1] + d[1:]) / 2, (3 * d[-1] - d[-2]) / 2])  # at the knots
+        a = np.gradient(vk, dt, axis=0, edge_order=2)
         out = np.empty((K, 2))
         for k in range(K):
             pin.computeCentroidalMomentumTimeVariation(model, data, q[k], vk[k], a[k])
@@ -147,10 +146,12 @@ def dynamics_filter(robot: Humanoid, dt: float, plan: tuple[np.ndarray, np.ndarr
     if max(first.com_error_m.max(), first.feet_error_m.max()) > MISSED_M:
         return Filtered(first, before, before, com)  # a body not where the plan puts it: nothing to filter
     model = CartTable.of(dt, float(np.mean(com[:, 2])), g)
-    gains = preview_gains(model, round(PREVIEW_S / dt))
+    gains = preview_gains(model, round(preview_s / dt))
     shift = np.zeros_like(com)
     for axis in (0, 1):
-        shift[:, axis] = track(model, gains, zmp_ref[:, axis] - before[:, axis])[:, 0]
+        # The correction starts at rest, offset so that it fits the whole error best (a servo
+        # started at zero overshoots the error's first samples by centimetres).
+        shift[:, axis] = track_offset(model, gains, zmp_ref[:, axis] - before[:, axis])[:, 0]
     corrected = com + shift
     second = robot.solve_ik(corrected, feet, first.q[0])
     return Filtered(second, before, robot.zmp(second.q, dt, g), corrected)
