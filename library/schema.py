@@ -11,9 +11,10 @@ from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
 HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
-FORMAT_VERSION: Final = (1, 4)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
+FORMAT_VERSION: Final = (1, 5)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
 # model; 1.3: the humanoid's whole body (joints, feet, filtered COM and ZMP, its URDF); 1.4: transitions from
-# riding (from_velocity_mps, keys v0.50-0.80_s2) and the riding stance in /model
+# riding (from_velocity_mps, keys v0.50-0.80_s2) and the riding stance in /model; 1.5: the humanoid's soles
+# carry their pitch (toe-off)
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -99,7 +100,7 @@ D_NODES_CONTACT_POINT: Final = "nodes_contact_point"  # humanoid: per step, the 
 D_JOINTS: Final = "joints"  # (K, 12) joint angles [rad], columns the URDF's joint names
 D_JOINT_VELOCITIES: Final = "joint_velocities"  # (K, 12) [rad/s]
 D_BASE_POSE: Final = "base_pose"  # (K, 7) waist position [m] and quaternion x, y, z, w
-D_FEET: Final = "feet"  # (K, 8) right then left sole: x, y, z [m], yaw [rad]
+D_FEET: Final = "feet"  # (K, 10) right then left sole: x, y, z [m], yaw, pitch [rad] (before 1.5: no pitch, (K, 8))
 D_COM_REFERENCE: Final = "com_reference"  # (K, 3) the COM after the dynamics filter [m]
 D_ZMP_UNFILTERED: Final = "zmp_unfiltered"  # (K, 2) multibody ZMP of inverse kinematics on the GPM's COM [m]
 D_ZMP_WHOLEBODY: Final = "zmp_wholebody"  # (K, 2) multibody ZMP after the filter [m]

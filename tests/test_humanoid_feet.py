@@ -11,7 +11,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.humanoid.feet import LEFT, RIGHT, cycloid, evaluate, minimum_jerk, skating_feet, walking_feet
+from skatelib.pipeline.humanoid.feet import (
+    LEFT,
+    RIGHT,
+    ToeOff,
+    cycloid,
+    evaluate,
+    lowest_point,
+    minimum_jerk,
+    skating_feet,
+    sole_poses,
+    walking_feet,
+)
 from skatelib.pipeline.humanoid.motion import skating_steps, walking_steps
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -65,13 +76,13 @@ def test_walking_feet_follow_the_plan():
         np.testing.assert_allclose(feet[k1, swing, 0:3], spec.p_step, atol=1e-12)
         assert feet[(k0 + k1) // 2, swing, 2] == pytest.approx(0.05, abs=1e-3)
         t0 += spec.duration_s
-    assert np.all(feet[:, :, 2] >= 0.0) and np.all(feet[:, :, 3] == 0.0)
+    assert np.all(feet[:, :, 2] >= 0.0) and np.all(feet[:, :, 3:5] == 0.0)
 
 
 def test_skating_feet_follow_the_board():
     """The board foot ends the push at the step's position and speed; it and then the landed
-    pushing foot move at the board speed; the pushing foot stays put during the push and leaves
-    the ground at rest."""
+    pushing foot move at the board speed; the pushing foot stays put on its foothold during the
+    push and leaves the ground at rest (flat: no toe-off)."""
     cfg = load_config(CONFIGS / "hrp2_skate.toml")
     h, s = cfg.humanoid, cfg.skate
     v = 1.0
@@ -84,9 +95,55 @@ def test_skating_feet_follow_the_board():
     rate = np.gradient(feet[:, :, 0], dt, axis=0)
     assert rate[k1, RIGHT] == pytest.approx(v, abs=1e-3) and rate[0, RIGHT] == pytest.approx(0.0, abs=1e-3)
     np.testing.assert_allclose(rate[k1 + 5:, RIGHT], v, atol=1e-6)
-    np.testing.assert_allclose(feet[:k1, LEFT, 0:3], np.tile([0.0, h.step_width_m / 2, 0.0], (k1, 1)), atol=1e-12)
+    foothold = [s.push_foothold_m, h.step_width_m / 2, 0.0]
+    np.testing.assert_allclose(feet[:k1, LEFT, 0:3], np.tile(foothold, (k1, 1)), atol=1e-12)
     np.testing.assert_allclose(rate[k2 + 5:, LEFT], v, atol=1e-6)
     assert rate[k1 + 1, LEFT] == pytest.approx(0.0, abs=2e-3)
     assert feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
     assert feet[(k1 + k2) // 2, LEFT, 2] == pytest.approx(0.05, abs=1e-6)
     np.testing.assert_allclose(feet[k2:, LEFT, 0] - feet[k2:, RIGHT, 0], 0.0, atol=1e-9)  # side by side
+
+
+def test_toe_off_pivots_on_the_toe_edge():
+    """With the shipped toe-off the pushing sole stays flat until its last toe_off_s, then pitches
+    about its toe edge, which does not move, to toe_off_rad at lift-off, with no jump in the sole
+    centre's velocity there; in the swing no edge of the sole goes under the ground, and it lands
+    flat."""
+    cfg = load_config(CONFIGS / "hrp2_skate.toml")
+    h, s = cfg.humanoid, cfg.skate
+    assert s.toe_off_rad > 0.0 and s.toe_off_s > 0.0
+    _, plan = skating_steps(cfg, 1.0)
+    dt = 0.001
+    t = np.round(np.arange(0.0, s.push_s + s.slide_s + s.stop_s + 1e-9, dt), 10)
+    half = h.foot_length_m / 2
+    feet = skating_feet(plan, t, 0.05, h.step_width_m, 0.6, ToeOff(s.toe_off_s, s.toe_off_rad, half))
+    sole, pitch = feet[:, LEFT, 0:3], feet[:, LEFT, 4]
+    toe = sole + half * np.column_stack([np.cos(pitch), np.zeros_like(pitch), -np.sin(pitch)])  # Ry(pitch) (a, 0, 0)
+    k0, k1, k2 = round((s.push_s - s.toe_off_s) / dt), round(s.push_s / dt), round((s.push_s + 0.6) / dt)
+    np.testing.assert_allclose(toe[:k1 + 1], np.tile([s.push_foothold_m + half, h.step_width_m / 2, 0.0], (k1 + 1, 1)),
+                               atol=1e-12)
+    assert np.all(pitch[:k0 + 1] == 0.0) and pitch[k1] == pytest.approx(s.toe_off_rad, abs=1e-12)
+    assert np.all(np.diff(pitch[k0:k1 + 1]) >= 0.0)  # the heel only rises while pushing
+    rate = np.diff(sole, axis=0) / dt
+    assert np.abs(rate[k1] - rate[k1 - 1]).max() < 0.01  # no velocity jump at lift-off (m/s)
+    assert lowest_point(feet, half)[k1:k2, LEFT].min() > -1e-12
+    assert np.all(pitch[k2:] == 0.0) and feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_pitched_sole_is_lowest_at_its_toe_or_heel():
+    """A sole centred 1 cm up and pitched 0.3 rad either way reaches 0.12 sin 0.3 below its centre."""
+    soles = np.zeros((2, 2, 5))
+    soles[:, :, 2] = 0.01
+    soles[0, :, 4], soles[1, :, 4] = 0.3, -0.3
+    np.testing.assert_allclose(lowest_point(soles, 0.12), 0.01 - 0.12 * np.sin(0.3), atol=1e-15)
+
+
+def test_soles_of_an_older_file_read_flat():
+    """A ``feet`` array from before format 1.5 (K, 8: no pitch) reads as flat soles; a current one
+    (K, 10) as stored."""
+    old = np.arange(16.0).reshape(2, 8)
+    poses = sole_poses(old)
+    np.testing.assert_array_equal(poses[:, :, 0:4], old.reshape(2, 2, 4))
+    assert np.all(poses[:, :, 4] == 0.0)
+    new = np.arange(20.0).reshape(2, 10)
+    np.testing.assert_array_equal(sole_poses(new), new.reshape(2, 2, 5))

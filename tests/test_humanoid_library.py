@@ -43,7 +43,7 @@ def test_the_walk_stores_its_whole_body(walk):
     K = len(e.t)
     assert e.arrays[schema.D_JOINTS].shape == (K, 12) and e.units[schema.D_JOINTS] == ("rad",) * 12
     assert e.columns[schema.D_JOINTS][3] == "L_knee" and "<robot name=\"hrp2_class\">" in lib.urdf
-    assert e.arrays[schema.D_FEET].shape == (K, 8) and e.arrays[schema.D_BASE_POSE].shape == (K, 7)
+    assert e.arrays[schema.D_FEET].shape == (K, 10) and e.arrays[schema.D_BASE_POSE].shape == (K, 7)
     figures = json.loads(e.attrs[schema.A_WHOLEBODY])
     assert figures["zmp_rms_m"] < 0.5 * figures["zmp_rms_unfiltered_m"]
     assert figures["com_error_max_m"] < 1e-6 and figures["feet_error_max_m"] < 1e-6
@@ -83,12 +83,14 @@ def _doctored(walk, tmp_path, name, change):
 
 
 @pytest.mark.parametrize(("name", "change", "words"), [
-    (schema.D_FEET, lambda a: a + np.r_[0.005, 0, 0, 0, 0, 0, 0, 0], "miss the body's targets"),
+    (schema.D_FEET, lambda a: a + np.r_[0.005, 0, 0, 0, 0, 0, 0, 0, 0, 0], "miss the body's targets"),
+    (schema.D_FEET, lambda a: a + np.r_[0, 0, 0, 0, 0.05, 0, 0, 0, 0, 0], "miss the body's targets"),
     (schema.D_JOINTS, lambda a: np.where(np.arange(12) == 3, -0.01, a), "beyond its limit"),
     (schema.D_ZMP_WHOLEBODY, lambda a: a + np.r_[0.2, 0.0], "outside the support polygon"),
 ])
 def test_validate_catches_a_doctored_whole_body(walk, tmp_path, name, change, words):
-    """A sole moved 5 mm from where the joints put it, a knee bent past its limit, the multibody ZMP
-    moved 20 cm: validate exits 1 naming what is wrong (the untouched file passes above)."""
+    """A sole moved 5 mm from where the joints put it, or stored pitched 0.05 rad from the joints'
+    sole (5 mm at its toe), a knee bent past its limit, the multibody ZMP moved 20 cm: validate
+    exits 1 naming what is wrong (the untouched file passes above)."""
     r = _validate(_doctored(walk, tmp_path, name, change))
     assert r.returncode == 1 and words in r.stdout, r.stdout + r.stderr

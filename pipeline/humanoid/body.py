@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.library import schema
-from skatelib.pipeline.humanoid.feet import skating_feet, walking_feet
+from skatelib.pipeline.humanoid.feet import POSE, ToeOff, lowest_point, skating_feet, sole_poses, walking_feet
 from skatelib.pipeline.humanoid.wholebody import Humanoid, dynamics_filter
 
 if TYPE_CHECKING:
@@ -42,7 +42,7 @@ class BodyMotion:
     q: np.ndarray  # (K, 12) joint angles [rad]
     qd: np.ndarray  # (K, 12) joint velocities [rad/s] (central differences)
     base: np.ndarray  # (K, 7) waist position [m] and orientation quaternion (x, y, z, w)
-    feet: np.ndarray  # (K, 8) right then left sole: x, y, z [m], yaw [rad]
+    feet: np.ndarray  # (K, 10) right then left sole: x, y, z [m], yaw, pitch [rad]
     com_reference: np.ndarray  # (K, 3) the filtered COM reference [m]
     zmp_unfiltered: np.ndarray  # (K, 2) the multibody ZMP of inverse kinematics on the GPM's COM [m]
     zmp_wholebody: np.ndarray  # (K, 2) after the dynamics filter [m]
@@ -55,18 +55,20 @@ def robot_for(cfg: HumanoidConfig) -> Humanoid:
 
 def stored_body(arrays: dict[str, np.ndarray], columns: dict[str, tuple[str, ...]], figures: dict[str, float]
                 ) -> BodyMotion:
-    """A library entry's whole body, from its arrays (format 1.3)."""
+    """A library entry's whole body, from its arrays (format 1.3; soles without pitch before 1.5)."""
+    feet = sole_poses(arrays[schema.D_FEET])
     return BodyMotion(tuple(columns[schema.D_JOINTS]), arrays[schema.D_JOINTS], arrays[schema.D_JOINT_VELOCITIES],
-                      arrays[schema.D_BASE_POSE], arrays[schema.D_FEET], arrays[schema.D_COM_REFERENCE],
+                      arrays[schema.D_BASE_POSE], feet.reshape(len(feet), 2 * POSE), arrays[schema.D_COM_REFERENCE],
                       arrays[schema.D_ZMP_UNFILTERED], arrays[schema.D_ZMP_WHOLEBODY], figures)
 
 
 def feet_for(cfg: HumanoidConfig, m: Motion) -> np.ndarray:
-    """(K, 2, 4) both soles along the motion's plan."""
+    """(K, 2, 5) both soles along the motion's plan."""
     w, h = cfg.wholebody, cfg.humanoid
     if cfg.sweep.motion == "walk":
         return walking_feet(m.plan, m.t, w.swing_height_m, h.step_width_m)
-    return skating_feet(m.plan, m.t, w.swing_height_m, h.step_width_m, w.skate_swing_s)
+    toe_off = ToeOff(cfg.skate.toe_off_s, cfg.skate.toe_off_rad, h.foot_length_m / 2)
+    return skating_feet(m.plan, m.t, w.swing_height_m, h.step_width_m, w.skate_swing_s, toe_off)
 
 
 def whole_body(cfg: HumanoidConfig, m: Motion, robot: Humanoid) -> BodyMotion:
@@ -89,7 +91,7 @@ def whole_body(cfg: HumanoidConfig, m: Motion, robot: Humanoid) -> BodyMotion:
         "zmp_rms_m": float(np.sqrt(np.mean(err[1] ** 2))), "zmp_max_m": float(err[1].max()),
     }
     return BodyMotion(tuple(robot.joint_names), q, np.gradient(q, dt, axis=0), f.ik.q[:, 0:7],
-                      feet.reshape(len(feet), 8), f.com, f.zmp_before, f.zmp_after, figures)
+                      feet.reshape(len(feet), 2 * POSE), f.com, f.zmp_before, f.zmp_after, figures)
 
 
 def _supports(plan: list[StepSpec], t: np.ndarray) -> list[tuple[StepSpec, float, Support]]:
@@ -119,10 +121,12 @@ def zmp_margins(plan: list[StepSpec], t: np.ndarray, zmp: np.ndarray) -> np.ndar
     return out
 
 
-def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: BodyMotion) -> list[str]:
-    """The whole-body checks (module docstring), from the stored joints by forward kinematics."""
+def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: BodyMotion, sole_half_m: float
+                  ) -> list[str]:
+    """The whole-body checks (module docstring), from the stored joints by forward kinematics
+    (``sole_half_m``: half the sole's length, for its lowest edge when pitched)."""
     q = np.hstack([body.base, body.q])
-    feet = body.feet.reshape(-1, 2, 4)
+    feet = body.feet.reshape(-1, 2, POSE)
     com_err, feet_err = robot.residuals(q, body.com_reference, feet)
     lo, hi = robot.lower[7:], robot.upper[7:]
     out = []
@@ -144,7 +148,7 @@ def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: Bo
                    f"t = {t[margin.argmin()]:.2f} s")
     if body.figures["zmp_rms_m"] >= body.figures["zmp_rms_unfiltered_m"]:
         out.append("the dynamics filter did not reduce the multibody ZMP's error")
-    if feet[:, :, 2].min() < -1e-9:
+    if lowest_point(feet, sole_half_m).min() < -1e-9:
         out.append("a sole under the ground")
     out += _board_foot(plan, t, feet)
     return out

@@ -50,6 +50,12 @@ class SkateConfig:
     slide_s: float = _f(0.05, 10.0, "Sliding phase [s] (paper: 2.0).")
     stop_s: float = _f(0.05, 5.0, "Stop and return to the initial posture [s] (paper: 1.0).")
     transition_com_height_m: float = _f(0.2, 2.0, "COM height of the DCM at the push-to-slide transition [m] (0.73).")
+    push_foothold_m: float = _f(-0.5, 0.5, "Where the pushing foot stands, ahead of the board foot's start [m] "
+                                           "(0: beside it).", default=0.0)
+    toe_off_s: float = _f(0.0, 5.0, "Toe-off: the pushing foot's heel rises over the push's last toe_off_s [s], its "
+                                    "toe edge on the ground (the support polygon's part of that foot); 0: flat.",
+                          default=0.0)
+    toe_off_rad: float = _f(0.0, 1.2, "Toe-off: the pushing sole's pitch (heel up) at lift-off [rad].", default=0.0)
 
 
 @dataclass(frozen=True)

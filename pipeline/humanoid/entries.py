@@ -73,7 +73,7 @@ def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
     return EntryRecord(key=o.key, attrs=attrs, arrays=arrays, columns=columns, units=units)
 
 
-FEET_NAMES = tuple(f"{side}_{c}" for side in ("R", "L") for c in ("x", "y", "z", "yaw"))
+FEET_NAMES = tuple(f"{side}_{c}" for side in ("R", "L") for c in ("x", "y", "z", "yaw", "pitch"))
 
 
 def _body_records(b: BodyMotion) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
@@ -87,7 +87,7 @@ def _body_records(b: BodyMotion) -> tuple[dict[str, Any], dict[str, Any], dict[s
                schema.D_COM_REFERENCE: POINT_NAMES, schema.D_ZMP_UNFILTERED: ZMP_NAMES,
                schema.D_ZMP_WHOLEBODY: ZMP_NAMES}
     units = {schema.D_JOINTS: ("rad",) * n, schema.D_JOINT_VELOCITIES: ("rad/s",) * n,
-             schema.D_BASE_POSE: ("m",) * 3 + ("",) * 4, schema.D_FEET: ("m", "m", "m", "rad") * 2,
+             schema.D_BASE_POSE: ("m",) * 3 + ("",) * 4, schema.D_FEET: ("m", "m", "m", "rad", "rad") * 2,
              schema.D_COM_REFERENCE: ("m",) * 3, schema.D_ZMP_UNFILTERED: ("m", "m"),
              schema.D_ZMP_WHOLEBODY: ("m", "m")}
     return arrays, columns, units

@@ -7,22 +7,74 @@ solved step plan, sampled at the motion's times.
 * Skating: the board foot (the support foot on the board) follows a minimum-jerk path to the
   step's reference position and velocity in the push (accelerating) phase, then moves uniformly
   with the board while sliding and stopping. The pushing foot stays on the ground during the
-  push, then swings onto the board beside the board foot at the start of the slide: a
+  push, then swings onto the board beside the board foot at the start of the slide: its toe on a
   minimum-jerk path relative to the board foot (leaving the ground at rest, landing at rest on
   the board), a cycloid rising to ``height_m``; from then on it rides with the board.
+* Toe-off (skating, :class:`ToeOff`): over the push's last ``duration_s`` the pushing foot's heel
+  rises about its toe edge, which stays on the ground, to ``pitch_rad`` at lift-off (a
+  minimum-jerk profile), and the swing lays the sole flat again by touchdown. The ankle rises
+  and comes forward with the heel: the reach that lets the leg push until the board is fast
+  (without it the leg of an HRP-2-class robot is stretched before a 0.75 m/s push ends).
 
-Feet are (K, 2, 4) arrays: per knot, the right (0) and left (1) sole's centre on the ground (x, y,
-z) and its yaw.
+Feet are (K, 2, 5) arrays: per knot, the right (0) and left (1) sole's centre (x, y, z; on the
+ground when flat), its yaw and its pitch (positive: toe down, heel up).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from skatelib.pipeline.humanoid.step import StepSpec
 
 RIGHT, LEFT = 0, 1
+POSE = 5  # x, y, z, yaw, pitch
+
+
+@dataclass(frozen=True)
+class ToeOff:
+    """The pushing foot's heel lift (module docstring).
+
+    Attributes:
+        duration_s: How long before lift-off the heel starts rising [s] (0: the sole stays flat).
+        pitch_rad: The sole's pitch at lift-off [rad].
+        toe_m: From the sole's centre to its toe edge [m] (half the sole's length).
+    """
+
+    duration_s: float = 0.0
+    pitch_rad: float = 0.0
+    toe_m: float = 0.12
+
+    def centre(self, toe: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+        """(K, 3) sole centres of a sole facing +x with its toe edge's middle at ``toe`` (K, 3),
+        pitched by ``pitch`` (K,)."""
+        return toe + self.toe_m * np.column_stack([-np.cos(pitch), np.zeros_like(pitch), np.sin(pitch)])
+
+    def lift(self, t: np.ndarray, lift_off_s: float) -> np.ndarray:
+        """The pitch (K,) at times ``t`` of a push that lifts off at ``lift_off_s``: minimum jerk
+        from flat to ``pitch_rad`` over its last ``duration_s``, then back to flat by minimum jerk
+        over the swing (here the rest of ``t``; see :func:`skating_feet`)."""
+        if self.duration_s <= 0.0 or self.pitch_rad == 0.0:
+            return np.zeros_like(t)
+        s = np.clip((t - (lift_off_s - self.duration_s)) / self.duration_s, 0.0, 1.0)
+        return self.pitch_rad * s**3 * (10 - 15 * s + 6 * s**2)
+
+
+def sole_poses(feet: np.ndarray) -> np.ndarray:
+    """(K, 2, 5) soles from a library's ``feet`` array: (K, 10), or (K, 8) from a file before
+    format 1.5 (no pitch: flat)."""
+    feet = np.asarray(feet, dtype=np.float64)
+    if feet.shape[1] == 2 * POSE:
+        return feet.reshape(len(feet), 2, POSE)
+    out = np.zeros((len(feet), 2, POSE))
+    out[:, :, 0:4] = feet.reshape(len(feet), 2, 4)
+    return out
+
+
+def lowest_point(soles: np.ndarray, half_length_m: float) -> np.ndarray:
+    """(K, 2) the height of each sole's lowest edge (its toe or heel, pitched)."""
+    return soles[:, :, 2] - half_length_m * np.abs(np.sin(soles[:, :, 4]))
 
 
 def cycloid(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
@@ -57,7 +109,7 @@ def evaluate(coeffs: np.ndarray, t: np.ndarray | float) -> np.ndarray:
 
 def walking_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float) -> np.ndarray:
     """Both feet along a walking plan (module docstring); ``t`` from the plan's start."""
-    feet = np.zeros((len(t), 2, 4))
+    feet = np.zeros((len(t), 2, POSE))
     foot = {RIGHT: np.array([0.0, -step_width_m / 2, 0.0]), LEFT: np.array([0.0, step_width_m / 2, 0.0])}
     feet[:, RIGHT, 0:3], feet[:, LEFT, 0:3] = foot[RIGHT], foot[LEFT]
     t0 = 0.0
@@ -77,25 +129,34 @@ def walking_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
 
 
 def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float,
-                 swing_s: float) -> np.ndarray:
+                 swing_s: float, toe_off: ToeOff | None = None) -> np.ndarray:
     """Both feet along a skating plan (push, slide, stop; module docstring). The pushing foot's
-    swing takes the first ``swing_s`` of the slide, planned relative to the board foot: it leaves
-    the ground at rest (moving backwards relative to the board) and lands beside the board foot,
-    at rest on the board."""
+    swing takes the first ``swing_s`` of the slide, planned for its toe relative to the board
+    foot: it leaves the ground at rest (moving backwards relative to the board) and lands beside
+    the board foot, at rest on the board; its sole lies flat again when it lands."""
     push, slide = plan[0], plan[1]
+    toe_off = toe_off or ToeOff()
     v = np.asarray(push.v_step, dtype=np.float64)
-    board0, ground = np.array([0.0, -step_width_m / 2, 0.0]), np.array([0.0, step_width_m / 2, 0.0])
+    board0 = np.array([0.0, -step_width_m / 2, 0.0])
+    ground = np.asarray(push.segments[0][1].p0, dtype=np.float64)  # the pushing foot's foothold
     board_end = np.asarray(push.p_step, dtype=np.float64)
     T1 = push.duration_s
     Ts = min(swing_s, slide.duration_s)
-    feet = np.zeros((len(t), 2, 4))
+    feet = np.zeros((len(t), 2, POSE))
     path = minimum_jerk((board0, np.zeros(3), np.zeros(3)), (board_end, v, np.zeros(3)), T1)
     board = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
     feet[:, RIGHT, 0:3] = board
-    beside = ground - board0  # where the pushing foot lands, relative to the board foot
-    rel = minimum_jerk((ground - board_end, -v, np.zeros(3)), (beside, np.zeros(3), np.zeros(3)), Ts)
+    toe = np.array([toe_off.toe_m, 0.0, 0.0])
+    beside = np.array([0.0, step_width_m, 0.0])  # where the pushing foot lands, relative to the board foot
+    rel = minimum_jerk((ground + toe - board_end, -v, np.zeros(3)), (beside + toe, np.zeros(3), np.zeros(3)), Ts)
     _, up = cycloid((t - T1) / Ts)
-    feet[:, LEFT, 0:3] = np.select([(t < T1)[:, None], (t < T1 + Ts)[:, None]],
-                                   [ground, board + evaluate(rel, t - T1)], board + beside)
-    feet[:, LEFT, 2] += height_m * np.where((t >= T1) & (t < T1 + Ts), up, 0.0)
+    swinging = (t >= T1) & (t < T1 + Ts)
+    toe_path = np.select([(t < T1)[:, None], swinging[:, None]], [ground + toe, board + evaluate(rel, t - T1)],
+                         board + beside + toe)
+    toe_path[:, 2] += height_m * np.where(swinging, up, 0.0)
+    s = np.clip((t - T1) / Ts, 0.0, 1.0)  # the swing lays the sole flat by minimum jerk
+    pitch = np.where(t < T1, toe_off.lift(t, T1), toe_off.pitch_rad * (1 - s**3 * (10 - 15 * s + 6 * s**2)))
+    pitch = np.where(t < T1 + Ts, pitch, 0.0) if toe_off.duration_s > 0.0 else np.zeros_like(t)
+    feet[:, LEFT, 0:3] = toe_off.centre(toe_path, pitch)
+    feet[:, LEFT, 4] = pitch
     return feet

@@ -64,7 +64,8 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
                 fails.append("whole body: the library stores no robot description (/model/robot_urdf) to check it on")
             else:
                 body = stored_body(dict(e.arrays), dict(e.columns), json.loads(str(e.attrs[schema.A_WHOLEBODY])))
-                fails += [f"whole body: {f}" for f in body_failures(robot, plan, np.asarray(e.t), body)]
+                half = cfg.humanoid.foot_length_m / 2
+                fails += [f"whole body: {f}" for f in body_failures(robot, plan, np.asarray(e.t), body, half)]
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})
     return bad

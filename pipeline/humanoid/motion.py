@@ -36,6 +36,14 @@ def _hull(c: HumanoidConfig, feet: list[np.ndarray], ref: np.ndarray) -> tuple[t
     return convex_hull(np.vstack([np.asarray(_rect(c, f, ref)) for f in feet]))
 
 
+def _toe_edge(c: HumanoidConfig, foot: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """(2, 2) the ends of a sole's toe edge (facing +x), relative to ``ref``: all of it on the
+    ground once its heel rises."""
+    h = c.humanoid
+    x, y = float(foot[0] - ref[0]) + h.foot_length_m / 2, float(foot[1] - ref[1])
+    return np.array([[x, y - h.foot_width_m / 2], [x, y + h.foot_width_m / 2]])
+
+
 def walking_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[StepSpec]]:
     """Initial state and steps for walking at ``velocity`` (step length = velocity x step period)."""
     h, w = c.humanoid, c.walk
@@ -64,17 +72,22 @@ def skating_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[
     """Initial state and the push, slide and stop phases for a board speed ``velocity``."""
     h, s = c.humanoid, c.skate
     mu, z = h.friction_mu, h.com_height_m
-    ground, board = np.array([0.0, h.step_width_m / 2, 0.0]), np.array([0.0, -h.step_width_m / 2, 0.0])
+    ground = np.array([s.push_foothold_m, h.step_width_m / 2, 0.0])
+    board = np.array([0.0, -h.step_width_m / 2, 0.0])
     v = np.array([velocity, 0.0, 0.0])
     board_end = board + v * s.push_s / 2  # the board speeds up evenly from rest during the push
     # Both soles carry the robot during the push: the support polygon is the hull of the ground foot
-    # and the board foot where the board has rolled to (updated in PUSH_SEGMENTS pieces).
+    # and the board foot where the board has rolled to (updated in PUSH_SEGMENTS pieces); a piece
+    # that ends in the toe-off has only the ground foot's toe edge.
     segs = []
+    heel_up = s.push_s - s.toe_off_s if s.toe_off_s > 0.0 and s.toe_off_rad > 0.0 else np.inf
     for i in range(PUSH_SEGMENTS):
         t_mid = (i + 0.5) * s.push_s / PUSH_SEGMENTS
         on_board = board + v * t_mid**2 / (2 * s.push_s)
-        segs.append((i * s.push_s / PUSH_SEGMENTS,
-                     Support(tuple(ground), (0, 0, 0), _hull(c, [ground, on_board], ground), mu, mu)))
+        toe_off = (i + 1) * s.push_s / PUSH_SEGMENTS > heel_up + 1e-9
+        ground_part = _toe_edge(c, ground, ground) if toe_off else np.asarray(_rect(c, ground, ground))
+        polygon = convex_hull(np.vstack([ground_part, np.asarray(_rect(c, on_board, ground))]))
+        segs.append((i * s.push_s / PUSH_SEGMENTS, Support(tuple(ground), (0, 0, 0), polygon, mu, mu)))
     push = StepSpec("push", s.push_s, tuple(segs), "skate", tuple(board_end), tuple(v),
                     dz_vrp_m=s.transition_com_height_m, mu_next=0.0)
     foot_b = board_end + v * s.slide_s

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 from skatelib.library import schema
+from skatelib.pipeline.humanoid.feet import sole_poses
 from skatelib.pipeline.views.rerun_parts import ground, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -67,7 +68,7 @@ def _log_body(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
     t, base = e.t, e.arrays[schema.D_BASE_POSE]
     log_robot(rec, Robot(lib.urdf), f"{root}/robot", t, (base[:, 0:3] + offset, _matrices(base[:, 3:7]),
                                                           e.arrays[schema.D_JOINTS]))
-    feet = e.arrays[schema.D_FEET].reshape(len(t), 2, 4)
+    feet = sole_poses(e.arrays[schema.D_FEET])
     rec.log(f"{root}/sole_paths", rr.LineStrips3D([feet[:, s, 0:3] + offset for s in (0, 1)],
                                                   colors=[(120, 120, 120)], radii=0.003), static=True)
     zmp = e.arrays[schema.D_ZMP_WHOLEBODY]

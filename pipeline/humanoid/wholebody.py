@@ -25,6 +25,7 @@ SOLES = ("R_sole", "L_sole")
 WAIST = "waist"
 PREVIEW_S = 1.6  # the dynamics filter's preview (Kajita et al. 2003)
 MISSED_M = 1e-6  # inverse kinematics that leaves a target this far has missed it
+SOLE_LEVER_M = 0.1  # a sole's pose is checked at its centre and this far ahead of and behind it
 
 
 @dataclass(frozen=True)
@@ -74,12 +75,13 @@ class Humanoid:
 
     def solve_ik(self, com: np.ndarray, feet: np.ndarray, q0: np.ndarray, tol: float = 1e-9,
                  max_iterations: int = 200, damping: float = 1e-8) -> IkResult:
-        """Configurations for COM targets (K, 3) and feet (K, 2, 4: sole centre, yaw), from ``q0``."""
+        """Configurations for COM targets (K, 3) and feet (K, 2, 5: sole centre, yaw, pitch), from ``q0``."""
         q = q0.copy()
         out = np.empty((len(com), self.model.nq))
         worst = 0
         for k in range(len(com)):
-            soles = [pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, float(feet[k, s, 3])), feet[k, s, 0:3]) for s in (0, 1)]
+            soles = [pin.SE3(pin.rpy.rpyToMatrix(0.0, float(feet[k, s, 4]), float(feet[k, s, 3])), feet[k, s, 0:3])
+                     for s in (0, 1)]
             waist_R = pin.rpy.rpyToMatrix(0.0, 0.0, float(np.mean(feet[k, :, 3])))
             used = 0
             while used < max_iterations:
@@ -97,14 +99,20 @@ class Humanoid:
         return IkResult(out, *self.residuals(out, com, feet), worst)
 
     def residuals(self, q: np.ndarray, com: np.ndarray, feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """|COM - target| (K,) and |sole - target| (K, 2) by forward kinematics."""
+        """|COM - target| (K,) and each sole's distance from its target pose (K, 2), by forward
+        kinematics: the largest miss of its centre and of the points ``SOLE_LEVER_M`` ahead of and
+        behind it (a turned or pitched sole misses at its toe and heel)."""
         model, data = self.model, self.data
         c_err, f_err = np.empty(len(q)), np.empty((len(q), 2))
+        lever = np.array([[0.0, 0.0, 0.0], [SOLE_LEVER_M, 0.0, 0.0], [-SOLE_LEVER_M, 0.0, 0.0]]).T
         for k, qk in enumerate(q):
             pin.framesForwardKinematics(model, data, qk)
             c_err[k] = np.linalg.norm(pin.centerOfMass(model, data, qk, False) - com[k])
             for s, f in enumerate(self.soles):
-                f_err[k, s] = np.linalg.norm(data.oMf[f].translation - feet[k, s, 0:3])
+                want = pin.rpy.rpyToMatrix(0.0, float(feet[k, s, 4]), float(feet[k, s, 3])) @ lever
+                got = data.oMf[f].rotation @ lever
+                f_err[k, s] = np.linalg.norm(got + data.oMf[f].translation[:, None] - want
+                                             - feet[k, s, 0:3, None], axis=0).max()
         return c_err, f_err
 
     def zmp(self, q: np.ndarray, dt: float, g: float = 9.81) -> np.ndarray:
