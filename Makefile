@@ -110,6 +110,9 @@ figures: venv
 	$(BIN)/skatelib build configs/hrp2_walk.toml -o out/hrp2-walk.h5 --no-progress
 	$(BIN)/skatelib plot out/hrp2-walk.h5 -o build/figures/hrp2-walk -f png
 	cp build/figures/hrp2-walk/zmp_wholebody.png docs/figures/hrp2-walk-zmp.png
+	$(BIN)/skatelib build configs/hrp2_skate.toml -o out/hrp2-skate.h5 --no-progress
+	$(BIN)/skatelib plot out/hrp2-skate.h5 -o build/figures/hrp2-skate -f png
+	cp build/figures/hrp2-skate/zmp_wholebody.png docs/figures/hrp2-skate-zmp.png
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache
