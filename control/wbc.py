@@ -115,7 +115,7 @@ class _Layout:
     Rows: the 18 rows of M qdd + h - J_c^T f (the base's 6 held at zero, the joints' 12 within the
     torque limit), the stance feet's accelerations, then each stance foot's normal and facets."""
 
-    def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings, tau_max: float):
+    def __init__(self, legs: np.ndarray, joints: np.ndarray, s: WbcSettings):
         self.legs, self.swing = legs, np.setdiff1d(np.arange(4), legs)
         nf = 3 * len(legs)
         n = NV + nf
@@ -131,7 +131,6 @@ class _Layout:
         m = self.surface + per_leg * len(legs)
         self.rows = np.zeros((m, n))
         self.up, self.lo = np.full(m, 1e30), np.full(m, -1e30)
-        self.tau_band = np.r_[np.zeros(6), np.full(NV - 6, tau_max)]  # the dynamics rows' bounds, less h
         self.sense = np.zeros(m, dtype=np.intc)
         self.sense[:6] = self.sense[NV:self.surface] = EQUALITY
         k = np.arange(len(legs))
@@ -154,7 +153,7 @@ class WholeBodyController:
         self.joints = np.asarray(joint_columns)
         contiguous = np.array_equal(self.joints, np.arange(6, NV))  # pinocchio's order: views, not copies
         self._j: slice | np.ndarray = slice(6, NV) if contiguous else self.joints
-        self.tau_max = torque_limit_Nm
+        self.tau_max = torque_limit_Nm  # (sets the dynamics rows' bounds)
         self.mu = mu
         self._layouts: dict[bytes, _Layout] = {}
         import daqp
@@ -162,6 +161,16 @@ class WholeBodyController:
         self._daqp = daqp.solve
         self._coefficients = surface_coefficients(mu, self.s.friction_rows)
         self._floor_rows = self._coefficients.copy()  # on the floor R = I
+
+    @property
+    def tau_max(self) -> float:
+        """The joints' torque limit [N m]."""
+        return self._tau_max
+
+    @tau_max.setter
+    def tau_max(self, limit_Nm: float) -> None:
+        self._tau_max = limit_Nm
+        self._band = np.r_[np.zeros(6), np.full(NV - 6, limit_Nm)]  # the dynamics rows' bounds, less h
 
     def solve(self, T: DynamicsTerms, tg: WbcTargets) -> WbcOutput:
         """Torques of this tick.
@@ -201,7 +210,7 @@ class WholeBodyController:
         key = np.asarray(stance, dtype=bool).tobytes()
         out = self._layouts.get(key)
         if out is None:
-            out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s, self.tau_max)
+            out = self._layouts[key] = _Layout(np.nonzero(stance)[0], self.joints, self.s)
         return out
 
     def _constraints(self, L: _Layout, T: DynamicsTerms, tg: WbcTargets, JcT: np.ndarray) -> None:
@@ -210,8 +219,8 @@ class WholeBodyController:
         rows, up, lo, legs = L.rows, L.up, L.lo, L.legs
         rows[:NV, :NV] = T.M  # M qdd + h - Jc^T f: zero on the base, within the limit on the joints
         rows[:NV, NV:] = -JcT
-        np.subtract(L.tau_band, T.h, out=up[:NV])
-        np.subtract(-L.tau_band, T.h, out=lo[:NV])
+        np.subtract(self._band, T.h, out=up[:NV])
+        np.subtract(-self._band, T.h, out=lo[:NV])
         s = L.surface
         rows[NV:s, :NV] = JcT.T  # stance feet
         up[NV:s] = lo[NV:s] = (tg.stance_acc[:, legs] - T.dJv_feet[legs].T).T.ravel()
