@@ -7,26 +7,22 @@ NaN equal to NaN), the same label-level figures within the same tolerances (scal
 the numbers of ``physics_json`` and the closed-loop verdicts) and the same model. What differs
 between two builds of one problem anyway (creation time, solve times, cache keys) is left out;
 provenance (code commit, package and solver versions, solver options, the config's keys) and
-solver effort (iterations, attempts) are reported but do not make two libraries differ.
+solver effort (iterations, attempts; a humanoid's stage times) are reported but do not make two
+libraries differ.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library.figures import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
 from skatelib.library.reader import LibraryData, read_library
-from skatelib.library.records import EntryRecord, jsonable, text
+from skatelib.library.records import EntryRecord, jsonable
 
-VOLATILE = frozenset({"created_utc", "solve_time_s", "build_time_s", "cache_key", "content_sha256", "config_toml",
-                      "format"})
-EFFORT = frozenset({"iterations", "attempts"})  # reported, not counted
-PROVENANCE = frozenset({"git_commit", "git_dirty", "skatelib_version", "casadi_version", "ipopt_version",
-                        "pinocchio_version", "format_version", "name", "solver_options_json", "ipopt_options_json"})
 CONFIG = "config_resolved_json"
 
 
@@ -120,7 +116,7 @@ def compare(A: LibraryData, B: LibraryData, tol: Tolerance = Tolerance(), keys: 
     model = _values(A.model_attrs, B.model_attrs, tol) + _arrays_equal(A.model_arrays, B.model_arrays, tol)
     model += [ValueChange(k, "...", "...") for k in sorted(set(A.model_text) | set(B.model_text))
               if A.model_text.get(k) != B.model_text.get(k)]
-    config = _values(_flat(_json(A.attrs.get(CONFIG))), _flat(_json(B.attrs.get(CONFIG))), Tolerance())
+    config = _values(json_figures(A.attrs.get(CONFIG)), json_figures(B.attrs.get(CONFIG)), Tolerance())
     prov = _values({k: v for k, v in A.attrs.items() if k in PROVENANCE},
                    {k: v for k, v in B.attrs.items() if k in PROVENANCE}, Tolerance())
     other = {k for k in set(A.attrs) | set(B.attrs) if k not in PROVENANCE | VOLATILE | {CONFIG}}
@@ -143,9 +139,10 @@ def _entry(a: EntryRecord, b: EntryRecord, tol: Tolerance) -> EntryChange | None
         channels += _channels(name, np.asarray(x), np.asarray(y), b, t, tol)
     attrs_a = {k: v for k, v in a.attrs.items() if k not in VOLATILE | EFFORT | PROVENANCE}
     attrs_b = {k: v for k, v in b.attrs.items() if k not in VOLATILE | EFFORT | PROVENANCE}
-    figures = _values(_expand(attrs_a), _expand(attrs_b), tol)
-    effort = _values({k: v for k, v in a.attrs.items() if k in EFFORT},
-                     {k: v for k, v in b.attrs.items() if k in EFFORT}, Tolerance())
+    (fig_a, effort_a), (fig_b, effort_b) = split(expand(attrs_a)), split(expand(attrs_b))
+    figures = _values(fig_a, fig_b, tol)
+    effort = _values({**{k: v for k, v in a.attrs.items() if k in EFFORT}, **effort_a},
+                     {**{k: v for k, v in b.attrs.items() if k in EFFORT}, **effort_b}, Tolerance())
     if not (channels or shapes or figures or effort):
         return None
     return EntryChange(a.key, tuple(channels), tuple(shapes), tuple(figures), tuple(effort))
@@ -181,35 +178,6 @@ def column_names(name: str, y: np.ndarray, e: EntryRecord) -> tuple[list[str], l
         return ([f"{c}.{ax}" for c in cols for ax in axes],
                 [u for u in (units or [""] * len(cols)) for _ in range(inner)])
     return [f"{name}[{j}]" for j in range(width)], [""] * width
-
-
-def _json(v: Any) -> Any:
-    try:
-        return json.loads(text(v)) if v is not None else {}
-    except ValueError:
-        return text(v)
-
-
-def _flat(v: Any, prefix: str = "") -> dict[str, Any]:
-    """A JSON value as dotted keys -> scalars (lists of scalars kept whole)."""
-    if isinstance(v, dict):
-        out: dict[str, Any] = {}
-        for k, x in v.items():
-            out.update(_flat(x, f"{prefix}.{k}" if prefix else str(k)))
-        return out
-    return {prefix: v}
-
-
-def _expand(attrs: Mapping[str, Any]) -> dict[str, Any]:
-    """Attributes with JSON objects (``physics_json``, the closed-loop verdicts) opened into their figures."""
-    out: dict[str, Any] = {}
-    for k, v in attrs.items():
-        s = text(v) if isinstance(v, (str, bytes)) else None
-        if s is not None and s.startswith("{"):
-            out.update(_flat(_json(s), k.removesuffix("_json")))
-        else:
-            out[k] = jsonable(v)
-    return out
 
 
 def _values(a: Mapping[str, Any], b: Mapping[str, Any], tol: Tolerance) -> list[ValueChange]:

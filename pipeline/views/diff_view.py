@@ -26,10 +26,13 @@ def _v(x: Any) -> str:
 
 
 def _values(title: str, changes: tuple[ValueChange, ...], first: tuple[str, ...] = ()) -> None:
-    """A table of changed values; with ``first``, those named in it alone and the others counted."""
+    """A table of changed values; with ``first``, those named in it alone and the others counted
+    (none of them changed: the first few others)."""
     if not changes:
         return
     shown = [c for c in changes if c.name in first] if first else list(changes)
+    if not shown:
+        shown = list(changes[:CHANNELS_SHOWN])
     shown.sort(key=lambda c: first.index(c.name) if c.name in first else 0)
     t = entry_table(title, ("name", "a", "b"))
     for c in shown:
