@@ -51,14 +51,20 @@ class ToeOff:
         pitched by ``pitch`` (K,)."""
         return toe + self.toe_m * np.column_stack([-np.cos(pitch), np.zeros_like(pitch), np.sin(pitch)])
 
-    def lift(self, t: np.ndarray, lift_off_s: float) -> np.ndarray:
-        """The pitch (K,) at times ``t`` of a push that lifts off at ``lift_off_s``: minimum jerk
-        from flat to ``pitch_rad`` over its last ``duration_s``, then back to flat by minimum jerk
-        over the swing (here the rest of ``t``; see :func:`skating_feet`)."""
+    def pitch(self, t: np.ndarray, lift_off_s: float, swing_s: float) -> np.ndarray:
+        """The pushing sole's pitch (K,) at times ``t``: flat, then minimum jerk up to ``pitch_rad``
+        over the last ``duration_s`` before ``lift_off_s``, then minimum jerk back to flat over the
+        ``swing_s`` after it; all zero when either figure is."""
         if self.duration_s <= 0.0 or self.pitch_rad == 0.0:
             return np.zeros_like(t)
-        s = np.clip((t - (lift_off_s - self.duration_s)) / self.duration_s, 0.0, 1.0)
-        return self.pitch_rad * s**3 * (10 - 15 * s + 6 * s**2)
+        up = np.clip((t - (lift_off_s - self.duration_s)) / self.duration_s, 0.0, 1.0)
+        down = np.clip((t - lift_off_s) / swing_s, 0.0, 1.0)
+        return self.pitch_rad * (_smooth(up) - _smooth(down))
+
+
+def _smooth(s: np.ndarray) -> np.ndarray:
+    """The rest-to-rest minimum-jerk profile from 0 to 1 for s in [0, 1]."""
+    return s**3 * (10 - 15 * s + 6 * s**2)
 
 
 def sole_poses(feet: np.ndarray) -> np.ndarray:
@@ -154,9 +160,7 @@ def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
     toe_path = np.select([(t < T1)[:, None], swinging[:, None]], [ground + toe, board + evaluate(rel, t - T1)],
                          board + beside + toe)
     toe_path[:, 2] += height_m * np.where(swinging, up, 0.0)
-    s = np.clip((t - T1) / Ts, 0.0, 1.0)  # the swing lays the sole flat by minimum jerk
-    pitch = np.where(t < T1, toe_off.lift(t, T1), toe_off.pitch_rad * (1 - s**3 * (10 - 15 * s + 6 * s**2)))
-    pitch = np.where(t < T1 + Ts, pitch, 0.0) if toe_off.duration_s > 0.0 else np.zeros_like(t)
+    pitch = toe_off.pitch(t, T1, Ts)
     feet[:, LEFT, 0:3] = toe_off.centre(toe_path, pitch)
     feet[:, LEFT, 4] = pitch
     return feet
