@@ -164,6 +164,13 @@ def test_unknown_motion_is_a_config_error(tmp_path):
     assert Path(WALK).exists()
 
 
+def test_a_toe_off_longer_than_the_push_is_a_config_error(tmp_path):
+    p = tmp_path / "x.toml"
+    p.write_text(f'extends = "{SKATE.as_posix()}"\n[skate]\ntoe_off_s = 1.5\n')
+    with pytest.raises(ConfigError, match=r"skate\.toe_off_s.*skate\.push_s"):
+        load_config(p)
+
+
 def test_humanoid_build_goes_the_one_build_path(tmp_path):
     """`skatelib build` of a humanoid config runs through the same sweep as a quadruped's: its motions
     solve as tasks in worker processes (-j 2), a second build is served from the entry cache

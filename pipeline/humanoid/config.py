@@ -134,6 +134,9 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
         raise ConfigError(path, "gpm.solver", f"{cfg.gpm.solver!r}: use 'ipopt' or 'sqp'")
     if cfg.humanoid.leg_min_m >= cfg.humanoid.leg_max_m:
         raise ConfigError(path, "humanoid.leg_min_m", "must be below humanoid.leg_max_m")
+    if cfg.skate.toe_off_s > cfg.skate.push_s:
+        raise ConfigError(path, "skate.toe_off_s", f"{cfg.skate.toe_off_s} s is longer than the push "
+                                                   f"(skate.push_s = {cfg.skate.push_s} s): the heel rises within it")
     if not cfg.sweep.velocities_mps:
         raise ConfigError(path, "sweep.velocities_mps", "is empty: list at least one speed")
     check_unique_keys(path, cfg.sweep.velocities_mps)
