@@ -86,11 +86,13 @@ def _doctored(walk, tmp_path, name, change):
     (schema.D_FEET, lambda a: a + np.r_[0.005, 0, 0, 0, 0, 0, 0, 0, 0, 0], "miss the body's targets"),
     (schema.D_FEET, lambda a: a + np.r_[0, 0, 0, 0, 0.05, 0, 0, 0, 0, 0], "miss the body's targets"),
     (schema.D_JOINTS, lambda a: np.where(np.arange(12) == 3, -0.01, a), "beyond its limit"),
+    (schema.D_JOINT_VELOCITIES, lambda a: 2.0 * a, "faster than its limit"),
     (schema.D_ZMP_WHOLEBODY, lambda a: a + np.r_[0.2, 0.0], "outside the support polygon"),
 ])
 def test_validate_catches_a_doctored_whole_body(walk, tmp_path, name, change, words):
     """A sole moved 5 mm from where the joints put it, or stored pitched 0.05 rad from the joints'
-    sole (5 mm at its toe), a knee bent past its limit, the multibody ZMP moved 20 cm: validate
-    exits 1 naming what is wrong (the untouched file passes above)."""
+    sole (5 mm at its toe), a knee bent past its limit, joint rates doubled (the walk's fastest,
+    3.9 rad/s, past the 6 rad/s limit), the multibody ZMP moved 20 cm: validate exits 1 naming what
+    is wrong (the untouched file passes above)."""
     r = _validate(_doctored(walk, tmp_path, name, change))
     assert r.returncode == 1 and words in r.stdout, r.stdout + r.stderr

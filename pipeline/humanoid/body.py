@@ -4,7 +4,7 @@ solved motion, and its checks, in code apart from the stages they check:
 
 * inverse kinematics: the whole-body COM on the (filtered) COM reference within 1 cm, each sole on
   its path within 2 mm (forward kinematics of the stored joints);
-* joint limits of the robot description;
+* joint limits of the robot description: angles and velocities;
 * the multibody ZMP inside the plan's support polygon at every knot after the filter, and its RMS
   error against the planned ZMP smaller than without the filter;
 * swing clearance: a sole is never under the ground;
@@ -129,12 +129,7 @@ def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: Bo
     feet = body.feet.reshape(-1, 2, POSE)
     com_err, feet_err = robot.residuals(q, body.com_reference, feet)
     lo, hi = robot.lower[7:], robot.upper[7:]
-    out = []
-    beyond = (body.q < lo - 1e-9) | (body.q > hi + 1e-9)
-    if beyond.any():
-        k, j = (int(x[0]) for x in np.nonzero(beyond))
-        out.append(f"{body.joint_names[j]} beyond its limit at t = {t[k]:.2f} s ({body.q[k, j]:+.3f} rad, "
-                   f"range {lo[j]:+.2f} to {hi[j]:+.2f})")
+    out = _joint_limits(robot, t, body)
     off = (com_err > COM_TOL_M) | (feet_err.max(axis=1) > FEET_TOL_M)
     if off.any():  # the rest would measure a body that is not where the plan puts it
         k = int(np.argmax(off))
@@ -151,6 +146,23 @@ def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: Bo
     if lowest_point(feet, sole_half_m).min() < -1e-9:
         out.append("a sole under the ground")
     out += _board_foot(plan, t, feet)
+    return out
+
+
+def _joint_limits(robot: Humanoid, t: np.ndarray, body: BodyMotion) -> list[str]:
+    """The joints' angles within the URDF's range and their rates within its velocity limits."""
+    lo, hi, fast = robot.lower[7:], robot.upper[7:], robot.model.velocityLimit[6:]
+    out = []
+    beyond = (body.q < lo - 1e-9) | (body.q > hi + 1e-9)
+    if beyond.any():
+        k, j = (int(x[0]) for x in np.nonzero(beyond))
+        out.append(f"{body.joint_names[j]} beyond its limit at t = {t[k]:.2f} s ({body.q[k, j]:+.3f} rad, "
+                   f"range {lo[j]:+.2f} to {hi[j]:+.2f})")
+    over = np.abs(body.qd) > fast
+    if over.any():
+        k, j = (int(x[0]) for x in np.nonzero(over))
+        out.append(f"{body.joint_names[j]} faster than its limit at t = {t[k]:.2f} s ({body.qd[k, j]:+.2f} rad/s, "
+                   f"limit {fast[j]:.1f})")
     return out
 
 
