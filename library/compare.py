@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from skatelib.library.figures import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
+from skatelib.library.attributes import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord, jsonable
 
