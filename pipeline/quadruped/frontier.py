@@ -55,6 +55,11 @@ class Lane:
     stop: bool = False
 
     @property
+    def start_up(self) -> bool:
+        """The start-ups' lane (the only one that warm-starts along its search)."""
+        return not self.stop and not self.from_mps
+
+    @property
     def label(self) -> str:
         return "stop (from)" if self.stop else f"speed-up from {self.from_mps:.2f}" if self.from_mps else "start-up"
 
@@ -104,7 +109,7 @@ def _try(config: QuadrupedConfig, v: float, strides: int, warm: WarmStart | None
          ) -> tuple[SolveResult, Probe]:
     """Solve a start-up warm (when given) and else cold, a transition with the build's retries;
     judge the converged result with the physics checks."""
-    if lane == Lane():
+    if lane.start_up:
         result = solve(lane.spec(config, v, strides, warm))
         if not result.success and warm is not None:
             result = solve(lane.spec(config, v, strides, None))
@@ -119,7 +124,6 @@ def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch, 
     """Climb, then bisect, one lane and stride count (a module-level function for worker processes)."""
     probes: list[Probe] = []
     best, best_warm, fail, limit = lane.floor, None, None, "search limit"
-    warms = lane == Lane()  # start-ups only (module docstring)
     v = lane.start(search)
     while v <= search.max_mps + 1e-9:
         result, probe = _try(config, v, strides, best_warm, lane)
@@ -127,7 +131,7 @@ def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch, 
         if not probe.ok:
             fail, limit = v, probe.status
             break
-        best, best_warm = v, result.warm if warms else None
+        best, best_warm = v, result.warm if lane.start_up else None
         v = round(v + search.step_mps, 6)
     lo = best
     while fail is not None and fail - lo > search.resolution_mps:
@@ -135,7 +139,7 @@ def frontier_for(config: QuadrupedConfig, strides: int, search: FrontierSearch, 
         result, probe = _try(config, mid, strides, best_warm, lane)
         probes.append(probe)
         if probe.ok:
-            lo, best, best_warm = mid, mid, result.warm if warms else None
+            lo, best, best_warm = mid, mid, result.warm if lane.start_up else None
         else:
             fail, limit = mid, probe.status
     return FrontierPoint(strides, best, fail, limit, tuple(probes), lane.from_mps, lane.stop)

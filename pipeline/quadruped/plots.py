@@ -131,7 +131,7 @@ def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
     ticks = []
     for y, p in enumerate(points):
         lane = Lane(p.get("from_mps", 0.0), p.get("stop", False))  # files of start-ups only lack them
-        ticks.append(f"{p['n_strides']}" if lane == Lane() else f"{lane.label}, {p['n_strides']}")
+        ticks.append(f"{p['n_strides']}" if lane.start_up else f"{lane.label}, {p['n_strides']}")
         ok = [q["velocity_mps"] for q in p["probes"] if q["ok"]]
         bad = [q["velocity_mps"] for q in p["probes"] if not q["ok"]]
         ax.scatter(ok, [y] * len(ok), marker="o", color="C2", s=18, zorder=3)
