@@ -36,9 +36,9 @@ def measure(path: Path) -> list[Measured]:
     from skatelib.control.qp import SOLVERS, make_solver
     from skatelib.control.reference import EntryReference
     from skatelib.control.settings import TrackSettings
-    from skatelib.control.track import track_jobs
     from skatelib.library.rotations import board_rotations, rpy_matrices
     from skatelib.pipeline.build.sweep import run_calls
+    from skatelib.proving.track import track_jobs
     from skatelib.runtime import MotionLibrary
 
     lib = MotionLibrary.open(path)

@@ -51,10 +51,11 @@ def _replay(loop: Any, tasks: Any, ticks: list[tuple[float, Any, Any]]) -> float
 def measure(path: Path) -> list[Measured]:
     from skatelib.control.mpc import MpcConfig
     from skatelib.control.params import SkateParams
-    from skatelib.control.settings import ClosedLoop, TrackSettings
-    from skatelib.control.twin_loop import TwinLoop
+    from skatelib.control.settings import TrackSettings
     from skatelib.pipeline.build.sweep import run_calls
-    from skatelib.pipeline.twin_track import twin_jobs
+    from skatelib.proving.setup import ClosedLoop
+    from skatelib.proving.twin.loop import TwinLoop
+    from skatelib.proving.twin.track import twin_jobs
     from skatelib.runtime import MotionLibrary
     from skatelib.sim.figures import TwinFigures
     from skatelib.sim.plant import TwinPlant

@@ -190,7 +190,7 @@ class EntryReference:
 
 
 class Reference(Protocol):
-    """What :func:`skatelib.control.loop.simulate` asks of a reference (an entry's, or the steering experiment's)."""
+    """What :func:`skatelib.proving.loop.simulate` asks of a reference (an entry's, or the steering experiment's)."""
 
     t0: float  # start [s]
     t_end: float  # end of the planned motion [s] (speeds are judged from here)

@@ -1,12 +1,9 @@
-"""How a closed loop is set up: the run's settings and the whole set-up (model, plant, disturbances,
-MPC, settings) that every closed-loop function takes as one object."""
+"""A closed-loop run's settings that the entry reference reads (the transfer, the ride after it)
+besides the proving ground's (plant steps, seed)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
-from skatelib.control.mpc import MpcConfig
-from skatelib.control.params import Disturbances, SkateParams
+from dataclasses import dataclass
 
 
 @dataclass(frozen=True)
@@ -28,22 +25,3 @@ class TrackSettings:
     transfer_s: float = 0.4
     ride_s: float = 1.5
     seed: int = 0
-
-
-@dataclass(frozen=True)
-class ClosedLoop:
-    """One closed-loop set-up.
-
-    Attributes:
-        model: What the controller believes (the library's model).
-        plant: What it drives (the model with the perturbation applied).
-        dist: Disturbances of the run (noise, an impulse, a COM offset, an initial error).
-        mpc: The MPC's settings.
-        settings: The run's settings.
-    """
-
-    model: SkateParams
-    plant: SkateParams
-    dist: Disturbances = field(default_factory=Disturbances)
-    mpc: MpcConfig = field(default_factory=MpcConfig)
-    settings: TrackSettings = field(default_factory=TrackSettings)

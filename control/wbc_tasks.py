@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from skatelib.control.body_plan import BodyPlan, BodyTargets, yaw_matrix
+from skatelib.control.feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
-from skatelib.control.twin_feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.wbc import WbcSettings, WbcTargets
 from skatelib.library.channels import BOARD, SWING
 

@@ -34,11 +34,11 @@ def closed_loop_verdicts(path: Path, perturb: str, jobs: int, plant: str = "mode
     errors = "" if perturb == "none" else perturb
     try:
         if plant == "mujoco":
-            from skatelib.pipeline.twin_track import twin_jobs
+            from skatelib.proving.twin.track import twin_jobs
 
             calls: list[Any] = twin_jobs(path, None, errors)
         else:
-            from skatelib.control.track import track_jobs
+            from skatelib.proving.track import track_jobs
 
             calls = track_jobs(path, None, errors)
     except ImportError as e:

@@ -17,14 +17,16 @@ pytest.importorskip("osqp")
 pytest.importorskip("daqp")
 
 from scipy.linalg import expm
-from skatelib.control.closed_loop import track_entry
 from skatelib.control.linear_model import Discretizer, Feedback, continuous_model
 from skatelib.control.mpc import Bias, HorizonRef, MpcConfig, build_problem, qp_objective
-from skatelib.control.params import PerturbationError, SkateParams, parse_perturbation
-from skatelib.control.plant import NB, Plant
+from skatelib.control.params import SkateParams
 from skatelib.control.qp import make_solver
-from skatelib.control.settings import ClosedLoop, TrackSettings
+from skatelib.control.settings import TrackSettings
 from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.proving.closed_loop import track_entry
+from skatelib.proving.perturb import PerturbationError, parse_perturbation
+from skatelib.proving.plant import NB, Plant
+from skatelib.proving.setup import ClosedLoop
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY
@@ -255,7 +257,7 @@ def test_steering_follows_the_deck_roll_and_its_negative_control(lib):
     loaded. A deck with half the trucks' stiffness: the torso shift that follows the stiffness
     measured while rolling keeps the error within the bound with less shift; negative control:
     with the model's K_B throughout it misses the bound."""
-    from skatelib.control.steer import steer
+    from skatelib.proving.steer import steer
 
     p = SkateParams.from_library(lib)
     r = steer(lib, ClosedLoop(p, p), 0.0, duration_s=4.5)

@@ -37,3 +37,22 @@ def test_checker_reports_long_modules_long_functions_and_wrong_imports(tmp_path)
     assert any(f.startswith("runtime/long.py:1: imports skatelib.pipeline.build.orchestrate") for f in found)
     assert any(f.startswith("pipeline/ocp/bad.py:1: imports skatelib.pipeline.quadruped") for f in found)
     assert len(found) == 4, found
+
+
+def test_checker_keeps_the_controller_apart_from_its_proving_ground(tmp_path):
+    """A doctored tree: the controller importing the proving ground, the twin and casadi; the twin
+    importing the controller; the proving ground importing the pipeline. Each is a breach."""
+    check = _checker()
+    for top in ("control", "sim", "proving"):
+        shutil.copytree(ROOT / top, tmp_path / top, ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "control" / "bad.py").write_text(
+        "from skatelib.proving.twin.loop import TwinLoop\nimport skatelib.sim.plant\nimport casadi\nimport pinocchio\n")
+    (tmp_path / "sim" / "bad.py").write_text("from skatelib.control.wbc import WholeBodyController\n")
+    (tmp_path / "proving" / "bad.py").write_text("from skatelib.pipeline.cli import app\nimport skatelib.sim\n")
+    found = check.problems(tmp_path)
+    assert any(f.startswith("control/bad.py:1: imports skatelib.proving.twin.loop (control/ must not)") for f in found)
+    assert any(f.startswith("control/bad.py:2: imports skatelib.sim.plant (control/ must not)") for f in found)
+    assert any(f.startswith("control/bad.py:3: imports casadi (control/ is installed on the robot") for f in found)
+    assert any(f.startswith("sim/bad.py:1: imports skatelib.control.wbc (sim/ must not)") for f in found)
+    assert any(f.startswith("proving/bad.py:1: imports skatelib.pipeline.cli (proving/ must not)") for f in found)
+    assert len(found) == 5, found  # pinocchio in control/ and the twin in proving/ are allowed

@@ -177,10 +177,11 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_
     entry delivers its label; the shove (board at the label, robot slow and sinking) ends the push-off
     with the system's momentum far short of the label and fails."""
     pytest.importorskip("daqp")
-    from skatelib.control.closed_loop import track_entry
     from skatelib.control.params import SkateParams
-    from skatelib.control.settings import ClosedLoop, TrackSettings
+    from skatelib.control.settings import TrackSettings
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
+    from skatelib.proving.closed_loop import track_entry
+    from skatelib.proving.setup import ClosedLoop
     from skatelib.runtime import MotionLibrary
 
     verdicts = {}

@@ -16,11 +16,11 @@ pytest.importorskip("mujoco")
 pytest.importorskip("daqp")
 
 from skatelib.control.params import SkateParams
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings
-from skatelib.control.twin_verdict import HEADING_LIMIT_RAD, SLIP_LIMIT_M, twin_result
 from skatelib.control.wbc import WbcSettings
 from skatelib.library import schema
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
+from skatelib.proving.twin.verdict import HEADING_LIMIT_RAD, SLIP_LIMIT_M, twin_result
 from skatelib.runtime import MotionLibrary
 from skatelib.sim.errors import DEFAULT_TWIN_PERTURBATION, parse_twin_perturbation
 from skatelib.sim.figures import TwinFigures
@@ -123,7 +123,7 @@ def test_the_steering_maneuver_in_physics(libs):
     On trucks half as stiff, the shift that follows the stiffness measured while rolling keeps the
     error to less than half of what the model's K_B throughout gives (which misses the bound by
     far, a foot leaving the deck)."""
-    from skatelib.control.twin_steer import SteerRun, steer_twin
+    from skatelib.proving.twin.steer import SteerRun, steer_twin
 
     lib = MotionLibrary.open(libs["one"])
     p = SkateParams.from_library(lib)

@@ -1,13 +1,15 @@
 """Hold the repository to its layout rules (docs: README "Layout"); run by ``make lint``.
 
 * Modules of every package folder (``pipeline/``, ``library/``, ``runtime/``, ``control/``,
-  ``sim/``) at most 250 lines, functions at most 60.
-* Imports follow the data path: ``library/`` imports neither ``pipeline`` nor ``runtime`` nor
-  ``control`` nor ``sim``; ``runtime/`` not ``pipeline``, ``control`` or ``sim``; ``control/`` and
-  ``sim/`` not ``pipeline``; ``sim/`` not ``control``; ``pipeline/ocp/`` (the engine) no robot
-  subpackage.
+  ``sim/``, ``proving/``) at most 250 lines, functions at most 60.
+* Imports follow the data path: ``library/`` imports none of the others; ``runtime/`` only
+  ``library``; ``control/`` (the controller a robot runs) only ``library`` and ``runtime``, never
+  the proving ground, the twin or the pipeline; ``sim/`` only ``library`` and ``runtime``;
+  ``proving/`` (the proving ground) anything but ``pipeline``; ``pipeline/ocp/`` (the engine) no
+  robot subpackage.
 * ``library/`` and ``runtime/`` (what a robot installs) import only the standard library, numpy,
-  h5py and skatelib.
+  h5py and skatelib; ``control/`` besides them only pinocchio, scipy, its QP solvers and
+  threadpoolctl (the ``[control]`` extra).
 
 Usage: ``python tools/check_layout.py [ROOT]``; exit 1 listing every breach.
 """
@@ -20,16 +22,22 @@ from pathlib import Path
 
 MAX_MODULE_LINES = 250
 MAX_FUNCTION_LINES = 60
-PACKAGES = ("pipeline", "library", "runtime", "control", "sim")
+PACKAGES = ("pipeline", "library", "runtime", "control", "sim", "proving")
 FORBIDDEN = {  # folder -> imported packages it must not use
-    "library": ("skatelib.pipeline", "skatelib.runtime", "skatelib.control", "skatelib.sim"),
-    "runtime": ("skatelib.pipeline", "skatelib.control", "skatelib.sim"),
-    "control": ("skatelib.pipeline", "skatelib.sim"),
-    "sim": ("skatelib.pipeline", "skatelib.control"),
+    "library": ("skatelib.pipeline", "skatelib.runtime", "skatelib.control", "skatelib.sim", "skatelib.proving"),
+    "runtime": ("skatelib.pipeline", "skatelib.control", "skatelib.sim", "skatelib.proving"),
+    "control": ("skatelib.pipeline", "skatelib.sim", "skatelib.proving"),
+    "sim": ("skatelib.pipeline", "skatelib.control", "skatelib.proving"),
+    "proving": ("skatelib.pipeline",),
     "pipeline/ocp": ("skatelib.pipeline.quadruped", "skatelib.pipeline.humanoid"),
 }
-ONBOARD = ("library", "runtime")  # what a robot installs
 ONBOARD_ALLOWED = {*sys.stdlib_module_names, "numpy", "h5py", "skatelib"}
+# What a robot installs, and the third-party packages each may import besides.
+ONBOARD = {
+    "library": ONBOARD_ALLOWED,
+    "runtime": ONBOARD_ALLOWED,
+    "control": {*ONBOARD_ALLOWED, "pinocchio", "scipy", "daqp", "proxsuite", "osqp", "threadpoolctl"},
+}
 
 
 def _imports(tree: ast.AST) -> list[tuple[int, str]]:
@@ -64,9 +72,10 @@ def problems(root: Path) -> list[str]:
         text = path.read_text()
         tree = ast.parse(text, filename=rel)
         found += _sizes(path, rel, tree, len(text.splitlines()))
-        if rel.split("/")[0] in ONBOARD:
-            found += [f"{rel}:{line}: imports {name} (a robot installs only numpy and h5py)"
-                      for line, name in _imports(tree) if name.split(".")[0] not in ONBOARD_ALLOWED]
+        top = rel.split("/")[0]
+        if top in ONBOARD:
+            found += [f"{rel}:{line}: imports {name} ({top}/ is installed on the robot without it)"
+                      for line, name in _imports(tree) if name.split(".")[0] not in ONBOARD[top]]
         for folder, banned in FORBIDDEN.items():
             if rel.startswith(folder + "/"):
                 found += [f"{rel}:{line}: imports {name} ({folder}/ must not)"

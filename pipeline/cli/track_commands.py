@@ -65,8 +65,8 @@ def track(
     try:
         from skatelib.control.mpc import MpcConfig
         from skatelib.control.settings import TrackSettings
-        from skatelib.control.track import steer_jobs
         from skatelib.pipeline.build.sweep import run_calls
+        from skatelib.proving.track import steer_jobs
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
@@ -116,7 +116,7 @@ def _recording(library: Path, save: Path | None) -> Any:
 
 def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any],
                 outputs: tuple[Path | None, Path | None], how: tuple[bool, bool]) -> None:
-    """A chained ride (:mod:`skatelib.control.ride`), its stages' table. ``errors``: the plant's
+    """A chained ride (:mod:`skatelib.proving.ride`), its stages' table. ``errors``: the plant's
     perturbation and its name; ``controller``: the MPC's and the run's settings; ``outputs``: a
     recording and a video (the twin's) to write; ``how``: no option that rides something else (the
     steering maneuver, entries), and whether on the twin."""
@@ -127,9 +127,9 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
     if video is not None and not on_twin:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     (plant_error, perturb), (mpc, settings) = errors, controller
-    from skatelib.control.ride import parse_ride, ride
-    from skatelib.control.track import JobSpec, _quadruped
     from skatelib.pipeline.views.console import ride_table
+    from skatelib.proving.ride import parse_ride, ride
+    from skatelib.proving.track import JobSpec, _quadruped
 
     try:
         stages = parse_ride(text)
@@ -141,7 +141,7 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
 
         check_output(video, [library], what="video")
     if on_twin:
-        from skatelib.pipeline.twin_ride import twin_ride
+        from skatelib.proving.twin.ride import twin_ride
         from skatelib.runtime import MotionLibrary
 
         lib = MotionLibrary.open(library)
@@ -163,7 +163,7 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
                  runner: tuple[int, bool], save: Path | None) -> None:
     """``runner``: parallel jobs, and whether to show progress."""
-    from skatelib.control.track import track_jobs
+    from skatelib.proving.track import track_jobs
 
     jobs, progress = runner
     save_closed_loop = _recording(library, save)
@@ -186,7 +186,7 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
     """``runner``: parallel jobs, and whether to show progress."""
     jobs, progress = runner
     from skatelib.pipeline.build.sweep import run_calls
-    from skatelib.pipeline.twin_track import twin_jobs, twin_steer_jobs
+    from skatelib.proving.twin.track import twin_jobs, twin_steer_jobs
 
     save, video = outputs
     if maneuver is Maneuver.steer:

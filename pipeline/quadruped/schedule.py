@@ -4,7 +4,7 @@ On the robot: four-leg balancing -> three-leg transfer (push leg board -> ground
 [push on the ground (duty x period), swing (rest of the period)] -> three-leg transfer (push leg
 back onto the board) -> four-leg balancing. The trajectory optimization covers the strides (the
 accelerating mode, :func:`knot_schedule`); the transfers and balancing are the controller's
-(``skatelib.control.closed_loop``).
+(``skatelib.proving.closed_loop``).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The physical twin as a build's judge of transitions (``[transitions] twin_judge``): a candidate
 that passes the independent physics checks is ridden in closed loop on the MuJoCo twin
-(:func:`skatelib.pipeline.twin_track.ride_twin`: the MPC over the whole-body controller, the
+(:func:`skatelib.proving.twin.track.ride_twin`: the MPC over the whole-body controller, the
 transfer and 1.5 s of riding) under each of the configured model-error sets, and judged as
-``skatelib track --plant mujoco`` judges an entry (:func:`skatelib.control.twin_verdict.twin_result`).
+``skatelib track --plant mujoco`` judges an entry (:func:`skatelib.proving.twin.verdict.twin_result`).
 A stride count the twin refuses is not kept: the next is tried.
 
 Verdicts are cached beside the solves, under the candidate's cache key, the error sets and a
@@ -62,13 +62,13 @@ def twin_fingerprint() -> str:
     """A hash of the controller's and the twin's source, the ride's and this judge's, and MuJoCo's version."""
     import mujoco
     import skatelib.control
-    import skatelib.pipeline.twin_track
+    import skatelib.proving
     import skatelib.sim
 
     h = hashlib.sha256(mujoco.__version__.encode())
-    files = [p for package in (skatelib.control, skatelib.sim) for folder in package.__path__
+    files = [p for package in (skatelib.control, skatelib.sim, skatelib.proving) for folder in package.__path__
              for p in sorted(Path(folder).rglob("*.py"))]
-    for path in [*files, Path(skatelib.pipeline.twin_track.__file__), Path(__file__)]:
+    for path in [*files, Path(__file__)]:
         h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
@@ -87,10 +87,10 @@ def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> 
     reasons ('' when none fails)."""
     from skatelib.control.mpc import MpcConfig
     from skatelib.control.settings import TrackSettings
-    from skatelib.control.twin_verdict import twin_result
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
     from skatelib.pipeline.quadruped.problem import system_for
-    from skatelib.pipeline.twin_track import ride_twin
+    from skatelib.proving.twin.track import ride_twin
+    from skatelib.proving.twin.verdict import twin_result
     from skatelib.runtime import MotionLibrary
 
     key = schema.entry_key(result.target_velocity_mps, result.n_strides, result.from_velocity_mps)

@@ -4,12 +4,12 @@ entry's reference, with the model loop's observers) and the whole-body controlle
 multibody plant (the MuJoCo twin) stepping at its own timestep: 2 plant steps per whole-body tick
 and 17 ticks per MPC update (1/30 s) at the twin's 1/1020 s.
 
-Each tick: the sensed state (:mod:`skatelib.control.twin_feedback`), pinocchio's terms of the
+Each tick: the sensed state (:mod:`skatelib.control.feedback`), pinocchio's terms of the
 library's robot at it; on the first tick of each update the MPC's update on the same state and
 terms (the centre of mass is the whole robot's), the observers, the horizon, one QP; then the
 tasks on the measured board, one whole-body QP, the torques (clipped at the limit, as the motors
 do). The plant's true state feeds the measures
-(:mod:`skatelib.control.twin_metrics`) and the fall checks.
+(:mod:`skatelib.proving.twin.metrics`) and the fall checks.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.control.body_plan import BodyPlan
+from skatelib.control.feedback import MultibodyState, mpc_state, quat_wxyz
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Discretizer, Feedback
 from skatelib.control.mpc import Bias, MpcProblem, build_problem
@@ -27,15 +28,15 @@ from skatelib.control.multibody import DynamicsTerms, RobotDynamics
 from skatelib.control.observers import CoastObserver, DisturbanceObserver
 from skatelib.control.qp import QpSolveFailed, make_solver
 from skatelib.control.reference import EntryReference
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.twin_feedback import MultibodyPlant, MultibodyState, SensedState, Sensors, mpc_state, quat_wxyz
-from skatelib.control.twin_metrics import Meter, TwinMeasures, planned_floor_near
-from skatelib.control.twin_record import TwinRecord
 from skatelib.control.wbc import WbcSettings, WholeBodyController
 from skatelib.control.wbc_tasks import ContactTable, TaskMaker
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.twin.metrics import Meter, TwinMeasures, planned_floor_near
+from skatelib.proving.twin.record import TwinRecord
+from skatelib.proving.twin.sensors import MultibodyPlant, SensedState, Sensors
 
 PRELOAD_M = 2e-4  # the deck feet start this far into the deck (a foot above it would start in the air)
 FALL_HEIGHT_M = 0.10  # trunk this close above the deck's top: fallen

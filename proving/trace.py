@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from skatelib.control.plant import Plant
 from skatelib.library import schema
 from skatelib.library.channels import CONTROL_NAMES, LEGS, NX, STATE_NAMES
+from skatelib.proving.plant import Plant
 from skatelib.runtime import Entry
 
 

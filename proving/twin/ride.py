@@ -1,4 +1,4 @@
-"""``skatelib track LIB --ride ... --plant mujoco``: a chained ride (:mod:`skatelib.control.ride`) on
+"""``skatelib track LIB --ride ... --plant mujoco``: a chained ride (:mod:`skatelib.proving.ride`) on
 the physical twin, by the MPC and the whole-body controller of ``skatelib.control`` on the MuJoCo
 model of ``skatelib.sim``: the joined entry starts rolling at the first stage's start speed, each
 stage is judged by the plant's momentum speed at its end, the run by the twin's verdict."""
@@ -11,12 +11,12 @@ from typing import Any
 
 def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: Any, settings: Any,
               outputs: tuple[bool, Path | None] = (False, None)) -> Any:
-    """Ride ``stages`` on the twin with ``perturb``'s errors; a :class:`skatelib.control.ride.RideResult`
+    """Ride ``stages`` on the twin with ``perturb``'s errors; a :class:`skatelib.proving.ride.RideResult`
     whose ``run`` is the twin's verdict. ``outputs``: whether to keep the run as an entry (for a
     recording), and a video to render it to (MuJoCo's offscreen renderer)."""
-    from skatelib.control.ride import RideResult, judge_stages, plan_ride
-    from skatelib.control.twin_verdict import twin_result
-    from skatelib.pipeline.twin_track import check_twin, ride_twin
+    from skatelib.proving.ride import RideResult, judge_stages, plan_ride
+    from skatelib.proving.twin.track import check_twin, ride_twin
+    from skatelib.proving.twin.verdict import twin_result
 
     lib = check_twin(path, perturb)
     plan = plan_ride(lib, stages)

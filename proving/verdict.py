@@ -18,10 +18,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from skatelib.control.params import SkateParams
-from skatelib.control.plant import Plant
 from skatelib.control.reference import Reference
-from skatelib.control.trace import Run
 from skatelib.library.channels import I_BOARD_ROLL, NX
+from skatelib.proving.plant import Plant
+from skatelib.proving.trace import Run
 
 SPEED_TOLERANCE = 0.05
 STOP_TOLERANCE_MPS = 0.05  # a stop (label 0) delivers at most this speed

@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from skatelib.control.twin_loop import TwinRun
-from skatelib.control.verdict import speed_verdict
+from skatelib.proving.twin.loop import TwinRun
+from skatelib.proving.verdict import speed_verdict
 
 SLIP_LIMIT_M = 0.01
 HEADING_LIMIT_RAD = 0.1

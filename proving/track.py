@@ -9,13 +9,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from skatelib.control.closed_loop import track_entry
 from skatelib.control.mpc import MpcConfig
-from skatelib.control.params import SkateParams, parse_perturbation
-from skatelib.control.settings import ClosedLoop, TrackSettings
-from skatelib.control.steer import SteerResult, steer
-from skatelib.control.verdict import TrackResult
+from skatelib.control.params import SkateParams
+from skatelib.control.settings import TrackSettings
 from skatelib.library.errors import SkatelibError
+from skatelib.proving.closed_loop import track_entry
+from skatelib.proving.perturb import parse_perturbation
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.steer import SteerResult, steer
+from skatelib.proving.verdict import TrackResult
 from skatelib.runtime import Entry, MotionLibrary
 
 
@@ -89,7 +91,7 @@ def track_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcCon
 
 def steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: MpcConfig | None = None,
                settings: TrackSettings | None = None) -> list[SteerJob]:
-    """One steering job per speed (:mod:`skatelib.control.steer`)."""
+    """One steering job per speed (:mod:`skatelib.proving.steer`)."""
     _quadruped(path, perturb, "the steering experiment")
     spec = JobSpec(str(path), perturb, mpc or MpcConfig(), settings or TrackSettings())
     return [SteerJob(spec, v) for v in speeds]

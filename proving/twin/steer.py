@@ -1,5 +1,5 @@
 """The four-leg balancing and steering maneuver (Sec. VI-A, Fig. 5) in full physics: the MPC with
-the model loop's steering reference (:class:`skatelib.control.steer.SteerReference`: the deck's
+the model loop's steering reference (:class:`skatelib.proving.steer.SteerReference`: the deck's
 roll along a 0.1 rad sine of 3 s period, held by shifting the body sideways) over the whole-body
 controller, on a multibody plant, at rest and riding.
 
@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 from skatelib.control.body_plan import BodyTargets
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.steer import ROLL_RMS_LIMIT_RAD, SteerReference, SteerResult
-from skatelib.control.twin_feedback import MultibodyPlant
-from skatelib.control.twin_loop import Ride, TwinLoop, TwinLoopSettings
-from skatelib.control.twin_verdict import SLIP_LIMIT_M
 from skatelib.library.channels import NX
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.steer import ROLL_RMS_LIMIT_RAD, SteerReference, SteerResult
+from skatelib.proving.twin.loop import Ride, TwinLoop, TwinLoopSettings
+from skatelib.proving.twin.sensors import MultibodyPlant
+from skatelib.proving.twin.verdict import SLIP_LIMIT_M
 
 
 class SteerPlan:

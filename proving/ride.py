@@ -1,14 +1,14 @@
 """A chained ride in closed loop: stages such as 0 -> 0.5 -> 0.8 -> 0.3 -> 0 m/s, each ridden by the
 library's entries (``MotionLibrary.route``: one entry when one gets there), joined end to start into
-one reference and driven through the closed loop of :mod:`skatelib.control.closed_loop` as one
-entry (on the twin: ``skatelib.pipeline.twin_ride``, the same joined entry through the twin's
+one reference and driven through the closed loop of :mod:`skatelib.proving.closed_loop` as one
+entry (on the twin: ``skatelib.proving.twin.ride``, the same joined entry through the twin's
 loop). Between stages the robot rides on three feet with the push foot lifted beside the deck (the
 next entry starts where the last one ends: the riding stance of ``[terminal]``); after the last
 stage come the transfer of the push leg onto the deck and four-leg riding, as after any entry.
 
 Each stage is judged at its end by the plant's momentum speed (robot and board together) against
 its target: within 5 %, a stop below 0.05 m/s; the whole ride by the entry verdict
-(:mod:`skatelib.control.verdict`: no fall, no slip, torques and reach).
+(:mod:`skatelib.proving.verdict`: no fall, no slip, torques and reach).
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from skatelib.control.closed_loop import run_entry
 from skatelib.control.reference import STAGE_ENDS
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.verdict import speed_verdict
 from skatelib.library import schema
+from skatelib.proving.closed_loop import run_entry
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.verdict import speed_verdict
 from skatelib.runtime import Entry, MotionLibrary
 
 

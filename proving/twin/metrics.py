@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from skatelib.control.twin_feedback import ON_DECK, ON_FLOOR
+from skatelib.control.feedback import ON_DECK, ON_FLOOR
 from skatelib.library.channels import GROUND
 
 WHEEL_LIFT_TICKS = 5  # a wheel without load for this many ticks in a row has lifted off

@@ -2,7 +2,7 @@
 controller (the MPC at 30 Hz and the whole-body controller at 510 Hz of ``skatelib.control``) on
 the MuJoCo model of ``skatelib.sim``. The two packages do not know each other; a job here hands
 the one's plant to the other's loop. Jobs are picklable and checked before any runs, like the
-model plant's (:mod:`skatelib.control.track`)."""
+model plant's (:mod:`skatelib.proving.track`)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from skatelib.runtime import MotionLibrary
 class TwinJob:
     """One entry on the twin with ``perturb``'s errors (:mod:`skatelib.sim.errors`); with
     ``video`` the run rendered to that file (:mod:`skatelib.sim.video`); with ``keep_run`` the run
-    as an entry for a recording (:mod:`skatelib.control.twin_record`). Returns (the verdict, the
+    as an entry for a recording (:mod:`skatelib.proving.twin.record`). Returns (the verdict, the
     video's path or None, the entry or None)."""
 
     path: str
@@ -31,8 +31,8 @@ class TwinJob:
     keep_run: bool = False
 
     def __call__(self) -> tuple[Any, str | None, Any]:
-        from skatelib.control.twin_verdict import twin_result
         from skatelib.library import schema
+        from skatelib.proving.twin.verdict import twin_result
 
         lib = MotionLibrary.open(self.path)
         label = float(lib[self.key].attrs[schema.A_TARGET_VELOCITY])
@@ -47,11 +47,11 @@ def ride_twin(lib: MotionLibrary, what: Any, perturb: str, controller: tuple[Any
     """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
     with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread.
     ``outputs``: whether to keep the run's record, and a video to render it to. Returns the run
-    (:class:`skatelib.control.twin_loop.TwinRun`) and the video's path or None."""
+    (:class:`skatelib.proving.twin.loop.TwinRun`) and the video's path or None."""
     from skatelib.control.params import SkateParams
-    from skatelib.control.settings import ClosedLoop
-    from skatelib.control.twin_feedback import Sensors
-    from skatelib.control.twin_loop import TwinLoop, TwinLoopSettings
+    from skatelib.proving.setup import ClosedLoop
+    from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
+    from skatelib.proving.twin.sensors import Sensors
     from threadpoolctl import threadpool_limits
 
     keep, video = outputs
@@ -71,7 +71,7 @@ def ride_twin(lib: MotionLibrary, what: Any, perturb: str, controller: tuple[Any
 
 @dataclass(frozen=True)
 class TwinSteerJob:
-    """The steering maneuver at ``speed_mps`` on the twin (:mod:`skatelib.control.twin_steer`)."""
+    """The steering maneuver at ``speed_mps`` on the twin (:mod:`skatelib.proving.twin.steer`)."""
 
     path: str
     speed_mps: float
@@ -81,10 +81,10 @@ class TwinSteerJob:
 
     def __call__(self) -> Any:
         from skatelib.control.params import SkateParams
-        from skatelib.control.settings import ClosedLoop
-        from skatelib.control.twin_feedback import Sensors
-        from skatelib.control.twin_loop import TwinLoopSettings
-        from skatelib.control.twin_steer import SteerRun, steer_twin
+        from skatelib.proving.setup import ClosedLoop
+        from skatelib.proving.twin.loop import TwinLoopSettings
+        from skatelib.proving.twin.sensors import Sensors
+        from skatelib.proving.twin.steer import SteerRun, steer_twin
         from threadpoolctl import threadpool_limits
 
         lib = MotionLibrary.open(self.path)

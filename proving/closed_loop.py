@@ -8,35 +8,35 @@ single-rigid-body plant); then four-leg riding at the speed reached, ``ride_s`` 
 The parts, one module each (the paper's Fig. 3): the reference
 (:mod:`skatelib.control.reference`), the observers (:mod:`skatelib.control.observers`), the MPC
 problem (:mod:`skatelib.control.mpc`) and its QP backends (:mod:`skatelib.control.qp`), the loop
-that ticks them against the plant (:mod:`skatelib.control.loop`) and the verdict
-(:mod:`skatelib.control.verdict`).
+that ticks them against the plant (:mod:`skatelib.proving.loop`) and the verdict
+(:mod:`skatelib.proving.verdict`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from skatelib.control.kinematics import LegKinematics
-from skatelib.control.loop import simulate
-from skatelib.control.plant import NB
 from skatelib.control.reference import EntryReference
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.trace import Run, Trace
-from skatelib.control.verdict import TrackResult, track_result
 from skatelib.library import schema
 from skatelib.library.channels import NX
+from skatelib.proving.loop import simulate
+from skatelib.proving.plant import NB
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.trace import Run, Trace
+from skatelib.proving.verdict import TrackResult, track_result
 from skatelib.runtime import Entry, MotionLibrary
 
 
 def track_entry(lib: MotionLibrary, key: str, loop: ClosedLoop, keep_trace: bool = False
                 ) -> tuple[TrackResult, Trace | None]:
-    """Run one entry in closed loop and judge it (:mod:`skatelib.control.verdict`); with
+    """Run one entry in closed loop and judge it (:mod:`skatelib.proving.verdict`); with
     ``keep_trace`` the run's time series too."""
     result, run = run_entry(lib, lib[key], loop, keep_trace)
     return result, run.trace
 
 
 def run_entry(lib: MotionLibrary, entry: Entry, loop: ClosedLoop, keep_trace: bool = False) -> tuple[TrackResult, Run]:
-    """Run ``entry`` (of ``lib``, or one made of its entries: :mod:`skatelib.control.ride`) in closed
+    """Run ``entry`` (of ``lib``, or one made of its entries: :mod:`skatelib.proving.ride`) in closed
     loop: its verdict and what the run measured."""
     key = entry.key
     ref = EntryReference(lib, entry, loop.model, loop.settings)

@@ -19,15 +19,15 @@ from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Discretizer, Feedback
 from skatelib.control.mpc import Bias, HorizonRef, MpcProblem, build_problem
 from skatelib.control.observers import CoastObserver, DisturbanceObserver
-from skatelib.control.plant import Plant, PlantInput
 from skatelib.control.qp import QpSolveFailed, make_solver
 from skatelib.control.reference import Reference
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.trace import Run, Trace
-from skatelib.control.verdict import fall_reason
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q, SWING
 from skatelib.library.margins import forward_speed, momentum_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.proving.plant import Plant, PlantInput
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.trace import Run, Trace
+from skatelib.proving.verdict import fall_reason
 
 
 def simulate(ref: Reference, x_init: np.ndarray, loop: ClosedLoop, keep_trace: bool = False,

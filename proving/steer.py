@@ -14,13 +14,13 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from skatelib.control.loop import simulate
 from skatelib.control.mpc import HorizonRef
 from skatelib.control.params import SkateParams
-from skatelib.control.plant import NB
-from skatelib.control.settings import ClosedLoop
-from skatelib.control.verdict import slip_reason
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, I_BOARD_ROLL_RATE, NU, NX
+from skatelib.proving.loop import simulate
+from skatelib.proving.plant import NB
+from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.verdict import slip_reason
 from skatelib.runtime import MotionLibrary
 
 ROLL_RMS_LIMIT_RAD = 0.03  # deck-roll tracking error below this, RMS

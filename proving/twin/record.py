@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from skatelib.control.twin_feedback import ON_FLOOR
+from skatelib.control.feedback import ON_FLOOR
 from skatelib.library import schema
 from skatelib.library.channels import BOARD, CONTROL_NAMES, GROUND, LEGS, NX, STATE_NAMES, SWING
 from skatelib.runtime import Entry

@@ -1,0 +1,97 @@
+"""The model errors (``track --perturb``) that make the proving ground's model plant differ from the
+controller's model, and the disturbances of a run beyond them."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from skatelib.control.params import SkateParams
+from skatelib.library.errors import SkatelibError
+from skatelib.library.perturb import perturbation_items
+
+
+class PerturbationError(SkatelibError, ValueError):
+    """A ``--perturb`` item is malformed or names an unknown key."""
+
+
+
+# --perturb key -> the SkateParams field it changes.
+PERTURB_KEYS: dict[str, str] = {
+    "mass": "mass_kg",
+    "inertia": "inertia_kgm2",
+    "board_mass": "board_mass_kg",
+    "kb": "kb_Nm_per_rad",
+    "bb": "bb_Nms_per_rad",
+    "rolling": "rolling_N",
+    "mu": "mu",
+    "tanh": "tanh_scale_s_per_m",
+}
+EXTRA_KEYS = ("com", "noise", "impulse", "impulse_t", "init")
+
+
+@dataclass(frozen=True)
+class Disturbances:
+    """What happens to the plant beyond its parameters.
+
+    Attributes:
+        com_offset_m: Shift of the true COM from the model's, trunk frame y [m] (lateral).
+        noise_std: Standard deviation of the feedback noise on positions [m] and angles [rad]
+            (velocities get 5x that per second of it, joint angles none).
+        impulse_Ns: Lateral impulse on the trunk [N s], applied over one plant step.
+        impulse_t_s: When, from the start of the entry [s].
+        init_error_m: Initial lateral and vertical base position error [m].
+    """
+
+    com_offset_m: float = 0.0
+    noise_std: float = 0.0
+    impulse_Ns: float = 0.0
+    impulse_t_s: float = 1.0
+    init_error_m: float = 0.0
+
+
+def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Disturbances]:
+    """Apply ``KEY=VALUE,...`` to the nominal parameters: ``+10%`` or ``-20%`` is relative, a plain
+    number absolute (``mu=0.5``; for ``inertia`` a factor; ``com=0.01`` [m], ``noise=0.001``, ``impulse=0.5`` [N s] at
+    ``impulse_t`` [s], ``init=0.01`` [m]). ``rolling`` changes the rolling-resistance coefficient
+    (the force at the nominal weight); the force follows the plant's weight (``mass``, ``board_mass``).
+    ``tanh`` is the plant's k of Eq. (10) [s/m] (``tanh=500``: rolling resistance close to Coulomb's).
+
+    Raises:
+        PerturbationError: Naming the item and the valid keys.
+    """
+    changes: dict[str, Any] = {}
+    extra: dict[str, float] = {}
+    for item, key, number, relative in perturbation_items(text, [*PERTURB_KEYS, *EXTRA_KEYS], PerturbationError):
+        if key in EXTRA_KEYS:
+            if relative:
+                raise PerturbationError(f"--perturb {item!r}: {key} takes an absolute value")
+            extra[key] = number
+            continue
+        field = PERTURB_KEYS[key]
+        base = getattr(nominal, field)
+        if relative:
+            new = base * (1.0 + number / 100.0)
+        elif key == "inertia":
+            new = base * number  # a matrix: a plain number is a factor
+        else:
+            new = number
+        if np.any(np.asarray(new) <= 0) and key != "rolling":
+            raise PerturbationError(f"--perturb {item!r}: {key} would be {new}; it must stay positive")
+        changes[field] = new
+    # Rolling resistance is a coefficient times the weight on the wheels (Eq. 9b, the config's
+    # rolling_friction_coeff): a heavier or lighter robot or board changes the force with it.
+    weight_ratio = ((changes.get("mass_kg", nominal.mass_kg) + changes.get("board_mass_kg", nominal.board_mass_kg))
+                    / (nominal.mass_kg + nominal.board_mass_kg))
+    changes["rolling_N"] = changes.get("rolling_N", nominal.rolling_N) * weight_ratio
+    dist = Disturbances(
+        com_offset_m=extra.get("com", 0.0), noise_std=extra.get("noise", 0.0),
+        impulse_Ns=extra.get("impulse", 0.0), impulse_t_s=extra.get("impulse_t", 1.0),
+        init_error_m=extra.get("init", 0.0),
+    )
+    return dataclasses.replace(nominal, **changes), dist
+
+
+DEFAULT_PERTURBATION = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
