@@ -36,14 +36,14 @@ class _Capture:
         return self.tasks(t, st, T, feet_v, forces)
 
 
-def _replay(loop: Any, tasks: Any, ticks: list[tuple[float, Any, Any]]) -> float:
-    """The median time of the loop's whole-body updates (terms, tasks, QP) replayed back to back [ms]."""
+def _replay(ctrl: Any, tasks: Any, ticks: list[tuple[float, Any, Any]]) -> float:
+    """The median time of the controller's whole-body updates (terms, tasks, QP) replayed back to back [ms]."""
     times = []
     for t, st, forces in ticks:
         t0 = time.perf_counter()
-        qp, vp = loop.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
-        T = loop.dyn.terms(qp, vp)
-        loop.wbc.solve(T, tasks(t, st, T, (T.J_feet @ vp).T, forces))
+        qp, vp = ctrl.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
+        T = ctrl.dyn.terms(qp, vp)
+        ctrl.wbc.solve(T, tasks(t, st, T, (T.J_feet @ vp).T, forces))
         times.append(time.perf_counter() - t0)
     return statistics.median(times) * 1e3
 
@@ -73,10 +73,10 @@ def measure(path: Path) -> list[Measured]:
         wall = time.perf_counter() - t0
         recorded = TwinLoop(lib, key, ClosedLoop(p, p), TwinPlant(TwinFigures.from_library(lib)))
         ticks: list[tuple[float, Any, Any]] = []
-        tasks = recorded.tasks
-        recorded.tasks = _Capture(tasks, ticks)  # type: ignore[assignment]
+        tasks = recorded.ctrl.tasks
+        recorded.ctrl.tasks = _Capture(tasks, ticks)  # type: ignore[assignment]
         recorded.ride()
-        replay = _replay(recorded, dataclasses.replace(tasks), ticks)
+        replay = _replay(recorded.ctrl, dataclasses.replace(tasks), ticks)
     wbc, mpc = statistics.median(run.wbc_times_s) * 1e3, statistics.median(run.mpc_times_s) * 1e3
     jobs = twin_jobs(Path(path), None, "", MpcConfig(), TrackSettings())
     t0 = time.perf_counter()

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -47,6 +48,13 @@ class BodyTargets:
     feet_a: np.ndarray  # (3, 4)
     q: np.ndarray  # (12,) joint angles (the posture)
     board_v: np.ndarray  # (3,) the plan's board velocity (a foot bound for the ground lands at the plan's ground speed)
+
+
+class Plan(Protocol):
+    """What the whole-body controller's tasks ask of a body plan (an entry's :class:`BodyPlan`, or a
+    maneuver's): the targets at a time (a plan may adapt while it runs)."""
+
+    def at(self, tau: float) -> BodyTargets: ...
 
 
 class BodyPlan:

@@ -190,7 +190,8 @@ class EntryReference:
 
 
 class Reference(Protocol):
-    """What :func:`skatelib.proving.loop.simulate` asks of a reference (an entry's, or the steering experiment's)."""
+    """What the controller (:class:`skatelib.control.controller.SkateController`) and the proving
+    ground's loops ask of a reference (an entry's, or the steering experiment's)."""
 
     t0: float  # start [s]
     t_end: float  # end of the planned motion [s] (speeds are judged from here)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-from skatelib.control.body_plan import BodyPlan, BodyTargets, yaw_matrix
+from skatelib.control.body_plan import BodyTargets, Plan, yaw_matrix
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
@@ -66,7 +66,7 @@ class ContactTable:
 class TaskMaker:
     """The tasks of each tick; keeps the stance set between ticks."""
 
-    plan: BodyPlan
+    plan: Plan
     contacts: ContactTable  # the planned contact codes
     p: SkateParams
     g: WbcSettings

@@ -1,5 +1,7 @@
-"""The loop that ticks the closed loop's parts at their rates: every MPC update (30 Hz) the
-estimator's feedback, the observers, the reference's horizon and one QP; between updates the plant
+"""The model plant's loop, which ticks the closed loop's parts at their rates: every MPC update
+(30 Hz) the feedback of the model plant and the controller's update on it
+(:class:`skatelib.control.update.MpcUpdate`: the observers, the reference's horizon, one QP);
+between updates the plant
 at ``plant_substeps`` steps; after each update the stance legs' joint angles by inverse kinematics
 (the whole-body controller's share) and the fall checks.
 
@@ -11,18 +13,16 @@ angles.
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import numpy as np
 from skatelib.control.kinematics import LegKinematics
-from skatelib.control.linear_model import Discretizer, Feedback
-from skatelib.control.mpc import Bias, HorizonRef, MpcProblem, build_problem
-from skatelib.control.observers import CoastObserver, DisturbanceObserver
-from skatelib.control.qp import QpSolveFailed, make_solver
+from skatelib.control.linear_model import Feedback
+from skatelib.control.qp import QpSolveFailed
 from skatelib.control.reference import Reference
+from skatelib.control.update import MpcUpdate
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q, SWING
-from skatelib.library.margins import forward_speed, momentum_speed
+from skatelib.library.margins import forward_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.proving.plant import Plant, PlantInput
 from skatelib.proving.setup import ClosedLoop
@@ -64,10 +64,8 @@ class _Loop:
         self.com_shift = np.array([0.0, dist.com_offset_m, 0.0])
         self.plant = Plant(loop.plant, self.com_shift)
         self.result = Run(plant=self.plant)
-        self.disc = Discretizer(loop.model, cfg.dt)
-        self.solver = make_solver(cfg.solver)
-        self.observer = DisturbanceObserver(cfg.disturbance_gain)
-        self.coast_observer = CoastObserver(cfg.coast_gain)
+        self.mpc = MpcUpdate(ref, loop.model, cfg, cfg.dt)
+        self._last_U: np.ndarray | None = None  # what the model plant was last given
         self.h = cfg.dt / loop.settings.plant_substeps
         s = np.array(x_init, dtype=np.float64)
         s[0:3] += rpy_matrices(s[3:6]) @ self.com_shift  # the true COM
@@ -113,29 +111,16 @@ class _Loop:
 
     def update(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """One MPC update: (forces (3, 4), joint velocities (12,), the reference of its first step),
-        or None when the QP failed (recorded as a fall)."""
-        cfg, ref, t = self.loop.mpc, self.ref, self.t
-        fb = self.feedback()
-        x_fb = fb.x
-        v_ride = float(forward_speed(x_fb))
-        bias = self.observer.update(v_ride, cfg.dt, float(x_fb[8]))
-        ref.observe(t, x_fb, self.s[NX:NX + 2])
-        v_momentum = float(momentum_speed(x_fb, self.loop.model.mass_kg, self.loop.model.board_mass_kg))
-        measured = self.coast_observer.update(ref.coasting(t), v_momentum, cfg.dt)
-        coast = ref.prior_coast_mps2(t) if measured is None else measured
-        horizon: HorizonRef = ref.horizon(t, cfg.horizon, cfg.dt, self.s[NX:NX + 2], v_ride,
-                                          coast if cfg.coast_compensation else None)
-        t_start = time.perf_counter()
-        qp: MpcProblem = build_problem(self.loop.model, cfg, self.disc, fb, horizon,
-                                       Bias(bias, self.observer.vertical_mps2))
+        or None when the QP failed (recorded as a fall). The observer compares the feedback with
+        the model's prediction under the MPC's own forces: the model plant applies them as given."""
         try:
-            U = self.solver.solve(qp)
+            step = self.mpc(self.t, self.feedback(), self.s[NX:NX + 2], self._last_U)
         except QpSolveFailed as e:
-            self.result.fall = f"the MPC's QP failed at t = {t:.2f} s ({e})"
+            self.result.fall = f"the MPC's QP failed at t = {self.t:.2f} s ({e})"
             return None
-        self.observer.predict(qp, U)
-        self.result.times_s.append(time.perf_counter() - t_start)
-        return U[:12].reshape(4, 3).T, U[12:24], horizon.x_ref[0]
+        self._last_U = step.U
+        self.result.times_s.append(step.solve_s)
+        return step.forces, step.U[12:24], step.horizon.x_ref[0]
 
     def substeps(self, forces: np.ndarray, qd: np.ndarray, x_ref0: np.ndarray) -> None:
         """The plant's steps until the next update (touch-downs where the plan puts them)."""

@@ -71,7 +71,9 @@ def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, speed_mps: flo
     run = loop_.ride()
     ticks = np.array(run.ticks) if run.ticks else np.zeros((0, 5))
     settled = ticks[:, 0] >= 1.0
-    roll_ref = np.array([ride.ref.roll(t)[0] for t in ticks[:, 0]])
+    steer_ref = ride.ref
+    assert isinstance(steer_ref, SteerReference)
+    roll_ref = np.array([steer_ref.roll(t)[0] for t in ticks[:, 0]])
     err = ticks[settled, 1] - roll_ref[settled]
     rms = float(np.sqrt(np.mean(err**2))) if len(err) else float("nan")
     off_deck = int(np.sum(ticks[:, 3] < 4))
