@@ -5,19 +5,22 @@ the MPC's 28 channels made of it."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from skatelib.library.channels import NX
+from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q
+from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.runtime import Entry
 
 # A foot's touch code in ``MultibodyState.foot_touch`` (0: touching nothing).
 ON_DECK, ON_FLOOR = 1, 2
 
 
 class MultibodyState(Protocol):
-    """The fields of one plant instant the controller reads (world frame; see the twin's state)."""
+    """The fields of the robot's and the board's state the controller reads at a tick (world frame;
+    see the twin's state, or :class:`RobotState`)."""
 
-    t: float
     trunk_pos: np.ndarray
     trunk_R: np.ndarray
     trunk_v: np.ndarray
@@ -28,10 +31,8 @@ class MultibodyState(Protocol):
     deck_R: np.ndarray
     deck_v: np.ndarray
     deck_omega: np.ndarray
-    foot_centres: np.ndarray
-    foot_velocities: np.ndarray
-    foot_touch: np.ndarray
-    contact_points: np.ndarray
+    foot_touch: np.ndarray  # (4,) each foot's touch code
+    contact_points: np.ndarray  # (3, 4) where each foot touches (or its lowest point)
 
     @property
     def deck_yaw(self) -> float: ...
@@ -70,3 +71,53 @@ def mpc_state(st: MultibodyState, com: np.ndarray, com_v: np.ndarray) -> np.ndar
     x[26] = st.deck_roll
     x[27] = float(st.deck_R[:, 0] @ st.deck_omega)
     return x
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """A state as the robot's estimator gives it to the controller (world frame): the trunk's pose,
+    its velocity (world) and angular velocity (trunk frame), the joints in channel order, the
+    deck's pose and velocity, each foot's touch code and contact point."""
+
+    trunk_pos: np.ndarray
+    trunk_R: np.ndarray
+    trunk_v: np.ndarray
+    trunk_omega: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    deck_pos: np.ndarray
+    deck_R: np.ndarray
+    deck_v: np.ndarray
+    deck_omega: np.ndarray
+    foot_touch: np.ndarray
+    contact_points: np.ndarray
+
+    @property
+    def deck_yaw(self) -> float:
+        return float(np.arctan2(self.deck_R[1, 0], self.deck_R[0, 0]))
+
+    @property
+    def deck_roll(self) -> float:
+        """Roll about the deck's own x axis (Z-Y-X angles)."""
+        return float(np.arctan2(self.deck_R[2, 1], self.deck_R[2, 2]))
+
+
+def planned_state(entry: Entry, k: int, com_offset_m: np.ndarray) -> RobotState:
+    """The state an entry plans at its knot ``k``, as the estimator would report it if the robot
+    were exactly on the plan: the trunk's origin from the planned centre of mass (``com_offset_m``
+    in the trunk frame), the deck at the planned board pose and roll, the feet on their planned
+    contacts. A controller's dry run on a library starts here."""
+    if entry.board_pos is None or entry.contact is None or entry.foot_pos is None:
+        raise ValueError(f"{entry.key}: not a quadruped entry (no board, contacts or feet)")
+    x = np.asarray(entry.state[k], dtype=np.float64)
+    R = rpy_matrices(x[3:6])
+    board = np.asarray(entry.board_pos[k], dtype=np.float64)
+    deck_R = board_rotations(float(board[3]), float(x[I_BOARD_ROLL]))
+    heading = deck_R[:, 0]
+    contact = np.asarray(entry.contact[k])
+    touch = np.where(contact == BOARD, ON_DECK, np.where(contact == GROUND, ON_FLOOR, 0))
+    return RobotState(
+        trunk_pos=x[0:3] - R @ com_offset_m, trunk_R=R, trunk_v=x[6:9].copy(), trunk_omega=x[9:12].copy(),
+        q=x[S_Q].copy(), qd=np.zeros(12), deck_pos=board[0:3].copy(), deck_R=deck_R,
+        deck_v=np.r_[x[24:26], 0.0], deck_omega=heading * x[27], foot_touch=touch,
+        contact_points=np.asarray(entry.foot_pos[k], dtype=np.float64).T.copy())

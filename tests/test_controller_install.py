@@ -1,0 +1,82 @@
+"""The controller a robot runs (skatelib.control) apart from its proving ground: a tick on a
+library entry gives torques within the motors' limit and contact forces that carry the robot, and
+the controller's extra installed alone into a fresh venv (no build, no twin, no viewer) runs it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+LIBRARY = ROOT / "tests" / "data" / "tiny-reference.h5"
+EXAMPLE = ROOT / "examples" / "controller_tick.py"
+HARNESS = ("casadi", "mujoco", "typer", "joblib", "rerun", "skatelib.proving", "skatelib.pipeline", "skatelib.sim")
+
+
+def test_a_tick_on_the_plan_carries_the_robot_within_the_torque_limit():
+    """On the entry's first knot, standing on the deck: the whole-body QP's forces carry the robot's
+    weight (the MPC asks for its planned acceleration besides: within 20 %), the torques stay
+    inside the limit, and the MPC's state is the plan's."""
+    from skatelib.control.body_plan import BodyPlan
+    from skatelib.control.controller import Rates, SkateController
+    from skatelib.control.feedback import planned_state
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.mpc import MpcConfig
+    from skatelib.control.params import SkateParams
+    from skatelib.control.reference import EntryReference
+    from skatelib.control.settings import TrackSettings
+    from skatelib.control.wbc import WbcSettings
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(LIBRARY)
+    entry = lib["v0.30_s1"]
+    p = SkateParams.from_library(lib)
+    ref = EntryReference(lib, entry, p, TrackSettings())
+    kin = LegKinematics.from_library(lib)
+    ctrl = SkateController(lib, ref, BodyPlan(ref, kin.foot_radius_m), p, MpcConfig(), WbcSettings(), Rates())
+    tick = ctrl.tick(ref.t0, planned_state(entry, 0, p.com_offset_m), update=True)
+    assert tick.x is not None and np.allclose(tick.x[12:24], entry.state[0][12:24])
+    assert np.all(np.isfinite(tick.out.tau)) and np.max(np.abs(tick.out.tau)) <= kin.torque_limit_Nm + 1e-6
+    weight = p.mass_kg * p.gravity_mps2
+    assert 0.8 * weight < tick.out.forces.sum(axis=1)[2] < 1.2 * weight
+    nxt = ctrl.tick(ref.t0 + Rates().tick_s, planned_state(entry, 0, p.com_offset_m))
+    assert nxt.x is None and nxt.mpc_s is None  # between updates, the whole-body QP alone
+
+
+def test_the_controller_imports_no_harness():
+    """Imported and ticked in a fresh interpreter, the controller loads none of the build's, the
+    twin's, the viewer's or the proving ground's modules."""
+    code = (f"import runpy, sys; sys.argv = ['x', {str(LIBRARY)!r}, 'v0.30_s1']; "
+            f"runpy.run_path({str(EXAMPLE)!r}, run_name='__main__'); "
+            f"bad = sorted(m for m in sys.modules if m.startswith({HARNESS!r})); print(bad); sys.exit(1 if bad else 0)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+
+
+@pytest.mark.slow
+def test_the_controller_extra_alone_runs_a_tick(tmp_path):
+    """The wheel with the [control] extra into a fresh venv: the packages installed are the
+    controller's and its solvers' alone (no casadi, mujoco, typer, rerun), and a tick runs."""
+    dist = tmp_path / "dist"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(dist),
+                    str(ROOT)], check=True, capture_output=True)
+    (wheel,) = dist.glob("skatelib-*.whl")
+    env_dir = tmp_path / "robot"
+    venv.create(env_dir, with_pip=True)
+    py = env_dir / "bin" / "python"
+    r = subprocess.run([str(py), "-m", "pip", "install", "-q", f"{wheel}[control]"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    listed = subprocess.run([str(py), "-m", "pip", "list", "--format=freeze"], capture_output=True, text=True,
+                            check=True).stdout.lower()
+    names = {line.split("==")[0].replace("_", "-") for line in listed.split()}
+    assert "pin" in names and "daqp" in names
+    # (joblib comes as OSQP's dependency, for its code generation; the controller does not import it)
+    assert not names & {"casadi", "mujoco", "typer", "rerun-sdk", "rich", "dask", "distributed", "matplotlib"}, names
+    out = subprocess.run([str(py), str(EXAMPLE), str(LIBRARY), "v0.30_s1"], capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "torques [N m]" in out.stdout
