@@ -73,7 +73,7 @@ def mpc_state(st: MultibodyState, com: np.ndarray, com_v: np.ndarray) -> np.ndar
     return x
 
 
-@dataclass(frozen=True)
+@dataclass
 class RobotState:
     """A state as the robot's estimator gives it to the controller (world frame): the trunk's pose,
     its velocity (world) and angular velocity (trunk frame), the joints in channel order, the

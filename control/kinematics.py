@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from skatelib.library import schema
+from skatelib.runtime import MotionLibrary
 
 
 @dataclass
@@ -39,8 +41,9 @@ class LegKinematics:
     upper_rad: np.ndarray
 
     @staticmethod
-    def from_library(lib: Any) -> LegKinematics:
-        robot = json.loads(str(lib.attrs["config_resolved_json"]))["robot"]
+    def from_library(lib: MotionLibrary) -> LegKinematics:
+        robot = json.loads(str(lib.attrs[schema.A_CONFIG_RESOLVED]))["robot"]
+        m = lib.quadruped_model
         model = pin.buildModelFromXML(lib.urdf)
         joints = [model.getJointId(n) for n in robot["joint_names"]]
         return LegKinematics(
@@ -48,9 +51,8 @@ class LegKinematics:
             q_index=np.array([model.joints[j].idx_q for j in joints]),
             v_index=np.array([model.joints[j].idx_v for j in joints]),
             feet=tuple(model.getFrameId(f) for f in robot["foot_frames"]),
-            foot_radius_m=float(robot["foot_radius_m"]), torque_limit_Nm=float(robot["torque_limit_Nm"]),
-            lower_rad=np.asarray(lib.model_arrays["joint_lower_rad"], dtype=float).reshape(12),
-            upper_rad=np.asarray(lib.model_arrays["joint_upper_rad"], dtype=float).reshape(12),
+            foot_radius_m=m.foot_radius_m, torque_limit_Nm=m.torque_limit_Nm,
+            lower_rad=m.arrays.joint_lower_rad, upper_rad=m.arrays.joint_upper_rad,
         )
 
     def _configuration(self, q: np.ndarray) -> np.ndarray:

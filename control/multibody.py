@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from skatelib.library import schema
 
 # The twin's rotor inertia reflected through the 7.75:1 gearbox (docs/twin.md): part of what the
 # controller knows of its robot, as any model-based controller of a geared leg does.
@@ -57,7 +58,7 @@ class RobotDynamics:
 
     @staticmethod
     def from_library(lib: Any) -> RobotDynamics:
-        robot = json.loads(str(lib.attrs["config_resolved_json"]))["robot"]
+        robot = json.loads(str(lib.attrs[schema.A_CONFIG_RESOLVED]))["robot"]
         return RobotDynamics(lib.urdf, robot["joint_names"], robot["foot_frames"])
 
     def configuration(self, trunk_pos: np.ndarray, trunk_R: np.ndarray, q: np.ndarray,

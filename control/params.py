@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from skatelib.library.model import QuadrupedModel
+from skatelib.runtime import MotionLibrary
 
 
 @dataclass(frozen=True)
@@ -101,33 +102,24 @@ class SkateParams:
         return np.asarray(R_B @ local)
 
     @staticmethod
-    def from_library(lib: Any) -> SkateParams:
+    def from_library(lib: MotionLibrary) -> SkateParams:
         """The nominal parameters a quadruped library was built with (its /model group)."""
-        m, a = lib.model, lib.model_arrays
-        legs = ("FL", "FR", "RL", "RR")
+        return SkateParams.from_model(lib.quadruped_model)
+
+    @staticmethod
+    def from_model(m: QuadrupedModel) -> SkateParams:
+        """The parameters of the optimizer's model in a ``/model`` record (a format 1.1 library's
+        board: Eq. (6)'s linear spring about the deck's top)."""
+        b, a = m.board, m.arrays
         return SkateParams(
-            mass_kg=float(m["robot_mass_kg"]),
-            inertia_kgm2=np.asarray(a["robot_inertia_kgm2"], dtype=float).reshape(3, 3),
-            com_offset_m=np.asarray(a["robot_com_offset_m"], dtype=float).reshape(3),
-            board_mass_kg=float(m["board_mass_kg"]),
-            roll_inertia_kgm2=float(m["board_roll_inertia_kgm2"]),
-            kb_Nm_per_rad=float(m["board_roll_stiffness_Nm_per_rad"]),
-            bb_Nms_per_rad=float(m["board_roll_damping_Nms_per_rad"]),
-            rolling_N=float(m["board_rolling_friction_N"]),
-            rolling_plan_N=float(m.get("board_rolling_friction_plan_N", m["board_rolling_friction_N"])),
-            tanh_scale_s_per_m=float(m.get("board_tanh_scale_s_per_m", 50.0)),
-            mu=float(m["friction_mu"]),
-            gravity_mps2=float(m["gravity_mps2"]),
-            deck_points_m=np.asarray(a["stance_deck_points_m"], dtype=float).reshape(2, 4),
-            roll_limit_rad=float(m.get("board_roll_limit_rad", 0.2)),
-            joint_velocity_limit_radps=float(m.get("joint_velocity_limit_radps", 31.0)),
-            push_leg=legs.index(str(m.get("push_leg", "RL"))),
-            mu_plan=float(m.get("friction_mu_plan", m["friction_mu"])),
-            torque_limit_Nm=float(m.get("torque_limit_Nm", math.inf)),
-            roll_axis_depth_m=float(m["board_deck_height_m"]) - float(m.get("board_roll_axis_height_m",
-                                                                            m["board_deck_height_m"])),
-            deck_mass_kg=float(m.get("board_deck_mass_kg", 0.0)),
-            pivot_rad=float(m.get("board_pivot_from_horizontal_rad", math.pi / 2)),
-            wheel_track_m=float(m.get("board_wheel_track_m", 0.0)),
-            wheel_load_margin=float(m.get("board_wheel_load_margin", 0.0)),
+            mass_kg=m.robot_mass_kg, inertia_kgm2=a.robot_inertia_kgm2, com_offset_m=a.robot_com_offset_m,
+            board_mass_kg=b.mass_kg, roll_inertia_kgm2=b.roll_inertia_kgm2, kb_Nm_per_rad=b.roll_stiffness_Nm_per_rad,
+            bb_Nms_per_rad=b.roll_damping_Nms_per_rad, rolling_N=b.rolling_friction_N,
+            rolling_plan_N=b.rolling_friction_N if b.rolling_friction_plan_N is None else b.rolling_friction_plan_N,
+            tanh_scale_s_per_m=b.tanh_scale_s_per_m, mu=m.friction_mu, gravity_mps2=m.gravity_mps2,
+            deck_points_m=a.stance_deck_points_m, roll_limit_rad=b.roll_limit_rad,
+            joint_velocity_limit_radps=m.joint_velocity_limit_radps, push_leg=m.push_leg_index, mu_plan=m.mu_plan,
+            torque_limit_Nm=m.torque_limit_Nm, roll_axis_depth_m=b.planned_roll_axis_depth_m(),
+            deck_mass_kg=b.planned_deck_mass_kg(), pivot_rad=b.planned_pivot_rad(),
+            wheel_track_m=b.planned_wheel_track_m(), wheel_load_margin=b.wheel_load_margin,
         )

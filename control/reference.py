@@ -60,7 +60,7 @@ class EntryReference:
         self.t_stop = self.transfer_end + settings.ride_s
         self.last = np.array(entry.state[-1], dtype=np.float64)
         self.board_pos = np.asarray(entry.board_pos, dtype=np.float64)
-        self.q_board = np.asarray(lib.model_arrays["stance_q_board_rad"], dtype=np.float64).reshape(12)
+        self.q_board = lib.quadruped_model.arrays.stance_q_board_rad
         self.rel_last = self.last[0:3] - self.board_pos[-1, 0:3]
         self.deck_z = float(self.board_pos[-1, 2])
         feet = np.asarray(entry.foot_pos, dtype=np.float64)  # (K, 4, 3)

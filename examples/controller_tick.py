@@ -33,7 +33,8 @@ def main(path: str, key: str | None = None) -> None:
     tick = ctrl.tick(ref.t0, planned_state(entry, 0, model.com_offset_m), update=True)
     np.set_printoptions(precision=3, suppress=True)
     print(f"{entry.key}: torques [N m] {tick.out.tau}")
-    print(f"contact forces' sum [N] {tick.out.forces.sum(axis=1)} (robot's weight {model.mass_kg * model.gravity_mps2:.1f} N)")
+    weight = model.mass_kg * model.gravity_mps2
+    print(f"contact forces' sum [N] {tick.out.forces.sum(axis=1)} (robot's weight {weight:.1f} N)")
 
 
 if __name__ == "__main__":

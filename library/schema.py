@@ -53,6 +53,7 @@ ROOT_REQUIRED: Final = (
 G_MODEL: Final = "model"
 D_ROBOT_INERTIA: Final = "robot_inertia_kgm2"
 D_ROBOT_URDF: Final = "robot_urdf"
+A_FRICTION_MU: Final = "friction_mu"  # every kind's (the typed records: skatelib.library.model)
 QUADRUPED_MODEL_ATTRS: Final = (
     "robot_mass_kg",
     "friction_mu",

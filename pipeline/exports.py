@@ -95,7 +95,7 @@ def write_mcap(path: Path, out: Path) -> list[Path]:
 
     data = read_library(path)
     kind = str(data.attrs.get("kind", ""))
-    joints = json.loads(str(data.attrs.get("config_resolved_json", "{}"))).get("robot", {}).get("joint_names", [])
+    joints = json.loads(str(data.attrs.get(schema.A_CONFIG_RESOLVED, "{}"))).get("robot", {}).get("joint_names", [])
     buffer = io.BytesIO()
     writer = Writer(buffer)
     schemas = {name: writer.register_msgdef(name, text) for name, text in msg.DEFINITIONS.items()}

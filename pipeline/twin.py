@@ -26,8 +26,8 @@ def twin_figures(source: Path | Any) -> Any:
     from skatelib.pipeline.quadruped.entries import quadruped_model
     from skatelib.pipeline.quadruped.system import SkateSystem
 
-    attrs, arrays = quadruped_model(source, SkateSystem.from_config(source))
-    return TwinFigures.from_model(attrs, arrays, source.urdf_path.read_text())
+    record = quadruped_model(source, SkateSystem.from_config(source))
+    return TwinFigures.from_record(record, source.urdf_path.read_text())
 
 
 def write_twin(source: Path | Any, out: Path) -> Path:

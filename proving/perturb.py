@@ -83,8 +83,8 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
         changes[field] = new
     # Rolling resistance is a coefficient times the weight on the wheels (Eq. 9b, the config's
     # rolling_friction_coeff): a heavier or lighter robot or board changes the force with it.
-    weight_ratio = ((changes.get("mass_kg", nominal.mass_kg) + changes.get("board_mass_kg", nominal.board_mass_kg))
-                    / (nominal.mass_kg + nominal.board_mass_kg))
+    changed = dataclasses.replace(nominal, **changes)
+    weight_ratio = (changed.mass_kg + changed.board_mass_kg) / (nominal.mass_kg + nominal.board_mass_kg)
     changes["rolling_N"] = changes.get("rolling_N", nominal.rolling_N) * weight_ratio
     dist = Disturbances(
         com_offset_m=extra.get("com", 0.0), noise_std=extra.get("noise", 0.0),

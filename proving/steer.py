@@ -76,10 +76,10 @@ class SteerReference:
         self.speed = speed_mps
         wave = wave or RollWave()
         self.amplitude, self.period = wave.amplitude_rad, wave.period_s
-        self.deck_z = float(lib.model["board_deck_height_m"])  # the board origin is on the deck's top
+        self.deck_z = lib.quadruped_model.board.deck_height_m  # the board origin is on the deck's top
         self.height = float(last[2]) - self.deck_z
         self.rel_x = float(np.mean(p.deck_points_m[0]))  # the COM over the middle of the feet
-        self.q = np.asarray(lib.model_arrays["stance_q_board_rad"], dtype=np.float64).reshape(12)
+        self.q = lib.quadruped_model.arrays.stance_q_board_rad
         feet = np.vstack([p.deck_points_m, np.zeros(4)]) - np.array([[self.rel_x], [0.0], [self.height]])
         self.max_reach = float(np.max(np.linalg.norm(feet, axis=0))) + 0.05  # room for the sideways shift
         self.foot_y = float(np.mean(np.abs(p.deck_points_m[1])))

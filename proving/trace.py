@@ -41,7 +41,8 @@ class Trace:
         }
         columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
                    schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: ("board_x", "board_y", "board_z", "board_yaw")}
-        attrs = {"target_velocity_mps": label_mps, "n_strides": 0, "success": True, "status": "closed loop"}
+        attrs = {schema.A_TARGET_VELOCITY: label_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
+                 schema.A_STATUS: "closed loop"}
         return Entry(key, attrs, arrays, columns)
 
 

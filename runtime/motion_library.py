@@ -6,13 +6,16 @@ two; an :class:`~skatelib.runtime.entry.Entry` samples one trajectory.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
 from math import isfinite
 from pathlib import Path
 
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.errors import SkatelibError
+from skatelib.library.errors import LibraryFormatError, SkatelibError
+from skatelib.library.model import HumanoidModel, QuadrupedModel
+from skatelib.library.model_io import read_humanoid_model, read_quadruped_model
 from skatelib.library.reader import EntryRecord, LibraryData, read_library
 from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck
 from skatelib.runtime.entry import Entry, EntryNotFound
@@ -47,6 +50,38 @@ class MotionLibrary:
     @property
     def kind(self) -> str:
         return str(self.attrs[schema.A_KIND])
+
+    @functools.cached_property
+    def quadruped_model(self) -> QuadrupedModel:
+        """The typed ``/model`` of a quadruped library (:mod:`skatelib.library.model`).
+
+        Raises:
+            LibraryFormatError: Not a quadruped library, or one without a required figure.
+        """
+        if self.kind != "quadruped":
+            raise LibraryFormatError(self.path, f"/@{schema.A_KIND}", f"a {self.kind} library has no quadruped model")
+        try:
+            return read_quadruped_model(self.model, self.model_arrays)
+        except KeyError as e:
+            raise self._missing(e) from e
+
+    @functools.cached_property
+    def humanoid_model(self) -> HumanoidModel:
+        """The typed ``/model`` of a humanoid library (:mod:`skatelib.library.model`).
+
+        Raises:
+            LibraryFormatError: Not a humanoid library, or one without a required figure.
+        """
+        if self.kind != "humanoid":
+            raise LibraryFormatError(self.path, f"/@{schema.A_KIND}", f"a {self.kind} library has no humanoid model")
+        try:
+            return read_humanoid_model(self.model)
+        except KeyError as e:
+            raise self._missing(e) from e
+
+    def _missing(self, e: KeyError) -> LibraryFormatError:
+        return LibraryFormatError(self.path, f"/{schema.G_MODEL}/{e.args[0]}",
+                                  "missing: the file is incomplete; rebuild it with skatelib build")
 
     def keys(self) -> list[str]:
         return list(self._entries)
@@ -164,7 +199,7 @@ class MotionLibrary:
         raise EntryNotFound(f"{self.path}: {velocity} m/s is outside the stored speeds {ranges} (per stride count)")
 
     def _margin_check(self, margin: BlendMargin) -> MarginCheck:
-        return MarginCheck(float(self.model["friction_mu"]), self.model_arrays.get(schema.D_JOINT_LOWER),
+        return MarginCheck(float(self.model[schema.A_FRICTION_MU]), self.model_arrays.get(schema.D_JOINT_LOWER),
                            self.model_arrays.get(schema.D_JOINT_UPPER), margin)
 
 
@@ -186,7 +221,7 @@ def blend_pair(a: Entry, b: Entry, velocity: float, check: MarginCheck) -> Entry
     if a.contact is not None:
         arrays[schema.D_CONTACT] = a.contact
     result = check(arrays)
-    attrs = {"target_velocity_mps": float(velocity), "n_strides": a.n_strides,
+    attrs = {schema.A_TARGET_VELOCITY: float(velocity), schema.A_N_STRIDES: a.n_strides,
              "success": bool(a.success and b.success and result.ok),
              "status": f"blend of {a.key} and {b.key} (weights {1 - w:.3f}, {w:.3f})",
              "blend_sources": (a.key, b.key), "blend_weights": (1.0 - w, w)}

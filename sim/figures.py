@@ -4,18 +4,16 @@ hangers, rotors), each with its source."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from skatelib.library.model import PUBLIC_HANGER_MASS_KG, PUBLIC_WHEEL_MASS_KG, QuadrupedModel
 from skatelib.runtime import MotionLibrary
 
 # Figures of the jointed model that the optimizer's model has no use for. The wheels' radius is the
 # optimizer's roll-axis height (the axles), their spacing its wheel track.
-WHEEL_MASS_KG = 0.049  # the public quadruped-skateboard model (docs/sources.md)
-HANGER_MASS_KG = 0.055  # the same model
+WHEEL_MASS_KG = PUBLIC_WHEEL_MASS_KG  # the public quadruped-skateboard model (docs/sources.md)
+HANGER_MASS_KG = PUBLIC_HANGER_MASS_KG  # the same model
 DECK_THICKNESS_M = 0.015  # a 7-ply maple deck is about 12-15 mm
 DECK_INERTIA_KGM2 = (0.00903, 0.0475, 0.0565)  # the public model's deck (docs/sources.md)
 # Rotor inertia reflected through the gearbox: a rotor of 0.0567 kg (docs/sources.md) as a 30 mm
@@ -74,36 +72,24 @@ class TwinFigures:
     deck_points_m: np.ndarray  # (2, 4) the feet's deck points (x, y) in the board frame
 
     @staticmethod
-    def from_model(model: Mapping[str, Any], arrays: Mapping[str, np.ndarray], urdf: str) -> TwinFigures:
-        """From a library's ``/model`` attributes and arrays and its URDF.
-
-        A library of format 1.1 names the truck pivot ``board_rake_front_rad``; its config gives
-        that figure as the angle from the ground (the public model's truck axis, 1.1904 rad), and
-        the twin builds it so, whatever the optimizer made of it; its other board figures the twin
-        takes from the same public model (deck 1.874 kg, 30 mm wheels 0.22 m apart).
-        """
-        pivot = float(model.get("board_pivot_from_horizontal_rad", model.get("board_rake_front_rad", math.pi / 4)))
-        total_weight = (float(model["robot_mass_kg"]) + float(model["board_mass_kg"])) * float(model["gravity_mps2"])
-        coeff = float(model.get("board_rolling_coeff", float(model["board_rolling_friction_N"]) / total_weight))
-        mass = float(model["board_mass_kg"])
+    def from_record(model: QuadrupedModel, urdf: str) -> TwinFigures:
+        """From a library's ``/model`` record (:mod:`skatelib.library.model`: a format 1.1 library's
+        truck axis is its ``board_rake_front_rad``, the angle from the ground, and its other board
+        figures the public model's) and its URDF: the physical board, whatever the optimizer made of it."""
+        b = model.board
         board = BoardFigures(
-            mass_kg=float(model["board_mass_kg"]), deck_length_m=float(model["board_deck_length_m"]),
-            deck_width_m=float(model["board_deck_width_m"]), deck_height_m=float(model["board_deck_height_m"]),
-            l_front_m=float(model["board_l_front_m"]), l_rear_m=float(model["board_l_rear_m"]),
-            truck_width_m=float(model["board_truck_width_m"]),
-            roll_stiffness_Nm_per_rad=float(model["board_roll_stiffness_Nm_per_rad"]),
-            roll_damping_Nms_per_rad=float(model["board_roll_damping_Nms_per_rad"]),
-            rolling_friction_coeff=coeff, pivot_from_horizontal_rad=pivot,
-            deck_mass_kg=float(model.get("board_deck_mass_kg", mass - 2 * HANGER_MASS_KG - 4 * WHEEL_MASS_KG)),
-            wheel_radius_m=float(model.get("board_roll_axis_height_m", 0.03)),
-            wheel_track_m=float(model.get("board_wheel_track_m", 0.22)))
+            mass_kg=b.mass_kg, deck_length_m=b.deck_length_m, deck_width_m=b.deck_width_m,
+            deck_height_m=b.deck_height_m, l_front_m=b.l_front_m, l_rear_m=b.l_rear_m, truck_width_m=b.truck_width(),
+            roll_stiffness_Nm_per_rad=b.roll_stiffness_Nm_per_rad, roll_damping_Nms_per_rad=b.roll_damping_Nms_per_rad,
+            rolling_friction_coeff=b.rolling_coefficient(model.total_weight()),
+            pivot_from_horizontal_rad=b.pivot_from_horizontal_rad, deck_mass_kg=b.deck_mass(),
+            wheel_radius_m=b.roll_axis_height_m, wheel_track_m=b.wheel_track_m)
         return TwinFigures(
-            urdf=urdf, foot_radius_m=float(model["foot_radius_m"]), friction_mu=float(model["friction_mu"]),
-            torque_limit_Nm=float(model["torque_limit_Nm"]), gravity_mps2=float(model["gravity_mps2"]),
-            robot_mass_kg=float(model["robot_mass_kg"]), board=board,
-            stance_q_rad=np.asarray(arrays["stance_q_board_rad"], dtype=np.float64).reshape(12),
-            deck_points_m=np.asarray(arrays["stance_deck_points_m"], dtype=np.float64).reshape(-1, 4)[:2])
+            urdf=urdf, foot_radius_m=model.foot_radius_m, friction_mu=model.friction_mu,
+            torque_limit_Nm=model.torque_limit_Nm, gravity_mps2=model.gravity_mps2,
+            robot_mass_kg=model.robot_mass_kg, board=board, stance_q_rad=model.arrays.stance_q_board_rad,
+            deck_points_m=model.arrays.stance_deck_points_m)
 
     @staticmethod
     def from_library(lib: MotionLibrary) -> TwinFigures:
-        return TwinFigures.from_model(lib.model, lib.model_arrays, lib.urdf)
+        return TwinFigures.from_record(lib.quadruped_model, lib.urdf)

@@ -77,6 +77,7 @@ def test_the_controller_extra_alone_runs_a_tick(tmp_path):
     assert "pin" in names and "daqp" in names
     # (joblib comes as OSQP's dependency, for its code generation; the controller does not import it)
     assert not names & {"casadi", "mujoco", "typer", "rerun-sdk", "rich", "dask", "distributed", "matplotlib"}, names
-    out = subprocess.run([str(py), str(EXAMPLE), str(LIBRARY), "v0.30_s1"], capture_output=True, text=True, cwd=tmp_path)
+    out = subprocess.run([str(py), str(EXAMPLE), str(LIBRARY), "v0.30_s1"], capture_output=True, text=True,
+                         cwd=tmp_path)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "torques [N m]" in out.stdout

@@ -56,3 +56,20 @@ def test_checker_keeps_the_controller_apart_from_its_proving_ground(tmp_path):
     assert any(f.startswith("sim/bad.py:1: imports skatelib.control.wbc (sim/ must not)") for f in found)
     assert any(f.startswith("proving/bad.py:1: imports skatelib.pipeline.cli (proving/ must not)") for f in found)
     assert len(found) == 5, found  # pinocchio in control/ and the twin in proving/ are allowed
+
+
+def test_checker_keeps_the_library_file_names_in_library(tmp_path):
+    """A doctored tree: /model attribute names and a root attribute name as literal keys in the
+    controller and the pipeline are breaches; the same words as plain values are not."""
+    check = _checker()
+    (tmp_path / "control").mkdir()
+    (tmp_path / "pipeline").mkdir()
+    (tmp_path / "control" / "bad.py").write_text(
+        'def f(lib):\n    return lib.model["board_mass_kg"], lib.model.get("board_tanh_scale_s_per_m", 50.0)\n')
+    (tmp_path / "pipeline" / "bad.py").write_text(
+        'def f(lib):\n    return {"config_resolved_json": lib.attrs}, "board_mass_kg"\n')
+    found = check.problems(tmp_path)
+    assert sorted(f.split(" as a literal")[0] for f in found) == [
+        "control/bad.py:2: the library file's name 'board_mass_kg'",
+        "control/bad.py:2: the library file's name 'board_tanh_scale_s_per_m'",
+        "pipeline/bad.py:2: the library file's name 'config_resolved_json'"], found

@@ -7,6 +7,10 @@
   the proving ground, the twin or the pipeline; ``sim/`` only ``library`` and ``runtime``;
   ``proving/`` (the proving ground) anything but ``pipeline``; ``pipeline/ocp/`` (the engine) no
   robot subpackage.
+* The library file's names stay in ``library/``: no ``/model`` attribute or dataset name of the
+  records (:mod:`skatelib.library.model`) and no entry or root attribute name of the schema as a
+  literal key (``x["name"]``, ``x.get("name")``, ``{"name": ...}``) in another package (read the
+  record, or use the schema's constant).
 * ``library/`` and ``runtime/`` (what a robot installs) import only the standard library, numpy,
   h5py and skatelib; ``control/`` besides them only pinocchio, scipy, its QP solvers and
   threadpoolctl (the ``[control]`` extra).
@@ -40,6 +44,28 @@ ONBOARD = {
 }
 
 
+def file_names() -> frozenset[str]:
+    """The names of the library file that only ``library/`` spells out: the ``/model`` records'
+    attributes and datasets, and the schema's attribute names of more than one word."""
+    from skatelib.library import model_io, schema
+
+    attrs = {v for k, v in vars(schema).items() if k.startswith("A_") and isinstance(v, str) and "_" in v}
+    return frozenset({*(n for n in model_io.attribute_names() if "_" in n), *attrs})
+
+
+def _literals(tree: ast.AST, names: frozenset[str]) -> list[tuple[int, str]]:
+    """The file's names used as keys: ``x["name"]``, ``x.get("name", ...)`` and ``{"name": ...}``."""
+    keys: list[ast.expr] = []
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Subscript):
+            keys.append(n.slice)
+        elif isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute) and n.func.attr == "get" and n.args:
+            keys.append(n.args[0])
+        elif isinstance(n, ast.Dict):
+            keys += [k for k in n.keys if k is not None]
+    return [(k.lineno, k.value) for k in keys if isinstance(k, ast.Constant) and k.value in names]
+
+
 def _imports(tree: ast.AST) -> list[tuple[int, str]]:
     out = []
     for node in ast.walk(tree):
@@ -66,6 +92,7 @@ def _sizes(path: Path, rel: str, tree: ast.AST, n_lines: int) -> list[str]:
 def problems(root: Path) -> list[str]:
     """Every breach of the layout rules under ``root`` (a checkout), one line each."""
     found: list[str] = []
+    names = file_names()
     paths = [p for top in PACKAGES for p in sorted((root / top).rglob("*.py"))]
     for path in paths:
         rel = path.relative_to(root).as_posix()
@@ -73,6 +100,10 @@ def problems(root: Path) -> list[str]:
         tree = ast.parse(text, filename=rel)
         found += _sizes(path, rel, tree, len(text.splitlines()))
         top = rel.split("/")[0]
+        if top != "library":
+            found += [f"{rel}:{line}: the library file's name {name!r} as a literal (read the record of "
+                      "skatelib.library.model, or use the constant of skatelib.library.schema)"
+                      for line, name in _literals(tree, names)]
         if top in ONBOARD:
             found += [f"{rel}:{line}: imports {name} ({top}/ is installed on the robot without it)"
                       for line, name in _imports(tree) if name.split(".")[0] not in ONBOARD[top]]

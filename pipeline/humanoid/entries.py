@@ -17,6 +17,8 @@ from skatelib.library.channels import (
     POINT_NAMES,
     ZMP_NAMES,
 )
+from skatelib.library.model import HumanoidModel
+from skatelib.library.model_io import humanoid_attributes
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
@@ -51,7 +53,7 @@ def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
         schema.A_MAX_VIOLATION: max(r.max_violation for r in steps),
         schema.A_PLAN: plan_json(m.plan), schema.A_CACHE_KEY: o.cache_key,
         schema.A_STEPS: json.dumps([{"name": r.spec.name, "status": r.status, "iterations": r.iterations,
-                                   "solve_time_s": r.solve_time_s, "duration_s": r.spec.duration_s,
+                                   schema.A_SOLVE_TIME: r.solve_time_s, "duration_s": r.spec.duration_s,
                                    "terminal": r.spec.terminal} for r in steps]),
     }
     arrays = {
@@ -96,15 +98,15 @@ def _body_records(b: BodyMotion) -> tuple[dict[str, Any], dict[str, Any], dict[s
 def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[EntryOutcome]) -> Path:
     """Write the motions as a library (atomically): its model, provenance and one entry each."""
     h = config.humanoid
-    model = {"robot_mass_kg": h.mass_kg, "gravity_mps2": h.gravity_mps2, "com_height_m": h.com_height_m,
-             "foot_length_m": h.foot_length_m, "foot_width_m": h.foot_width_m, "step_width_m": h.step_width_m,
-             "friction_mu": h.friction_mu, "leg_min_m": h.leg_min_m, "leg_max_m": h.leg_max_m,
-             "gpm_nodes": config.gpm.nodes, "gpm_solver": config.gpm.solver, "motion": config.sweep.motion,
-             "source": h.source}
+    model = HumanoidModel(robot_mass_kg=h.mass_kg, gravity_mps2=h.gravity_mps2, com_height_m=h.com_height_m,
+                          foot_length_m=h.foot_length_m, foot_width_m=h.foot_width_m, step_width_m=h.step_width_m,
+                          friction_mu=h.friction_mu, leg_min_m=h.leg_min_m, leg_max_m=h.leg_max_m,
+                          gpm_nodes=config.gpm.nodes, gpm_solver=config.gpm.solver, motion=config.sweep.motion,
+                          source=h.source)
     root = root_attributes("humanoid", config.meta.name, config.text, config.resolved_json(),
                            {"solver": config.gpm.solver, "nodes": config.gpm.nodes})
     urdf = config.wholebody.urdf_path(config.path).read_text()
-    return write_library(out, root, model, {}, {schema.D_ROBOT_URDF: urdf},
+    return write_library(out, root, humanoid_attributes(model), {}, {schema.D_ROBOT_URDF: urdf},
                          same_datasets([entry_from_motion(o, config) for o in outcomes]))
 
 

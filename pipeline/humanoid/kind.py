@@ -43,7 +43,7 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
     from skatelib.pipeline.humanoid.verify import check_steps, failures
 
     try:
-        cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
+        cfg = config_from_json(str(lib.attrs[schema.A_CONFIG_RESOLVED]), lib.path, None, HumanoidConfig)
     except SkatelibError as err:
         raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {err}") from err
     from skatelib.pipeline.humanoid.body import body_failures, stored_body

@@ -166,7 +166,7 @@ def stored_plan(lib: Any, e: Any) -> list[StepSpec]:
     from skatelib.pipeline.config import config_from_json
     from skatelib.pipeline.humanoid.config import HumanoidConfig
 
-    cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, None, HumanoidConfig)
+    cfg = config_from_json(str(lib.attrs[schema.A_CONFIG_RESOLVED]), lib.path, None, HumanoidConfig)
     return plan_for(cfg, e.target_velocity_mps)[1]
 
 

@@ -22,7 +22,7 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
     t, x = e.t, e.state
     zmp = e.arrays[schema.D_ZMP]
     cp = e.arrays[schema.D_CONTACT_POINT]
-    m = lib.model
+    m = lib.humanoid_model
     rec.send_columns(f"{root}/com", indexes=time_index(t),
                      columns=rr.Points3D.columns(positions=x[:, 0:3] + offset, radii=np.full(len(t), 0.03)))
     rec.log(f"{root}/com_path", rr.LineStrips3D([x[:, 0:3] + offset], colors=[(200, 40, 40)]), static=True)
@@ -35,7 +35,7 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
                      columns=rr.Points3D.columns(positions=cp + offset, radii=np.full(len(t), 0.015)))
     # Soles under the contact point (the footprints of the plan), static.
     feet = np.unique(np.round(cp[:, :2], 4), axis=0)
-    half = [m["foot_length_m"] / 2, m["foot_width_m"] / 2, 0.005]
+    half = [m.foot_length_m / 2, m.foot_width_m / 2, 0.005]
     rec.log(f"{root}/soles", rr.Boxes3D(centers=np.column_stack([feet, np.zeros(len(feet))]) + offset,
                                         half_sizes=[half] * len(feet), colors=[(120, 120, 200)]), static=True)
     _log_support_polygons(rec, lib, e, root, offset)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from skatelib.library.channels import I_BOARD_ROLL, LEGS, S_BOARD_V, S_OMEGA, S_Q, S_RPY, S_VEL, U_QD
+from skatelib.library.channels import I_BOARD_ROLL, S_BOARD_V, S_OMEGA, S_Q, S_RPY, S_VEL, U_QD
 from skatelib.pipeline.quadruped.system import END_BAND_M
 from skatelib.runtime import Entry, MotionLibrary
 from skatelib.runtime.routes import speed_key
@@ -56,25 +56,23 @@ def tolerances(lib: MotionLibrary, v: float) -> dict[str, float]:
     end's roll and pitch are held near level, a start has the riding stance's (``stance_ride_trunk``);
     the deck roll is held to the trunk's attitude tolerance; the push foot's height to half the
     end's height band."""
-    m = lib.model
-    ride_attitude = float(np.max(np.abs(lib.model_arrays["stance_ride_trunk"][2:4])))
-    rel = float(m.get("final_velocity_tol", 0.01))
-    stop = float(m.get("stop_speed_tol_mps", 0.02))
-    return {"com_xy_m": float(m["terminal_position_tol_m"]), "height_m": float(m["terminal_height_tol_m"]),
-            "attitude_rad": float(m["terminal_attitude_tol_rad"]) + ride_attitude,
-            "joints_rad": float(m["terminal_joint_tol_rad"]),
-            "relative_speed_mps": float(m["terminal_relative_speed_tol_mps"]),
-            "vertical_speed_mps": float(m["terminal_vertical_speed_tol_mps"]),
-            "angular_speed_radps": float(m["terminal_angular_speed_tol_radps"]),
-            "board_speed_mps": rel * v if v > 0 else stop,
-            "joint_speed_radps": float(m["terminal_joint_velocity_tol_radps"]),
-            "deck_roll_rad": float(m["terminal_attitude_tol_rad"]), "push_foot_height_m": END_BAND_M / 2}
+    m = lib.quadruped_model
+    trunk = m.arrays.stance_ride_trunk
+    ride_attitude = float(np.max(np.abs(trunk[2:4]))) if trunk is not None else 0.0
+    tol = m.terminal
+    return {"com_xy_m": tol["position_tol_m"], "height_m": tol["height_tol_m"],
+            "attitude_rad": tol["attitude_tol_rad"] + ride_attitude, "joints_rad": tol["joint_tol_rad"],
+            "relative_speed_mps": tol["relative_speed_tol_mps"], "vertical_speed_mps": tol["vertical_speed_tol_mps"],
+            "angular_speed_radps": tol["angular_speed_tol_radps"],
+            "board_speed_mps": m.final_velocity_tol * v if v > 0 else m.stop_speed_tol_mps,
+            "joint_speed_radps": tol["joint_velocity_tol_radps"],
+            "deck_roll_rad": tol["attitude_tol_rad"], "push_foot_height_m": END_BAND_M / 2}
 
 
 def chain_gaps(lib: MotionLibrary) -> list[ChainGap]:
     """Every (end, start) pair of successful entries that meet at a riding speed (see the module
     docstring); empty for a library without transitions."""
-    p = LEGS.index(str(lib.model["push_leg"]))
+    p = lib.quadruped_model.push_leg_index
     ok = [e for e in lib if e.success]
     out = []
     for b in (e for e in ok if e.from_velocity_mps > 0):

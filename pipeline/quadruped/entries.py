@@ -9,8 +9,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from skatelib.library import schema
+from skatelib.library import model_io, schema
 from skatelib.library.channels import CONTROL_NAMES, CONTROL_UNITS, LEGS, STATE_NAMES, STATE_UNITS
+from skatelib.library.model import BoardModel, QuadrupedArrays, QuadrupedModel
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
@@ -22,43 +23,34 @@ BOARD_POS_COLUMNS = ("board_x", "board_y", "board_z", "board_yaw")
 BOARD_POS_UNITS = ("m", "m", "m", "rad")
 
 
-def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """Every physical parameter the build used: /model attributes and arrays."""
+def quadruped_model(config: QuadrupedConfig, system: SkateSystem) -> QuadrupedModel:
+    """Every physical parameter the build used, as the library's ``/model`` record."""
     b, s = system.board, system
-    attrs = {
-        "robot_mass_kg": s.srb.mass_kg, "friction_mu": s.friction_mu, "gravity_mps2": s.gravity_mps2,
-        "foot_radius_m": s.foot_radius_m, "torque_limit_Nm": s.torque_limit_Nm,
-        "joint_velocity_limit_radps": s.joint_velocity_limit_radps, "push_leg": s.push_leg,
-        "board_mass_kg": b.mass_kg, "board_roll_stiffness_Nm_per_rad": b.roll_stiffness_Nm_per_rad,
-        "board_roll_damping_Nms_per_rad": b.roll_damping_Nms_per_rad, "board_roll_inertia_kgm2": b.roll_inertia_kgm2,
-        "board_rolling_friction_N": b.rolling_friction_nominal_N, "board_rolling_friction_plan_N": b.rolling_friction_N,
-        "board_rolling_coeff": b.rolling_coeff_nominal, "board_rolling_coeff_plan": b.rolling_coeff,
-        "board_K_board_m": b.K_board_m, "board_deck_mass_kg": b.deck_mass_kg,
-        "board_tanh_scale_s_per_m": b.tanh_scale_s_per_m, "board_pivot_from_horizontal_rad": b.pivot_rad,
-        "board_roll_axis_height_m": b.deck_height_m - b.roll_axis_depth_m, "board_wheel_track_m": b.wheel_track_m,
-        "board_wheel_load_margin": b.wheel_load_margin,
-        "board_l_front_m": b.l_front_m, "board_l_rear_m": b.l_rear_m,
-        "board_deck_height_m": b.deck_height_m, "board_deck_length_m": b.deck_length_m,
-        "board_deck_width_m": b.deck_width_m, "board_truck_width_m": b.truck_width_m,
-        "board_roll_limit_rad": b.roll_limit_rad, "schedule_period_s": config.schedule.period_s,
-        "schedule_push_duty": config.schedule.push_duty, "dt_s": config.optimization.dt_s,
-        "integrator": config.optimization.integrator, "robot_source": config.robot.source,
-        "friction_model": config.optimization.friction_model,
-        "friction_mu_plan": config.optimization.friction_margin * s.friction_mu,
-        "joint_limit_margin_rad": config.optimization.joint_limit_margin_rad,
-        **{f"terminal_{k}": v for k, v in dataclasses.asdict(config.terminal).items()},
-        "final_velocity_tol": config.optimization.final_velocity_tol,
-        "stop_speed_tol_mps": config.transitions.stop_speed_tol_mps,
-        "board_source": config.board.source,
-    }
-    arrays = {
-        schema.D_ROBOT_INERTIA: s.srb.inertia_kgm2, "robot_com_offset_m": s.srb.com_offset_m,
-        schema.D_JOINT_LOWER: s.robot.lower_limits, schema.D_JOINT_UPPER: s.robot.upper_limits,
-        "stance_q_board_rad": s.stance.q_board, "stance_q_push_rad": s.stance.q_push,
-        "stance_deck_points_m": s.stance.cr, "stance_q_ride_rad": s.stance.q_ride,
-        "stance_ride_trunk": s.stance.ride_trunk, "stance_riding_com_m": s.riding_com_m,
-    }
-    return attrs, arrays
+    board = BoardModel(
+        mass_kg=b.mass_kg, roll_stiffness_Nm_per_rad=b.roll_stiffness_Nm_per_rad,
+        roll_damping_Nms_per_rad=b.roll_damping_Nms_per_rad, roll_inertia_kgm2=b.roll_inertia_kgm2,
+        rolling_friction_N=b.rolling_friction_nominal_N, rolling_friction_plan_N=b.rolling_friction_N,
+        rolling_coeff=b.rolling_coeff_nominal, rolling_coeff_plan=b.rolling_coeff, K_board_m=b.K_board_m,
+        deck_mass_kg=b.deck_mass_kg, tanh_scale_s_per_m=b.tanh_scale_s_per_m, pivot_from_horizontal_rad=b.pivot_rad,
+        roll_axis_height_m=b.deck_height_m - b.roll_axis_depth_m, wheel_track_m=b.wheel_track_m,
+        wheel_load_margin=b.wheel_load_margin, l_front_m=b.l_front_m, l_rear_m=b.l_rear_m,
+        deck_height_m=b.deck_height_m, deck_length_m=b.deck_length_m, deck_width_m=b.deck_width_m,
+        truck_width_m=b.truck_width_m, roll_limit_rad=b.roll_limit_rad, source=config.board.source)
+    arrays = QuadrupedArrays(
+        robot_inertia_kgm2=s.srb.inertia_kgm2, robot_com_offset_m=s.srb.com_offset_m,
+        joint_lower_rad=s.robot.lower_limits, joint_upper_rad=s.robot.upper_limits,
+        stance_q_board_rad=s.stance.q_board, stance_q_push_rad=s.stance.q_push, stance_deck_points_m=s.stance.cr,
+        stance_q_ride_rad=s.stance.q_ride, stance_ride_trunk=s.stance.ride_trunk, stance_riding_com_m=s.riding_com_m)
+    opt = config.optimization
+    return QuadrupedModel(
+        board=board, arrays=arrays, robot_mass_kg=s.srb.mass_kg, friction_mu=s.friction_mu,
+        gravity_mps2=s.gravity_mps2, foot_radius_m=s.foot_radius_m, torque_limit_Nm=s.torque_limit_Nm,
+        joint_velocity_limit_radps=s.joint_velocity_limit_radps, push_leg=s.push_leg,
+        schedule_period_s=config.schedule.period_s, schedule_push_duty=config.schedule.push_duty, dt_s=opt.dt_s,
+        integrator=opt.integrator, robot_source=config.robot.source, friction_model=opt.friction_model,
+        friction_mu_plan=opt.friction_margin * s.friction_mu, joint_limit_margin_rad=opt.joint_limit_margin_rad,
+        terminal=dataclasses.asdict(config.terminal), final_velocity_tol=opt.final_velocity_tol,
+        stop_speed_tol_mps=config.transitions.stop_speed_tol_mps)
 
 
 def entry_from_result(r: SolveResult, attempts: int = 1, physics: dict[str, float] | None = None,
@@ -90,9 +82,10 @@ def write_quadruped_library(path: Path | str, config: QuadrupedConfig, system: S
                             entries: Sequence[EntryRecord], solver_options: dict[str, Any],
                             frontier_json: str | None = None) -> Path:
     """Write a quadruped motion library atomically (with the reachable-speed frontier when given)."""
-    model_attrs, model_arrays = quadruped_model(config, system)
+    record = quadruped_model(config, system)
     root = root_attributes("quadruped", config.meta.name, config.text, config.resolved_json(), solver_options)
     if frontier_json is not None:
         root[schema.A_FRONTIER] = frontier_json
-    return write_library(path, root, model_attrs, model_arrays, {schema.D_ROBOT_URDF: system.robot.urdf_text},
+    return write_library(path, root, model_io.attributes(record), model_io.arrays(record),
+                         {schema.D_ROBOT_URDF: system.robot.urdf_text},
                          entries)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from rich.markup import escape
 from rich.table import Table
+from skatelib.library import schema
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.pipeline.config import config_from_json
 from skatelib.pipeline.kinds import SubpackageKind
@@ -67,13 +68,13 @@ def system_from_library(lib: MotionLibrary) -> Any:
     """
     from skatelib.pipeline.quadruped.system import SkateSystem
 
-    if "board_pivot_from_horizontal_rad" not in lib.model:
+    if not lib.quadruped_model.board.modelled_trucks:
         raise LibraryFormatError(lib.path, "/model/@board_pivot_from_horizontal_rad", OLD_BOARD)
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / "robot.urdf"
         urdf.write_text(lib.urdf)
         try:
-            cfg = config_from_json(str(lib.attrs["config_resolved_json"]), lib.path, urdf, QuadrupedConfig)
+            cfg = config_from_json(str(lib.attrs[schema.A_CONFIG_RESOLVED]), lib.path, urdf, QuadrupedConfig)
             return SkateSystem.from_config(cfg)
         except SkatelibError as e:
             raise LibraryFormatError(lib.path, "/@config_resolved_json", f"stored config cannot be rebuilt: {e}") from e

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library import schema
 from skatelib.library.channels import GROUND
 from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import forward_speed, momentum_speed
@@ -45,7 +46,7 @@ def figures(lib: MotionLibrary, plt: Any, frontier_file: Path | None) -> dict[st
 def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
     """Board speed (solid) and momentum speed (dashed) against time, per panel (start-ups by strides,
     transitions by start speed)."""
-    m = lib.model
+    m = lib.quadruped_model
     groups = by_panel(lib)
     fig, axes = panels(plt, len(groups), f"{library_name(lib)}: board speed (solid) and momentum speed (dashed)")
     cmap = plt.get_cmap("viridis")
@@ -54,7 +55,7 @@ def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
         for e in entries:
             c = cmap(speeds.index(e.target_velocity_mps) / max(1, len(speeds) - 1))
             ax.plot(e.t, forward_speed(e.state), color=c, label=panel_label(e))
-            ax.plot(e.t, momentum_speed(e.state, m["robot_mass_kg"], m["board_mass_kg"]), "--", color=c, lw=1)
+            ax.plot(e.t, momentum_speed(e.state, m.robot_mass_kg, m.board.mass_kg), "--", color=c, lw=1)
             ax.axhline(e.target_velocity_mps, color=c, lw=0.5, alpha=0.5)
         ax.set_title(title, fontsize=10)
         ax.set_ylabel("speed [m/s]")
@@ -67,7 +68,7 @@ def plot_speeds(lib: MotionLibrary, plt: Any) -> Any:
 def plot_deck_roll(lib: MotionLibrary, plt: Any) -> Any:
     """Deck roll against time, per panel (start-ups by strides, transitions by start speed), with the
     wheel-collision limit."""
-    limit = float(lib.model.get("board_roll_limit_rad", np.nan))
+    limit = lib.quadruped_model.board.roll_limit_rad
     groups = by_panel(lib)
     fig, axes = panels(plt, len(groups), f"{library_name(lib)}: deck roll")
     for ax, (title, entries) in zip(axes, groups.items(), strict=True):
@@ -96,8 +97,7 @@ def push_foot_forces(e: Entry, mu: float) -> tuple[np.ndarray, np.ndarray, np.nd
 
 def plot_push_forces(lib: MotionLibrary, plt: Any) -> Any:
     """Per entry, the pushing foot's |f_t| against Coulomb's mu f_n and the plan's mu_plan f_n."""
-    mu = float(lib.model["friction_mu"])
-    mu_plan = float(lib.model.get("friction_mu_plan", mu))
+    mu, mu_plan = lib.quadruped_model.friction_mu, lib.quadruped_model.mu_plan
     entries = solved(lib)
     cols = 3
     rows = -(-len(entries) // cols)
@@ -131,7 +131,8 @@ def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
     ticks = []
     for y, p in enumerate(points):
         lane = Lane(p.get("from_mps", 0.0), p.get("stop", False))  # files of start-ups only lack them
-        ticks.append(f"{p['n_strides']}" if lane.start_up else f"{lane.label}, {p['n_strides']}")
+        strides = p[schema.A_N_STRIDES]
+        ticks.append(f"{strides}" if lane.start_up else f"{lane.label}, {strides}")
         ok = [q["velocity_mps"] for q in p["probes"] if q["ok"]]
         bad = [q["velocity_mps"] for q in p["probes"] if not q["ok"]]
         ax.scatter(ok, [y] * len(ok), marker="o", color="C2", s=18, zorder=3)
@@ -157,5 +158,5 @@ def _frontier(lib: MotionLibrary, frontier_file: Path | None) -> dict[str, Any] 
         except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
             raise SkatelibError(f"{frontier_file}: not a frontier file of `skatelib frontier -o` ({e})") from e
         return dict(data)
-    stored = lib.attrs.get("frontier_json")
+    stored = lib.attrs.get(schema.A_FRONTIER)
     return json.loads(str(stored)) if stored else None

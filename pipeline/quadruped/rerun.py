@@ -10,6 +10,7 @@ import numpy as np
 import rerun as rr
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, LEGS, S_Q, S_RPY
 from skatelib.library.margins import forward_speed, friction_margins
+from skatelib.library.model import BoardModel
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.pipeline.views.rerun_parts import ground, quat_rows, series, time_index
 from skatelib.pipeline.views.rerun_robot import Robot, log_robot
@@ -30,7 +31,8 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
     assert e.contact is not None and e.foot_pos is not None and e.board_pos is not None
     K = len(t)
     R = rpy_matrices(x[:, 3:6])
-    com_off = lib.model_arrays.get("robot_com_offset_m", np.zeros(3))
+    m = lib.quadruped_model
+    com_off = m.arrays.robot_com_offset_m
     trunk = x[:, 0:3] - np.einsum("kij,j->ki", R, com_off) + offset
     jac = log_robot(rec, robot, f"{root}/robot", t, (trunk, R, x[:, 12:24]))
     # Paths: the board's on the ground, each foot's trail, and where the push foot stood on the ground.
@@ -42,8 +44,8 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
     if np.any(stood):
         steps = np.unique(np.round(e.foot_pos[stood], 3), axis=0)
         rec.log(f"{root}/footholds", rr.Points3D(steps + offset, radii=0.012, colors=[(230, 120, 30)]), static=True)
-    _log_board(rec, lib.model, e, root, offset)
-    ground(rec, root, e.board_pos[:, :2] + offset[:2], float(lib.model["board_deck_length_m"]))
+    _log_board(rec, m.board, e, root, offset)
+    ground(rec, root, e.board_pos[:, :2] + offset[:2], m.board.deck_length_m)
     # Contact forces at the knots where a control acts.
     forces = u[:, :12].reshape(-1, 4, 3)
     for i, leg in enumerate(LEGS):
@@ -61,9 +63,8 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
         series(rec, root, f"normal_force/{leg}", t[:-1], forces[:, i, 2], f"{leg} normal force [N]")
     for name, q in zip(e.columns["state"][S_Q], x[:, S_Q].T, strict=True):
         series(rec, root, f"joints/{name}", t, q, f"{name.removeprefix('q_').replace('_', ' ')} [rad]")
-    m = lib.model
-    tau_max = float(m.get("torque_limit_Nm", np.inf))
-    fric, _ = friction_margins(x, u, e.contact, float(m["friction_mu"]))
+    tau_max = m.torque_limit_Nm
+    fric, _ = friction_margins(x, u, e.contact, m.friction_mu)
     touching = np.isin(e.contact[:-1], (BOARD, GROUND))
     tau = np.abs(np.einsum("klji,klj->kli", jac[:-1], forces)).max(axis=2)  # |J^T f| per leg
     torque = np.where(touching, tau_max - tau, np.inf).min(axis=1)
@@ -71,25 +72,25 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
     series(rec, root, "margins/torque_Nm", t[:-1], torque, "torque margin [N m]")
 
 
-def _log_board(rec: rr.RecordingStream, m: dict[str, Any], e: Entry, root: str, offset: np.ndarray) -> None:
+def _log_board(rec: rr.RecordingStream, b: BoardModel, e: Entry, root: str, offset: np.ndarray) -> None:
     """The board: the deck rolls about its x axis on two trucks that stay on the ground, four
     wheels on the trucks' axles; all of it moves and yaws with the board (``board_pos``: the deck
     top's centre, the deck roll)."""
     assert e.board_pos is not None
     t, yaw, roll = e.t, e.state[:, S_RPY][:, 2], e.state[:, I_BOARD_ROLL]
-    height = float(m["board_deck_height_m"])  # deck top above the ground, wheels included
+    height = b.deck_height_m  # deck top above the ground, wheels included
     base = e.board_pos[:, :3] * [1.0, 1.0, 0.0] + offset
     heading = quat_rows(board_rotations(yaw, 0 * roll))
     rec.send_columns(f"{root}/board", indexes=time_index(t),
                      columns=rr.Transform3D.columns(translation=base, quaternion=heading))
-    half = [m["board_deck_length_m"] / 2, m["board_deck_width_m"] / 2, DECK_THICKNESS_M / 2]
+    half = [b.deck_length_m / 2, b.deck_width_m / 2, DECK_THICKNESS_M / 2]
     rec.log(f"{root}/board/deck", rr.Boxes3D(half_sizes=[half], centers=[[0, 0, -DECK_THICKNESS_M / 2]],
                                              colors=[(160, 110, 60)], fill_mode="solid"), static=True)
     rec.send_columns(f"{root}/board/deck", indexes=time_index(t),
                      columns=rr.Transform3D.columns(translation=np.tile([0.0, 0.0, height], (len(t), 1)),
                                                     quaternion=quat_rows(board_rotations(0 * yaw, roll))))
-    axles = [float(m["board_l_front_m"]), -float(m["board_l_rear_m"])]
-    half_track = float(m.get("board_truck_width_m", m["board_deck_width_m"])) / 2
+    axles = [b.l_front_m, -b.l_rear_m]
+    half_track = b.truck_width() / 2
     hanger = height - DECK_THICKNESS_M - WHEEL_RADIUS_M
     rec.log(f"{root}/board/trucks", rr.Boxes3D(
         centers=[[x, 0.0, WHEEL_RADIUS_M + hanger / 2] for x in axles],

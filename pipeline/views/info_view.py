@@ -22,11 +22,11 @@ STORED_FIGURES = (*CLOSED_LOOP, ("wholebody", schema.A_WHOLEBODY))  # JSON attri
 
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
     """``skatelib info --json``: provenance, model and one record per entry."""
-    entries = [{"key": e.key, "target_velocity_mps": e.target_velocity_mps, "n_strides": e.n_strides,
-                "from_velocity_mps": e.from_velocity_mps,
+    entries = [{"key": e.key, schema.A_TARGET_VELOCITY: e.target_velocity_mps, schema.A_N_STRIDES: e.n_strides,
+                schema.A_FROM_VELOCITY: e.from_velocity_mps,
                 "success": e.success, "status": str(e.attrs[schema.A_STATUS]),
                 "iterations": int(e.attrs[schema.A_ITERATIONS]), "knots": len(e.t), "duration_s": e.duration_s,
-                "solve_time_s": e.attrs.get(schema.A_SOLVE_TIME),
+                schema.A_SOLVE_TIME: e.attrs.get(schema.A_SOLVE_TIME),
                 "physics": json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}"))),
                 **{name: json.loads(str(e.attrs[attr])) for name, attr in STORED_FIGURES if attr in e.attrs}}
                for e in lib]
@@ -34,17 +34,17 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
     provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
                    if f"{name}_{k}" in lib.attrs}
     transitions = transitions_json(lib) if lib.kind == "quadruped" else {}
-    return {"library": str(path), "kind": lib.kind, **provenance, "content_sha256": lib.content_sha256,
+    return {"library": str(path), schema.A_KIND: lib.kind, **provenance, schema.A_CHECKSUM: lib.content_sha256,
             "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
 
 
 def library_summary(lib: Any, path: Any) -> None:
     """``skatelib info``: provenance, the model's parameters and the entry table."""
     a = lib.attrs
-    console.print(escape(f"{path}: {a.get('name', '?')} ({lib.kind}), format {a['format_version']}, "
-                         f"skatelib {a['skatelib_version']}, created {a['created_utc']}"))
-    console.print(escape(f"git {a['git_commit'][:12]}{' (dirty)' if a['git_dirty'] else ''}; casadi "
-                         f"{a['casadi_version']}, ipopt {a['ipopt_version']}, pinocchio {a['pinocchio_version']}"))
+    console.print(escape(f"{path}: {a.get('name', '?')} ({lib.kind}), format {a[schema.A_FORMAT_VERSION]}, "
+                         f"skatelib {a[schema.A_SKATELIB_VERSION]}, created {a[schema.A_CREATED]}"))
+    console.print(escape(f"git {a[schema.A_GIT_COMMIT][:12]}{' (dirty)' if a[schema.A_GIT_DIRTY] else ''}; casadi "
+                         f"{a[schema.A_CASADI]}, ipopt {a[schema.A_IPOPT]}, pinocchio {a[schema.A_PINOCCHIO]}"))
     console.print(escape(f"content sha256 {lib.content_sha256}"))
     parameter_table("model", [(str(k), v) for k, v in sorted(lib.model.items()) if not str(k).endswith("_source")],
                     number="{:.6g}")

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 from rich.markup import escape
+from skatelib.library import schema
 from skatelib.library.margins import momentum_speed
 from skatelib.pipeline.views.console import console, entry_table
 
@@ -16,12 +17,14 @@ STOPPED_MPS = 0.05  # a stop counts as done below this momentum speed
 def stop_figures(lib: Any, e: Any) -> dict[str, float]:
     """How long and how far (along the heading) a stop entry rides until robot and board move slower
     than 0.05 m/s together (momentum speed), and the entry's whole duration."""
-    v = momentum_speed(np.asarray(e.state), float(lib.model["robot_mass_kg"]), float(lib.model["board_mass_kg"]))
+    m = lib.quadruped_model
+    v = momentum_speed(np.asarray(e.state), m.robot_mass_kg, m.board.mass_kg)
     k = int(np.argmax(v < STOPPED_MPS)) if np.any(v < STOPPED_MPS) else len(v) - 1
     board = np.asarray(e.board_pos)
     heading = np.array([np.cos(board[0, 3]), np.sin(board[0, 3])])
     return {"stop_time_s": float(e.t[k] - e.t[0]), "stop_distance_m": float((board[k, 0:2] - board[0, 0:2]) @ heading),
-            "duration_s": float(e.duration_s), "from_velocity_mps": e.from_velocity_mps, "n_strides": e.n_strides}
+            "duration_s": float(e.duration_s), schema.A_FROM_VELOCITY: e.from_velocity_mps,
+            schema.A_N_STRIDES: e.n_strides}
 
 
 def transitions_json(lib: Any) -> dict[str, Any]:
@@ -31,14 +34,15 @@ def transitions_json(lib: Any) -> dict[str, Any]:
     if not moves:
         return {}
     cells = [{"from_mps": e.from_velocity_mps, "to_mps": e.target_velocity_mps, "key": e.key, "success": e.success,
-              "n_strides": e.n_strides} for e in moves]
+              schema.A_N_STRIDES: e.n_strides} for e in moves]
     starts = sorted({e.from_velocity_mps for e in moves})
     fastest = {}
     for v0 in starts:
         ups = [e for e in moves if e.success and e.from_velocity_mps == v0 and e.target_velocity_mps > v0]
         if ups:
             best = max(ups, key=lambda e: (e.target_velocity_mps, -e.n_strides))
-            fastest[f"{v0:.2f}"] = {"to_mps": best.target_velocity_mps, "n_strides": best.n_strides, "key": best.key}
+            fastest[f"{v0:.2f}"] = {"to_mps": best.target_velocity_mps, schema.A_N_STRIDES: best.n_strides,
+                                    "key": best.key}
     stops = {e.key: stop_figures(lib, e) for e in moves if e.success and e.target_velocity_mps == 0}
     return {"cells": cells, "fastest_speed_up": fastest, "stops": stops}
 
@@ -54,12 +58,12 @@ def transitions_summary(lib: Any) -> None:
                     ("from \\ to", *(f"{v:.2f}" for v in targets)))
     for v0 in sorted({c["from_mps"] for c in data["cells"]}):
         row = {c["to_mps"]: c for c in data["cells"] if c["from_mps"] == v0}
-        t.add_row(f"{v0:.2f}", *("-" if v not in row else str(row[v]["n_strides"]) if row[v]["success"] else "FAIL"
-                                 for v in targets))
+        cell = {v: str(c[schema.A_N_STRIDES]) if c[schema.A_SUCCESS] else "FAIL" for v, c in row.items()}
+        t.add_row(f"{v0:.2f}", *(cell.get(v, "-") for v in targets))
     console.print(t)
     s = entry_table(f"stops (until robot and board ride slower than {STOPPED_MPS} m/s together)",
                     ("entry", "from [m/s]", "strides", "time [s]", "distance [m]"))
     for key, f in data["stops"].items():
-        s.add_row(escape(key), f"{f['from_velocity_mps']:.2f}", str(f["n_strides"]), f"{f['stop_time_s']:.2f}",
-                  f"{f['stop_distance_m']:.2f}")
+        s.add_row(escape(key), f"{f[schema.A_FROM_VELOCITY]:.2f}", str(f[schema.A_N_STRIDES]),
+                  f"{f['stop_time_s']:.2f}", f"{f['stop_distance_m']:.2f}")
     console.print(s)
