@@ -32,8 +32,9 @@ def measure(path: Path) -> list[Measured]:
     from skatelib.control.kinematics import LegKinematics
     from skatelib.control.linear_model import Feedback
     from skatelib.control.mpc import Discretizer, MpcConfig, build_problem
+    from skatelib.control.mpc_solvers import make_solver
     from skatelib.control.params import SkateParams
-    from skatelib.control.qp import SOLVERS, make_solver
+    from skatelib.control.qp import SOLVERS
     from skatelib.control.reference import EntryReference
     from skatelib.control.settings import TrackSettings
     from skatelib.library.rotations import board_rotations, rpy_matrices

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from skatelib.control.linear_model import Discretizer, Feedback
 from skatelib.control.mpc import Bias, HorizonRef, MpcConfig, MpcProblem, build_problem
+from skatelib.control.mpc_solvers import make_solver
 from skatelib.control.observers import CoastObserver, DisturbanceObserver
 from skatelib.control.params import SkateParams
-from skatelib.control.qp import make_solver
 from skatelib.control.reference import Reference
 from skatelib.library.margins import forward_speed, momentum_speed
 

@@ -21,11 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control.multibody import DynamicsTerms
-from skatelib.control.qp import QpSolveFailed
+from skatelib.control.qp import QpProblem, QpSolveFailed, solve_qp
 
 NV = 18
-EQUALITY = 5  # DAQP's sense of a row held at equality (active and immutable)
-
 
 @dataclass(frozen=True)
 class WbcSettings:
@@ -55,6 +53,7 @@ class WbcSettings:
     normal_min_N: float = 1.0
     normal_max_N: float = 150.0
     friction_rows: bool = True
+    qp_solver: str = "daqp"  # a backend of skatelib.control.qp.SOLVERS
 
 
 @dataclass
@@ -131,8 +130,8 @@ class _Layout:
         m = self.surface + per_leg * len(legs)
         self.rows = np.zeros((m, n))
         self.up, self.lo = np.full(m, 1e30), np.full(m, -1e30)
-        self.sense = np.zeros(m, dtype=np.intc)
-        self.sense[:6] = self.sense[NV:self.surface] = EQUALITY
+        self.equality = np.zeros(m, dtype=bool)
+        self.equality[:6] = self.equality[NV:self.surface] = True
         k = np.arange(len(legs))
         r = self.surface + per_leg * k  # each leg's normal row, then its facets
         self.up[r], self.lo[r] = s.normal_max_N, s.normal_min_N
@@ -156,9 +155,6 @@ class WholeBodyController:
         self.tau_max = torque_limit_Nm  # (sets the dynamics rows' bounds)
         self.mu = mu
         self._layouts: dict[bytes, _Layout] = {}
-        import daqp
-
-        self._daqp = daqp.solve
         self._coefficients = surface_coefficients(mu, self.s.friction_rows)
         self._floor_rows = self._coefficients.copy()  # on the floor R = I
 
@@ -176,7 +172,7 @@ class WholeBodyController:
         """Torques of this tick.
 
         Raises:
-            QpSolveFailed: DAQP found no solution (the caller records a fall).
+            QpSolveFailed: The backend found no solution (the caller records a fall).
         """
         L = self._layout(tg.stance)
         legs, swing, s, j = L.legs, L.swing, self.s, self._j
@@ -198,13 +194,15 @@ class WholeBodyController:
         g[j] -= s.w_posture * tg.posture_acc
         g[NV:] = -s.w_force * tg.forces[:, legs].T.ravel()
         self._constraints(L, T, tg, JcT)
-        x, _, flag, info = self._daqp(L.H, g, L.rows, L.up, L.lo, L.sense)
-        if flag != 1:
-            raise QpSolveFailed(f"whole-body QP: DAQP exit flag {flag}")
+        try:
+            solution = solve_qp(QpProblem(L.H, g, L.rows, L.lo, L.up, equality=L.equality), s.qp_solver)
+        except QpSolveFailed as e:
+            raise QpSolveFailed(f"whole-body QP: {e}") from e
+        x = solution.x
         tau = (L.rows[:NV] @ x + T.h)[j]
         forces = np.zeros((3, 4))
         forces[:, legs] = x[NV:].reshape(-1, 3).T
-        return WbcOutput(tau=tau, forces=forces, qdd=x[:NV], iterations=int(info["iterations"]))
+        return WbcOutput(tau=tau, forces=forces, qdd=x[:NV], iterations=solution.iterations)
 
     def _layout(self, stance: np.ndarray) -> _Layout:
         key = np.asarray(stance, dtype=bool).tobytes()

@@ -19,8 +19,8 @@ pytest.importorskip("daqp")
 from scipy.linalg import expm
 from skatelib.control.linear_model import Discretizer, Feedback, continuous_model
 from skatelib.control.mpc import Bias, HorizonRef, MpcConfig, build_problem, qp_objective
+from skatelib.control.mpc_solvers import make_solver
 from skatelib.control.params import SkateParams
-from skatelib.control.qp import make_solver
 from skatelib.control.settings import TrackSettings
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.proving.closed_loop import track_entry
