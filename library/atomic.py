@@ -63,6 +63,22 @@ def atomic_path(path: Path) -> Iterator[Path]:
         raise
 
 
+def confined(folder: Path, name: str) -> Path:
+    """``folder / name`` for a file name that comes from a file's content (an entry key): refused
+    unless it is one plain name whose resolved path stays inside ``folder``.
+
+    Raises:
+        OutputError: The name is a path, empty, ``.`` or ``..``, or leads outside ``folder``.
+    """
+    folder = Path(folder)
+    plain = name not in ("", ".", "..") and Path(name).name == name and "\\" not in name and "\0" not in name
+    real = folder.resolve()
+    if not plain or (real / name).parent != real:
+        raise OutputError(folder, f"refusing to write {name!r}: a file name from the library that leads outside "
+                                  "this folder; the library is not skatelib's or was altered (skatelib validate)")
+    return folder / name
+
+
 def write_atomic(path: Path, data: bytes | bytearray) -> Path:
     """Write ``data`` to ``path`` whole or not at all, refusing before writing a byte when the
     folder has less free space than the data needs.

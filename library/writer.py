@@ -45,11 +45,15 @@ def write_library(
     """Write a complete library file; a reader never sees a half-written one.
 
     Raises:
-        ValueError: When entries disagree on their dataset names or trailing shapes.
+        ValueError: When entries disagree on their dataset names or trailing shapes, or a key is not
+            a plain name (``schema.ENTRY_KEY_RULE``).
     """
     path = Path(path)
     names = list(entries[0].arrays) if entries else []
     for e in entries:
+        why = schema.entry_key_problem(e.key)  # what a reader would refuse
+        if why:
+            raise ValueError(why)
         if list(e.arrays) != names:
             raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
     root = {
