@@ -10,9 +10,9 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from skatelib.library.atomic import remove_stale_temporaries
 from skatelib.library.errors import ConfigError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
+from skatelib.library.temporaries import remove_stale_temporaries
 from skatelib.pipeline.build import trust
 from skatelib.pipeline.build.cache import CACHE_ENV, cache_dir
 
@@ -80,7 +80,7 @@ def check_folder(out: Path) -> None:
     if out.exists() and not out.is_dir():
         raise OutputError(out, "is a file; name a folder for the files, e.g. out/figures")
     _writable(out, out, "the folder cannot be written ({why}); choose another one")
-    remove_stale_temporaries(out, "skatelib")
+    remove_stale_temporaries(out)
 
 
 def _writable(folder: Path, named: Path, message: str) -> None:

@@ -7,12 +7,11 @@ import contextlib
 import fcntl
 import os
 import subprocess
-import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import casadi as ca
-from skatelib.library.atomic import remove_stale_temporaries
+from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
 from skatelib.pipeline.build import trust
 
 
@@ -32,8 +31,8 @@ def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[s
     gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
     for f in functions:
         gen.add(f)
-    remove_stale_temporaries(lib.parent, "compile")  # a compile killed earlier left its stage.c
-    with tempfile.TemporaryDirectory(prefix=f"compile-{os.getpid()}-", dir=lib.parent) as tmp:
+    remove_stale_temporaries(lib.parent)  # a compile killed earlier left its stage.c
+    with temporary_folder(lib.parent, "compile") as tmp:
         c_file = Path(tmp) / "stage.c"
         c_file.write_text(gen.dump())
         so_tmp = Path(tmp) / "stage.so"
