@@ -108,7 +108,7 @@ def check_cache_dir(entries_too: bool = True) -> Path:
     d = cache_dir()
     try:
         d.mkdir(mode=0o700, parents=True, exist_ok=True)
-        trust.check_own(d)
+        trust.check_own(d, trust.OWN_ADVICE if entries_too else trust.COMPILE_ADVICE)
         (d / "entries").mkdir(mode=0o700, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
             pass
