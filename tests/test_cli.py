@@ -68,6 +68,34 @@ def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
     assert "inf_pr" not in logs[1]
 
 
+def test_solve_cuts_the_config_to_the_one_start_up_it_names(cfg):
+    """The config ``solve`` builds from the default one (18 start-ups, 25 transitions) has exactly
+    one entry: the start-up named, no transitions."""
+    from skatelib.pipeline.quadruped.builder import one_start_up, tasks
+
+    assert sum(t.n_entries for t in tasks(cfg)) == 43
+    one = one_start_up(cfg, 0.5, 2)
+    assert [(type(t).__name__, t.n_entries) for t in tasks(one)] == [("BuildTask", 1)]
+    assert one.sweep.velocities_mps == (0.5,) and one.sweep.strides == (2,) and one.transitions.pairs() == []
+
+
+@pytest.mark.slow
+def test_solve_of_the_default_config_writes_one_entry(tmp_path: Path):
+    """`skatelib solve -V 0.5 -s 2` of the default config (its transitions included; the stage
+    functions interpreted, to need no compiler) writes the one push-off, in seconds: it solved the
+    25 transitions too, over ten minutes."""
+    from skatelib.runtime import MotionLibrary
+
+    cfg = tmp_path / "default.toml"
+    cfg.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[optimization]\ncompile = false\n')
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
+    out = tmp_path / "one.h5"
+    r = subprocess.run([*SKATELIB, "solve", "-V", "0.5", "-s", "2", "--config", str(cfg), "-o", str(out)],
+                       capture_output=True, text=True, env=env, timeout=180)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert MotionLibrary.open(out).keys() == ["v0.50_s2"]
+
+
 def test_model_of_a_humanoid_config_prints_the_lip_time_constant():
     """`skatelib model` on a humanoid config: its point-mass figures and omega = sqrt(g / z_com),
     the analytic LIP frequency (3.502 1/s for g 9.81 and z 0.80)."""
