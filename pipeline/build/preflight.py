@@ -43,11 +43,13 @@ def is_rerun_recording(path: Path) -> bool:
     return _head(path, 3) == b"RRF"
 
 
-def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, what: str = "library") -> None:
+def check_output(out: Path, inputs: Sequence[Path] = (), force: bool | None = None, what: str = "library") -> None:
     """Refuse an output that is a folder, one of the inputs, an existing file of another type
     (unless ``force``), or in a folder that cannot be written; remove stale temporaries there.
 
     Args:
+        force: The command's ``--force`` (overwrite a file of another type); None for a command
+            without that option, whose advice then does not name it.
         what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
             ``"twin"`` (a MuJoCo MJCF file), ``"video"`` (an MP4 or a GIF) or ``"frontier"`` (JSON).
 
@@ -63,8 +65,9 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
         if Path(p).resolve() == resolved:
             raise OutputError(out, "is an input of this command; choose another output file")
     if out.exists() and not force and not same_type(out):
-        raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it (choose another file, or pass "
-                               "--force)")
+        advice = "choose another output file, or pass --force" if force is False else (
+            "choose another output file, or remove that one")
+        raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it ({advice})")
     _writable(out.parent, out, "its folder {folder} cannot be written ({why}); choose another output")
     remove_stale_temporaries(out.parent)
 
