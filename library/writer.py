@@ -34,6 +34,18 @@ def _strings(values: Sequence[str]) -> np.ndarray:
     return np.array(list(values), dtype=h5py.string_dtype())
 
 
+def _dataset_names(entries: Sequence[EntryRecord]) -> list[str]:
+    """The entries' dataset names, the same for each; refuses a key a reader would refuse."""
+    names = list(entries[0].arrays) if entries else []
+    for e in entries:
+        why = schema.entry_key_problem(e.key)
+        if why:
+            raise ValueError(why)
+        if list(e.arrays) != names:
+            raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
+    return names
+
+
 def write_library(
     path: Path | str,
     root_attrs: Mapping[str, Any],
@@ -49,13 +61,7 @@ def write_library(
             a plain name (``schema.ENTRY_KEY_RULE``).
     """
     path = Path(path)
-    names = list(entries[0].arrays) if entries else []
-    for e in entries:
-        why = schema.entry_key_problem(e.key)  # what a reader would refuse
-        if why:
-            raise ValueError(why)
-        if list(e.arrays) != names:
-            raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
+    names = _dataset_names(entries)
     root = {
         **{k: jsonable(v) for k, v in root_attrs.items()},
         schema.A_FORMAT: schema.FORMAT_NAME,
