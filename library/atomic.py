@@ -1,6 +1,7 @@
-"""Files that appear whole or not at all: a temporary file in the target folder, then
-``os.replace`` (libraries, cached entries, recordings, figures), and the clean-up of what a killed
-writer left behind."""
+"""Files that appear whole or not at all: a temporary file in the target folder (named as
+:mod:`skatelib.library.temporaries` names skatelib's), then ``os.replace`` (libraries, cached
+entries, recordings, figures); and output file names taken from a file's content, kept inside
+their folder."""
 
 from __future__ import annotations
 
@@ -8,11 +9,11 @@ import contextlib
 import errno
 import os
 import shutil
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 from skatelib.library.errors import OutputError
+from skatelib.library.temporaries import new_file
 
 # A write that fails for want of room: a full device, a quota, a file-size limit.
 NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
@@ -45,10 +46,9 @@ def atomic_path(path: Path) -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    # The writer's pid is in the name, so a later run can tell a dead writer's leftover (kill -9)
-    # from a concurrent writer's file in progress (remove_stale_temporaries).
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    # Named as skatelib's, with the writer's pid: a later run removes a dead writer's leftover
+    # (kill -9) and nothing else (temporaries.remove_stale_temporaries).
+    tmp = new_file(path.parent, path.name)
     try:
         yield Path(tmp)
         umask = os.umask(0)
@@ -61,6 +61,22 @@ def atomic_path(path: Path) -> Iterator[Path]:
         if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(path, None, e) from e
         raise
+
+
+def confined(folder: Path, name: str) -> Path:
+    """``folder / name`` for a file name that comes from a file's content (an entry key): refused
+    unless it is one plain name whose resolved path stays inside ``folder``.
+
+    Raises:
+        OutputError: The name is a path, empty, ``.`` or ``..``, or leads outside ``folder``.
+    """
+    folder = Path(folder)
+    plain = name not in ("", ".", "..") and Path(name).name == name and "\\" not in name and "\0" not in name
+    real = folder.resolve()
+    if not plain or (real / name).parent != real:
+        raise OutputError(folder, f"refusing to write {name!r}: a file name from the library that leads outside "
+                                  "this folder; the library is not skatelib's or was altered (skatelib validate)")
+    return folder / name
 
 
 def write_atomic(path: Path, data: bytes | bytearray) -> Path:
@@ -80,35 +96,3 @@ def write_atomic(path: Path, data: bytes | bytearray) -> Path:
         f.flush()
         os.fsync(f.fileno())  # a full device can refuse the data only when it is written out
     return path
-
-
-def remove_stale_temporaries(folder: Path, prefix: str = "") -> list[Path]:
-    """Remove temporary files and folders (``.NAME.PID.*.tmp`` of :func:`atomic_path`, or
-    ``PREFIX-PID-*`` folders) left in ``folder`` by processes that no longer exist; returns them."""
-    removed: list[Path] = []
-    if not folder.is_dir():
-        return removed
-    for p in folder.iterdir():
-        parts = p.name.split(".") if p.name.endswith(".tmp") else p.name.split("-")
-        is_ours = p.name.endswith(".tmp") and p.name.startswith(".") and len(parts) >= 5
-        is_ours = is_ours or bool(prefix and p.name.startswith(f"{prefix}-") and len(parts) >= 3)
-        pid_part = parts[-3] if p.name.endswith(".tmp") else parts[1] if len(parts) > 1 else ""
-        if not is_ours or not pid_part.isdigit() or _alive(int(pid_part)):
-            continue
-        with contextlib.suppress(OSError):
-            if p.is_dir():
-                shutil.rmtree(p)
-            else:
-                p.unlink()
-            removed.append(p)
-    return removed
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True

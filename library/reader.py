@@ -22,6 +22,7 @@ from skatelib.library import schema
 from skatelib.library.crosscheck import check_against_index
 from skatelib.library.digest import check_checksum_attribute, refuse_damaged
 from skatelib.library.errors import LibraryFormatError
+from skatelib.library.index import check_index
 from skatelib.library.records import EntryRecord, text
 
 _H5_ERRORS = (OSError, RuntimeError, KeyError, ValueError)  # what h5py raises on damaged files
@@ -111,20 +112,29 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         arr.setflags(write=False)
     root, model = index["root"], index["model"]
     kind = _check_root(path, root, model)
-    model_arrays = {}
-    for k, spec in index.get("model_arrays", {}).items():
-        a = np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"])
-        a.setflags(write=False)
-        model_arrays[k] = a
     return LibraryData(
         path=path,
         attrs=root,
         model_attrs=model,
-        model_arrays=model_arrays,
+        model_arrays=_model_arrays(path, index),
         model_text=dict(index.get("model_text", {})),
         entries=_entries(path, kind, index, arrays),
         content_sha256=digest,
     )
+
+
+def _model_arrays(path: Path, index: dict[str, Any]) -> dict[str, np.ndarray]:
+    """The index's mirrors of /model's arrays, read-only."""
+    out = {}
+    for k, spec in index.get("model_arrays", {}).items():
+        try:
+            a = np.asarray(spec["data"], dtype=np.dtype(spec["dtype"])).reshape(spec["shape"])
+        except (TypeError, ValueError) as e:
+            raise LibraryFormatError(path, f"/{schema.G_MODEL}/{k}", f"its mirror in the index cannot be read ({e}); "
+                                                                  "rebuild the library") from e
+        a.setflags(write=False)
+        out[k] = a
+    return out
 
 
 def _check_format(path: Path, f: h5py.File) -> None:
@@ -174,9 +184,7 @@ def _parse_index(path: Path, blob: np.ndarray) -> dict[str, Any]:
         index = json.loads(blob.tobytes().decode())
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise LibraryFormatError(path, field, f"index is not valid JSON ({e}); rebuild the library") from e
-    for key in ("root", "model", "entries"):
-        if key not in index:
-            raise LibraryFormatError(path, field, f"index lacks {key!r}")
+    check_index(path, index)  # the one check of its shape and its keys, before any of it is used
     return index
 
 

@@ -7,6 +7,7 @@ a different minor version.
 
 from __future__ import annotations
 
+import re
 from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
@@ -129,6 +130,22 @@ ENTRY_DATASETS: Final = {
     "quadruped": (D_T, D_STATE, D_CONTROL, D_CONTACT, D_FOOT_POS, D_BOARD_POS),
     "humanoid": (D_T, D_STATE, D_CONTROL),
 }
+
+
+# Every entry key is a plain name: it names an HDF5 group under /entries and, in exports, a file in
+# the output folder. What skatelib writes (entry_key, humanoid_key) always matches.
+ENTRY_KEY_PATTERN: Final = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+ENTRY_KEY_RULE: Final = "letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 64"
+
+
+def entry_key_problem(key: object) -> str:
+    """Why ``key`` cannot be an entry key ("" when it can); shows the key escaped (``repr``), so
+    that no control character of a file reaches the terminal."""
+    if not isinstance(key, str):
+        return f"entry key {key!r} is not a string"
+    if ENTRY_KEY_PATTERN.fullmatch(key) is None:
+        return f"entry key {key!r} is not a plain name ({ENTRY_KEY_RULE})"
+    return ""
 
 
 def entry_key(target_velocity_mps: float, n_strides: int, from_velocity_mps: float = 0.0) -> str:

@@ -34,6 +34,18 @@ def _strings(values: Sequence[str]) -> np.ndarray:
     return np.array(list(values), dtype=h5py.string_dtype())
 
 
+def _dataset_names(entries: Sequence[EntryRecord]) -> list[str]:
+    """The entries' dataset names, the same for each; refuses a key a reader would refuse."""
+    names = list(entries[0].arrays) if entries else []
+    for e in entries:
+        why = schema.entry_key_problem(e.key)
+        if why:
+            raise ValueError(why)
+        if list(e.arrays) != names:
+            raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
+    return names
+
+
 def write_library(
     path: Path | str,
     root_attrs: Mapping[str, Any],
@@ -45,13 +57,11 @@ def write_library(
     """Write a complete library file; a reader never sees a half-written one.
 
     Raises:
-        ValueError: When entries disagree on their dataset names or trailing shapes.
+        ValueError: When entries disagree on their dataset names or trailing shapes, or a key is not
+            a plain name (``schema.ENTRY_KEY_RULE``).
     """
     path = Path(path)
-    names = list(entries[0].arrays) if entries else []
-    for e in entries:
-        if list(e.arrays) != names:
-            raise ValueError(f"entry {e.key} has datasets {list(e.arrays)}, expected {names}")
+    names = _dataset_names(entries)
     root = {
         **{k: jsonable(v) for k, v in root_attrs.items()},
         schema.A_FORMAT: schema.FORMAT_NAME,

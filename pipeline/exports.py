@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.atomic import write_atomic
+from skatelib.library.atomic import confined, write_atomic
 from skatelib.library.compare import column_names
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord
@@ -66,7 +66,7 @@ def write_npz(path: Path, out: Path) -> list[Path]:
             arrays[f"{k}__units"] = np.array(list(e.units.get(k, [""] * len(e.columns[k]))))
         buffer = io.BytesIO()
         np.savez(buffer, **arrays)  # type: ignore[arg-type]
-        written.append(write_atomic(out / f"{key}.npz", buffer.getvalue()))
+        written.append(write_atomic(confined(out, f"{key}.npz"), buffer.getvalue()))
     return written
 
 
@@ -80,7 +80,7 @@ def write_csv(path: Path, out: Path) -> list[Path]:
         w.writerow(heads)
         for row in table:
             w.writerow(["" if np.isnan(v) else repr(float(v)) for v in row])
-        written.append(write_atomic(out / f"{key}.csv", text.getvalue().encode()))
+        written.append(write_atomic(confined(out, f"{key}.csv"), text.getvalue().encode()))
     return written
 
 

@@ -68,6 +68,64 @@ def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
     assert "inf_pr" not in logs[1]
 
 
+def test_solve_cuts_the_config_to_the_one_start_up_it_names(cfg):
+    """The config ``solve`` builds from the default one (18 start-ups, 25 transitions) has exactly
+    one entry: the start-up named, no transitions."""
+    from skatelib.pipeline.quadruped.builder import one_start_up, tasks
+
+    assert sum(t.n_entries for t in tasks(cfg)) == 43
+    one = one_start_up(cfg, 0.5, 2)
+    assert [(type(t).__name__, t.n_entries) for t in tasks(one)] == [("BuildTask", 1)]
+    assert one.sweep.velocities_mps == (0.5,) and one.sweep.strides == (2,) and one.transitions.pairs() == []
+
+
+@pytest.mark.slow
+def test_solve_of_the_default_config_writes_one_entry(tmp_path: Path):
+    """`skatelib solve -V 0.5 -s 2` of the default config (its transitions included; the stage
+    functions interpreted, to need no compiler) writes the one push-off, in seconds: it solved the
+    25 transitions too, over ten minutes."""
+    from skatelib.runtime import MotionLibrary
+
+    cfg = tmp_path / "default.toml"
+    cfg.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[optimization]\ncompile = false\n')
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
+    out = tmp_path / "one.h5"
+    r = subprocess.run([*SKATELIB, "solve", "-V", "0.5", "-s", "2", "--config", str(cfg), "-o", str(out)],
+                       capture_output=True, text=True, env=env, timeout=180)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert MotionLibrary.open(out).keys() == ["v0.50_s2"]
+
+
+def test_advice_names_only_the_options_the_command_has(tmp_path: Path):
+    """An output file of another kind: ``solve``, ``frontier`` and ``export`` (no ``--force``) say to
+    choose another file or remove it; ``build`` (which has it) names ``--force``. A cache folder
+    others can write, with ``build --no-cache`` of a compiled config: the advice is not
+    ``--no-cache``, which was given. Each exits 2 and leaves the file as it was."""
+    tiny = Path(__file__).parent / "configs" / "tiny.toml"
+    reference = Path(__file__).parent / "data" / "tiny-reference.h5"
+    notes = tmp_path / "notes.txt"
+    notes.write_text("keep me")
+    cache = tmp_path / "cache"
+    cache.mkdir(mode=0o700)
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(cache)}
+    without = (["solve", "-V", "0.3", "-s", "1", "--config", str(tiny), "-o", str(notes)],
+               ["frontier", str(tiny), "-s", "1", "-o", str(notes)],
+               ["export", str(reference), "-f", "mcap", "-o", str(notes)])
+    for args in (*without, ["build", str(tiny), "-o", str(notes), "--no-progress"]):
+        r = subprocess.run([*SKATELIB, *args], capture_output=True, text=True, env=env, timeout=120)
+        assert r.returncode == 2 and "refusing to overwrite" in r.stderr, (args[0], r.stderr)
+        has_force = args[0] == "build"
+        assert ("--force" in r.stderr) == has_force and ("remove that one" in r.stderr) != has_force, r.stderr
+    assert notes.read_text() == "keep me"
+    compiled = tmp_path / "compiled.toml"
+    compiled.write_text(f'extends = "{tiny.as_posix()}"\n[optimization]\ncompile = true\n')
+    cache.chmod(0o777)
+    r = subprocess.run([*SKATELIB, "build", str(compiled), "-o", str(tmp_path / "x.h5"), "--no-cache",
+                        "--no-progress"], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 2 and "can be written by others" in r.stderr, r.stderr
+    assert "--no-cache" not in r.stderr and "compile = false" in r.stderr
+
+
 def test_model_of_a_humanoid_config_prints_the_lip_time_constant():
     """`skatelib model` on a humanoid config: its point-mass figures and omega = sqrt(g / z_com),
     the analytic LIP frequency (3.502 1/s for g 9.81 and z 0.80)."""

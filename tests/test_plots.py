@@ -41,7 +41,7 @@ def test_plot_writes_every_figure(lib_path, tmp_path):
         png = (tmp_path / "figs" / f"{stem}.png").read_bytes()
         assert png.startswith(b"\x89PNG") and len(png) > 10_000
         assert (tmp_path / "figs" / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
-    assert not list((tmp_path / "figs").glob("*.tmp*"))  # written atomically
+    assert not list((tmp_path / "figs").glob(".skatelib-tmp.*"))  # written atomically
 
 
 def test_push_forces_are_the_ground_foot_forces(lib_path):

@@ -8,15 +8,12 @@ import multiprocessing
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from skatelib.library.atomic import atomic_path
 from skatelib.library.errors import LibraryFormatError
-from skatelib.pipeline.build.preflight import check_output
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY
@@ -194,21 +191,6 @@ def test_inspect_save_is_checked_before_logging(tmp_path):
         ro.mkdir(mode=0o555)
         r = _run(["inspect", str(lib), "--save", str(ro / "x.rrd")])
         assert r.returncode == 2 and "cannot be written" in r.stderr
-
-
-def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
-    """A temp file left by a killed writer (its pid gone) is removed when the folder is next used
-    for output; one of a live writer is left alone."""
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                          text=True).stdout.strip()
-    stale = tmp_path / f".x.h5.{dead}.abc123.tmp"
-    stale.write_text("half")
-    live = tmp_path / f".x.h5.{os.getpid()}.def456.tmp"
-    live.write_text("in progress")
-    check_output(tmp_path / "x.h5")
-    assert not stale.exists() and live.exists()
-    with atomic_path(tmp_path / "y.h5") as tmp:
-        assert f".{os.getpid()}." in tmp.name
 
 
 def _open_damaged(args: tuple[bytes, int, str]) -> str:

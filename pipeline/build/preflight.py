@@ -10,9 +10,9 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
-from skatelib.library.atomic import remove_stale_temporaries
 from skatelib.library.errors import ConfigError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
+from skatelib.library.temporaries import remove_stale_temporaries
 from skatelib.pipeline.build import trust
 from skatelib.pipeline.build.cache import CACHE_ENV, cache_dir
 
@@ -43,11 +43,13 @@ def is_rerun_recording(path: Path) -> bool:
     return _head(path, 3) == b"RRF"
 
 
-def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, what: str = "library") -> None:
+def check_output(out: Path, inputs: Sequence[Path] = (), force: bool | None = None, what: str = "library") -> None:
     """Refuse an output that is a folder, one of the inputs, an existing file of another type
     (unless ``force``), or in a folder that cannot be written; remove stale temporaries there.
 
     Args:
+        force: The command's ``--force`` (overwrite a file of another type); None for a command
+            without that option, whose advice then does not name it.
         what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
             ``"twin"`` (a MuJoCo MJCF file), ``"video"`` (an MP4 or a GIF) or ``"frontier"`` (JSON).
 
@@ -63,8 +65,9 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool = False, wh
         if Path(p).resolve() == resolved:
             raise OutputError(out, "is an input of this command; choose another output file")
     if out.exists() and not force and not same_type(out):
-        raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it (choose another file, or pass "
-                               "--force)")
+        advice = "choose another output file, or pass --force" if force is False else (
+            "choose another output file, or remove that one")
+        raise OutputError(out, f"exists and is not a {kind}; refusing to overwrite it ({advice})")
     _writable(out.parent, out, "its folder {folder} cannot be written ({why}); choose another output")
     remove_stale_temporaries(out.parent)
 
@@ -80,7 +83,7 @@ def check_folder(out: Path) -> None:
     if out.exists() and not out.is_dir():
         raise OutputError(out, "is a file; name a folder for the files, e.g. out/figures")
     _writable(out, out, "the folder cannot be written ({why}); choose another one")
-    remove_stale_temporaries(out, "skatelib")
+    remove_stale_temporaries(out)
 
 
 def _writable(folder: Path, named: Path, message: str) -> None:
@@ -108,7 +111,7 @@ def check_cache_dir(entries_too: bool = True) -> Path:
     d = cache_dir()
     try:
         d.mkdir(mode=0o700, parents=True, exist_ok=True)
-        trust.check_own(d)
+        trust.check_own(d, trust.OWN_ADVICE if entries_too else trust.COMPILE_ADVICE)
         (d / "entries").mkdir(mode=0o700, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
             pass

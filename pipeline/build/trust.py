@@ -21,7 +21,7 @@ from pathlib import Path
 from skatelib.library.errors import OutputError
 
 TRUSTED_ENV = "SKATELIB_TRUSTED_CACHE"
-_OTHERS_WRITE = stat.S_IWGRP | stat.S_IWOTH
+OTHERS_WRITE = stat.S_IWGRP | stat.S_IWOTH
 
 
 def trusted_cache() -> Path | None:
@@ -30,17 +30,21 @@ def trusted_cache() -> Path | None:
     return Path(value) if value else None
 
 
+def own_rule(st: os.stat_result) -> str:
+    """Why a file or folder of this status must not be used from the user's own cache ("" when it may)."""
+    if hasattr(os, "getuid") and st.st_uid != os.getuid():
+        return f"belongs to another user (uid {st.st_uid})"
+    if st.st_mode & OTHERS_WRITE:
+        return f"can be written by others (mode {stat.filemode(st.st_mode)})"
+    return ""
+
+
 def own_problem(path: Path) -> str:
     """Why ``path`` (in the user's own cache) must not be used, or "" when it may."""
     try:
-        st = path.stat()
+        return own_rule(path.stat())
     except OSError as e:
         return f"cannot be checked ({e.strerror})"
-    if hasattr(os, "getuid") and st.st_uid != os.getuid():
-        return f"belongs to another user (uid {st.st_uid})"
-    if st.st_mode & _OTHERS_WRITE:
-        return f"can be written by others (mode {stat.filemode(st.st_mode)})"
-    return ""
 
 
 def shared_problem(path: Path) -> str:
@@ -49,18 +53,36 @@ def shared_problem(path: Path) -> str:
         st = path.stat()
     except OSError as e:
         return f"cannot be checked ({e.strerror})"
-    if st.st_mode & _OTHERS_WRITE:
+    if st.st_mode & OTHERS_WRITE:
         return f"can be written by others (mode {stat.filemode(st.st_mode)})"
     if os.access(path, os.W_OK):
         return f"can be written by you: a shared cache in {TRUSTED_ENV} must be read-only to its users"
     return ""
 
 
+def above_problem(folder: Path, owner: int | None = None) -> tuple[Path, str] | None:
+    """A folder above ``folder`` through which someone else could replace it, and why; None when
+    there is none. Each folder of its real path (no symlink is left in it) must belong to root,
+    the user or ``owner`` (a shared cache's account), and be writable by no one else unless it
+    has the sticky bit (as /tmp has: others cannot rename what they do not own there)."""
+    owners = {0, owner, os.getuid()} if hasattr(os, "getuid") else set()
+    for d in folder.resolve().parents:
+        try:
+            st = d.lstat()
+        except OSError as e:
+            return d, f"cannot be checked ({e.strerror})"
+        if owners and st.st_uid not in owners:
+            return d, f"belongs to another user (uid {st.st_uid})"
+        if st.st_mode & OTHERS_WRITE and not st.st_mode & stat.S_ISVTX:
+            return d, f"can be written by others (mode {stat.filemode(st.st_mode)})"
+    return None
+
+
 def file_problem(path: Path) -> str:
     """Why a cached file must not be loaded ("" when it may): by the rules of the cache it is in,
     for the file and the folder that holds it."""
     shared = trusted_cache()
-    rule = shared_problem if shared is not None and _inside(path, shared) else own_problem
+    rule = shared_problem if shared is not None and inside(path, shared) else own_problem
     why = rule(path)
     if why:
         return why
@@ -68,18 +90,31 @@ def file_problem(path: Path) -> str:
     return f"is in a folder that {folder}" if folder else ""
 
 
-def check_own(folder: Path) -> None:
-    """The user's cache folder and its subfolders pass :func:`own_problem`.
+OWN_ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or pass --no-cache"
+# Compiled stage functions are kept in the cache folder even with --no-cache (solve, frontier too).
+COMPILE_ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or set [optimization] compile = false"
+
+
+def check_own(folder: Path, advice: str = OWN_ADVICE) -> None:
+    """The user's cache folder and its subfolders pass :func:`own_problem`, the folders above it
+    :func:`above_problem`.
+
+    Args:
+        advice: What else the user can do (the command's options).
 
     Raises:
-        OutputError: Naming the folder and saying what to do.
+        OutputError: Naming the folder at fault and saying what to do.
     """
     for d in _folders(folder):
         why = own_problem(d)
         if why:
             raise OutputError(d, f"the cache folder {why}: whoever can write it can run code in your builds. "
-                                 f"Fix it (chmod go-w {d}), point SKATELIB_CACHE_DIR to a folder of your own, "
-                                 "or pass --no-cache")
+                                 f"Fix it (chmod go-w {d}), or {advice}")
+    above = above_problem(folder)
+    if above is not None:
+        d, why = above
+        raise OutputError(folder, f"the cache folder is inside {d}, which {why}: whoever can write there can "
+                                  f"replace the cache and run code in your builds. Fix that folder, or {advice}")
 
 
 def check_shared(folder: Path) -> None:
@@ -93,6 +128,11 @@ def check_shared(folder: Path) -> None:
         if why:
             raise OutputError(d, f"the shared cache named in ${TRUSTED_ENV} {why}. Have its owner make it "
                                  f"read-only (chmod -R a-w {folder}), or unset {TRUSTED_ENV}")
+    above = above_problem(folder, folder.stat().st_uid)
+    if above is not None:
+        d, why = above
+        raise OutputError(folder, f"the shared cache named in ${TRUSTED_ENV} is inside {d}, which {why}: "
+                                  f"whoever can write there can replace it. Unset {TRUSTED_ENV}")
 
 
 def _folders(cache: Path) -> tuple[Path, ...]:
@@ -101,7 +141,8 @@ def _folders(cache: Path) -> tuple[Path, ...]:
     return (cache, entries) if entries.exists() else (cache,)
 
 
-def _inside(path: Path, folder: Path) -> bool:
+def inside(path: Path, folder: Path) -> bool:
+    """Whether ``path`` (followed) lies in ``folder``."""
     try:
         path.resolve().relative_to(folder.resolve())
     except ValueError:
@@ -124,31 +165,3 @@ def sha256_of(path: Path) -> str:
         for chunk in iter(lambda: f.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
-
-
-def library_problem(lib: Path) -> str:
-    """Why a compiled library must not be loaded ("" when it may): its folder's rules
-    (:func:`file_problem`, for the library and its record) and the SHA-256 recorded when it was built."""
-    record = digest_record(lib)
-    why = file_problem(lib) or (file_problem(record) if record.exists() else "has no recorded SHA-256")
-    if why:
-        return why
-    if record.read_text().strip() != sha256_of(lib):
-        return "changed after it was built (its SHA-256 differs from the one recorded then)"
-    return ""
-
-
-def usable_library(own: Path) -> tuple[Path | None, str]:
-    """The compiled library to load for ``own`` (its path in the user's cache): that one, or the
-    same name in the trusted shared cache, or None (compile it); and a note when ``own`` existed but
-    was refused."""
-    note = ""
-    if own.exists():
-        why = library_problem(own)
-        if not why:
-            return own, ""
-        note = f"compiled stage library {own} {why}: not loaded, compiled again"
-    shared = trusted_cache()
-    if shared is not None and (shared / own.name).exists() and not library_problem(shared / own.name):
-        return shared / own.name, note
-    return None, note

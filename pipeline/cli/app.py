@@ -10,6 +10,7 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.cli import build_commands, diff_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
 
@@ -57,6 +58,7 @@ def _root(
     Exit codes: 0 ok, 1 entries failed, 2 usage/config/output error, 3 bad library file,
     4 missing optional package, 130 interrupted. Add --debug for a traceback instead of a message.
     """
+    interrupt.reset()  # an interrupt of an earlier command in this process is not this one's
 
 
 app.callback()(_root)
@@ -76,14 +78,9 @@ def _warning_line(message: Warning | str, category: type[Warning], filename: str
     err_console.print(f"[yellow]warning:[/] {escape(str(message))}")
 
 
-def _sigterm(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt  # SIGTERM stops a build like Ctrl-C: workers stopped, finished entries cached
-
-
 def main() -> None:
     """Entry point: errors become a one-paragraph message on stderr and a documented exit code
     (README "Exit codes"), not a traceback; ``--debug`` anywhere on the line shows the traceback."""
-    import signal
     import sys
 
     from skatelib.library.errors import EXIT_INTERRUPTED, exit_code
@@ -91,7 +88,7 @@ def main() -> None:
     debug = "--debug" in sys.argv
     if debug:
         sys.argv.remove("--debug")
-    signal.signal(signal.SIGTERM, _sigterm)
+    interrupt.install()  # Ctrl-C and SIGTERM stop a solve in this process even when CasADi swallows them
     warnings.showwarning = _warning_line
     notices = logging.getLogger("skatelib.compile")  # a line when (only when) code is compiled
     notices.addHandler(_ConsoleLine())

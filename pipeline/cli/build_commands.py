@@ -4,7 +4,6 @@ calls one library function and prints."""
 from __future__ import annotations
 
 import enum
-from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -208,9 +207,10 @@ def solve(
         from skatelib.pipeline.build.preflight import check_cache_dir
 
         check_cache_dir(entries_too=False)
-    cfg = replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity,), strides=(strides,)))
+    from skatelib.pipeline.quadruped.builder import one_start_up, summary
+
+    cfg = one_start_up(cfg, velocity, strides)  # that entry alone: no transitions
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
-    from skatelib.pipeline.quadruped.builder import summary
 
     summary(report.written)
     console.print(f"wrote {escape(str(report.path))}")

@@ -27,6 +27,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.humanoid.constraints import Rows, StepSymbols, node_rows, terminal_rows
 from skatelib.pipeline.humanoid.geometry import MAX_EDGES, Support, edges
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral, collocation_defects, terminal_state
@@ -175,6 +176,7 @@ def solve_step(spec: StepSpec, x0: np.ndarray, t0: float, model: StepModel) -> S
     p, P0, sup = prob.parameters(spec, x0, model.g, model.rmin, model.rmax)
     tic = time.perf_counter()
     sol = prob.solver(x0=prob.initial_guess(x0, spec), p=p, lbg=prob.lbg, ubg=prob.ubg)
+    interrupt.check()  # CasADi turns Ctrl-C into a failed solve; it stops the command
     dt = time.perf_counter() - tic
     st = prob.solver.stats()
     w = np.asarray(sol["x"]).reshape(-1)

@@ -26,7 +26,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.pipeline.build import trust
-from skatelib.pipeline.ocp.codegen import compile_library, locked
+from skatelib.pipeline.build.compiled import usable_code
+from skatelib.pipeline.ocp.codegen import compile_library, load_private, locked
 
 
 @dataclass(frozen=True)
@@ -108,13 +109,17 @@ class CompileTarget:
 def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, target: CompileTarget,
                              serialized: str | None = None) -> StageFunctions:
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
-    content hash, with its SHA-256 recorded beside it and checked before it is loaded (a library
-    that changed, or sits where others can write, is compiled again with a
-    :class:`~skatelib.pipeline.build.trust.CacheNote`; see :mod:`skatelib.pipeline.build.trust`).
+    content hash, with its SHA-256 recorded beside it. A cached library is read once and checked (a
+    symlink, a library that changed, or one that others can write, is compiled again with a
+    :class:`~skatelib.pipeline.build.trust.CacheNote`; :mod:`skatelib.pipeline.build.compiled`), and
+    the bytes checked are what is loaded, from a private copy.
 
     The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the
     flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a cache hit costs
     neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
+
+    Raises:
+        OutputError: ``target.folder``, or a folder above it, can be changed by someone else.
     """
     cc = c_compiler()
     if cc is None:
@@ -124,21 +129,21 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     native = host_cpu() if "-march=native" in flags else ""
     key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
-    found, note = trust.usable_library(lib)  # only from a folder no one else can write, as built
+    target.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    trust.check_own(target.folder, trust.COMPILE_ADVICE)  # code is compiled, copied and loaded there
+    code, note = usable_code(lib)  # only from a folder no one else can write, as built
     if note:
         warnings.warn(note, trust.CacheNote, stacklevel=2)
-    if found is None:
-        lib.parent.mkdir(parents=True, exist_ok=True)
+    if code is None:
         # Builds started together compile once: the others wait for the lock and load its library.
         with locked(lib.with_suffix(".lock")):
-            found, _ = trust.usable_library(lib)
-            if found is None:
+            code, _ = usable_code(lib)
+            if code is None:
                 COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
                                  "kept in %s)", cc, lib.parent)
                 fns = stage_functions(z, p, cost, cons)
-                compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
-                found = lib
-    return StageFunctions(*(ca.external(name, str(found)) for name in _NAMES))
+                code = compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
+    return StageFunctions(*load_private(code, target.folder, _NAMES))  # the bytes checked, not the path
 
 
 def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:

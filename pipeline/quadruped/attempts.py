@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, solve
 
 
@@ -26,6 +27,7 @@ def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
     build = total = 0.0
     attempts = 0
     for s in ladder:
+        interrupt.check()  # an interrupted attempt is no failure to retry
         result = solve(s)
         attempts += 1
         build, total = build + result.build_time_s, total + result.solve_time_s

@@ -5,6 +5,7 @@ warm-start chain per stride count, one per start speed of the transitions), the 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, cast
 
@@ -39,6 +40,13 @@ def announce(cfg: QuadrupedConfig) -> None:
     if c_compiler() is None:
         err_console.print("warning: no C compiler found ($CC, gcc, cc): the stage functions run interpreted, "
                           "3-4x slower; install gcc to compile them")
+
+
+def one_start_up(cfg: QuadrupedConfig, velocity_mps: float, strides: int) -> QuadrupedConfig:
+    """``cfg`` cut down to one entry (``skatelib solve``): the start-up to ``velocity_mps`` in
+    ``strides`` strides, without the config's other speeds, stride counts and transitions."""
+    return replace(cfg, sweep=replace(cfg.sweep, velocities_mps=(velocity_mps,), strides=(strides,)),
+                   transitions=replace(cfg.transitions, speeds_mps=()))
 
 
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask | TransitionTask]:

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.library.margins import forward_speed
+from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem import START_UP, PushoffProblem, Window, system_for, transition_window
 
@@ -139,6 +140,7 @@ def solve(spec: PushoffSpec) -> SolveResult:
         args["x0"] = prob.initial_guess(v0, v, spec.guess)
     t0 = time.perf_counter()
     sol = solver(**args)
+    interrupt.check()  # CasADi turns Ctrl-C into a failed solve; it stops the command
     solve_time = time.perf_counter() - t0
     stats = solver.stats()
     w = np.asarray(sol["x"]).reshape(-1)

@@ -19,6 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.errors import ModelError
+from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.ocp.rotations import rpy_to_matrix
 
 ATTITUDE_MAX_RAD = 0.02  # the riding trunk's roll and pitch: near level, inside the end's tolerance
@@ -71,6 +72,7 @@ def riding_pose(robot: Any, targets: np.ndarray, com_offset: np.ndarray, push: i
     x0 = np.r_[0.0, 0.0, 0.0, 0.0, np.clip(q_nominal, lo_q, hi_q)]
     sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.r_[np.zeros(12), np.full(3, fraction)],
                  ubg=np.r_[np.zeros(12), np.full(3, np.inf)])
+    interrupt.check()  # not a stance that failed: Ctrl-C, which CasADi swallowed
     if not solver.stats()["success"]:
         raise ModelError(f"no riding stance with each deck foot carrying {fraction:.0%} of the weight, the trunk "
                          f"near level and the joints {margin_rad} rad inside their limits "

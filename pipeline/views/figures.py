@@ -9,12 +9,12 @@ from __future__ import annotations
 import io
 import os
 import shutil
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from skatelib.library.atomic import NO_ROOM, no_room
 from skatelib.library.errors import SkatelibError
+from skatelib.library.temporaries import temporary_folder
 from skatelib.pipeline.kinds import kind_named
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -109,18 +109,16 @@ def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
     free = shutil.disk_usage(out_dir).free
     if free < needed:
         raise no_room(out_dir, needed)
-    staging = Path(tempfile.mkdtemp(prefix=f"skatelib-{os.getpid()}-figures-", dir=out_dir))
     try:
-        for name, data in drawn.items():
-            (staging / name).write_bytes(data)
-        written = []
-        for name in drawn:
-            os.replace(staging / name, out_dir / name)
-            written.append(out_dir / name)
+        with temporary_folder(out_dir, "figures") as staging:
+            for name, data in drawn.items():
+                (staging / name).write_bytes(data)
+            written = []
+            for name in drawn:
+                os.replace(staging / name, out_dir / name)
+                written.append(out_dir / name)
     except OSError as e:
         if e.errno in NO_ROOM:
             raise no_room(out_dir, needed, e) from e
         raise
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     return written

@@ -1,0 +1,95 @@
+"""A compiled stage library from the cache, checked and loaded as one thing: its bytes are read once,
+through a descriptor that follows no symlink, and checked (the rules of its cache, :mod:`.trust`,
+for the file, its folder and every folder above it; the SHA-256 recorded when it was built). The
+loader gets those very bytes, written to a private copy
+(:func:`skatelib.pipeline.ocp.codegen.load_private`), so a file replaced or relinked after the
+check is never what runs."""
+
+from __future__ import annotations
+
+import errno
+import hashlib
+import os
+import stat
+from pathlib import Path
+
+from skatelib.pipeline.build import trust
+
+_OPEN = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)  # a fifo does not block
+
+
+def read_nofollow(path: Path) -> tuple[bytes, os.stat_result]:
+    """The bytes and the status of the regular file at ``path``, from one descriptor.
+
+    Raises:
+        OSError: ``ELOOP`` when ``path`` is a symbolic link, ``EINVAL`` when it is no regular file,
+            or why it cannot be opened or read.
+    """
+    fd = os.open(path, _OPEN)
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise OSError(errno.EINVAL, "not a regular file")
+        return f.read(), st
+
+
+def _unreadable(path: Path, e: OSError) -> str:
+    if e.errno == errno.ELOOP:
+        return (f"is a symbolic link{'' if path.suffix == '.so' else ' (its SHA-256 record)'}: a compiled library is "
+                "loaded only from a file of its own in the cache folder")
+    if isinstance(e, FileNotFoundError) and path.suffix != ".so":
+        return "has no recorded SHA-256"
+    return f"cannot be read ({e.strerror})"
+
+
+def checked_code(lib: Path) -> tuple[bytes | None, str]:
+    """The bytes of the compiled library ``lib`` when they may be loaded, else None and why: a
+    symlink (the library or its record), a file or folder of its cache that others could change
+    (:func:`trust.file_problem`, :func:`trust.above_problem`), or bytes whose SHA-256 is not the
+    one recorded when it was built."""
+    shared = trust.trusted_cache()
+    in_shared = shared is not None and trust.inside(lib, shared)
+    if lib.is_symlink():
+        return None, _unreadable(lib, OSError(errno.ELOOP, "symbolic link"))
+    why = trust.file_problem(lib)
+    if why:
+        return None, why
+    owner = shared.stat().st_uid if shared is not None and in_shared else None  # the shared cache's account
+    above = trust.above_problem(lib.parent, owner)
+    if above is not None:
+        return None, f"is inside {above[0]}, which {above[1]}"
+    record = trust.digest_record(lib)
+    try:
+        code, st = read_nofollow(lib)
+    except OSError as e:
+        return None, _unreadable(lib, e)
+    try:
+        recorded, record_st = read_nofollow(record)
+    except OSError as e:
+        return None, _unreadable(record, e)
+    for what, s in (("", st), (" (its SHA-256 record)", record_st)):  # as opened, not as checked before
+        why = (f"can be written by others (mode {stat.filemode(s.st_mode)})" if s.st_mode & trust.OTHERS_WRITE
+               else "") if in_shared else trust.own_rule(s)
+        if why:
+            return None, why + what
+    if recorded.decode(errors="replace").strip() != hashlib.sha256(code).hexdigest():
+        return None, "changed after it was built (its SHA-256 differs from the one recorded then)"
+    return code, ""
+
+
+def usable_code(own: Path) -> tuple[bytes | None, str]:
+    """The checked bytes to load for ``own`` (a compiled library's path in the user's cache): its
+    own, or those of the same name in the trusted shared cache, or None (compile it); and a note
+    when ``own`` existed but was refused."""
+    note = ""
+    if os.path.lexists(own):
+        code, why = checked_code(own)
+        if code is not None:
+            return code, ""
+        note = f"compiled stage library {own} {why}: not loaded, compiled again"
+    shared = trust.trusted_cache()
+    if shared is not None and os.path.lexists(shared / own.name):
+        code, _ = checked_code(shared / own.name)
+        if code is not None:
+            return code, note
+    return None, note
