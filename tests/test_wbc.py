@@ -155,3 +155,26 @@ def test_wbc_holds_the_torque_limit(pair):
     ctl.tau_max = 1000.0
     free = ctl.solve(T, _targets([0.0, 0.0, 6 * 9.81]))
     assert np.max(np.abs(free.tau)) > 12.0
+
+
+@pytest.mark.parametrize("backend", ["proxqp", "osqp"])
+def test_every_backend_of_the_table_solves_the_whole_body_qp_alike(pair, backend):
+    """The whole-body QP is one solver-neutral problem: ProxQP and OSQP (the MPC's other backends)
+    reach DAQP's optimum with the friction and the torque limit binding: the same net force (the
+    tasks' outcome; how four feet share it is nearly free at these weights), inside the pyramid and
+    the limit, Newton-Euler held on the base."""
+    T, daqp_ctl, dyn = _standing(pair)
+    _, other, _ = _standing(pair, qp_solver=backend)
+    rows, Jc = pyramid(np.eye(3), MU), T.J_feet.reshape(12, 18)
+    for ask in ([0.0, 3.0, 0.0], [0.0, 0.0, 6 * 9.81]):
+        a, b = daqp_ctl.solve(T, _targets(ask)), other.solve(T, _targets(ask))
+        assert np.allclose(a.forces.sum(axis=1), b.forces.sum(axis=1), atol=0.05), (ask, a.forces, b.forces)
+        assert np.max(rows @ b.forces) <= 1e-4 and np.max(np.abs(b.tau)) <= other.tau_max + 1e-4
+        base = (T.M @ b.qdd + T.h - Jc.T @ b.forces.T.reshape(-1))[:6]
+        assert np.allclose(base, 0.0, atol=1e-4)
+
+
+def test_an_unknown_backend_is_refused_with_the_known_ones(pair):
+    T, ctl, _ = _standing(pair, qp_solver="cvxopt")
+    with pytest.raises(ValueError, match="unknown QP solver 'cvxopt'; choose one of daqp, proxqp, osqp"):
+        ctl.solve(T, _targets([0.0, 0.0, 0.0]))
