@@ -163,7 +163,7 @@ def test_every_backend_of_the_table_solves_the_whole_body_qp_alike(pair, backend
     reach DAQP's optimum with the friction and the torque limit binding: the same net force (the
     tasks' outcome; how four feet share it is nearly free at these weights), inside the pyramid and
     the limit, Newton-Euler held on the base."""
-    T, daqp_ctl, dyn = _standing(pair)
+    T, daqp_ctl, _ = _standing(pair)
     _, other, _ = _standing(pair, qp_solver=backend)
     rows, Jc = pyramid(np.eye(3), MU), T.J_feet.reshape(12, 18)
     for ask in ([0.0, 3.0, 0.0], [0.0, 0.0, 6 * 9.81]):
