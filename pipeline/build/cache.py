@@ -5,7 +5,7 @@ compiled stage functions' (``SKATELIB_CACHE_DIR``), which this module owns.
 
 A payload is stored in a form that runs no code when read (:mod:`skatelib.pipeline.build.codec`:
 arrays and a JSON manifest); files of the older pickled form (``*.pkl``) are never opened. Entries
-are read only from folders and files :mod:`skatelib.pipeline.build.trust` allows: the user's own
+are read only from folders and files :mod:`skatelib.pipeline.ocp.trust` allows: the user's own
 cache, then a shared read-only one named in ``SKATELIB_TRUSTED_CACHE``; new entries go to the
 user's own."""
 
@@ -20,7 +20,8 @@ from typing import Any
 
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_path
-from skatelib.pipeline.build import codec, trust
+from skatelib.pipeline.build import codec
+from skatelib.pipeline.ocp import trust
 
 # Bump when a kind's retry ladder, the solve's post-processing or the cached payload changes: the
 # keys cover the problems themselves (stage functions, bounds, guesses, plans, options), not that code.

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import casadi as ca
 from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
-from skatelib.pipeline.build import trust
+from skatelib.pipeline.ocp import trust
 
 
 @contextlib.contextmanager

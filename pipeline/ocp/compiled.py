@@ -13,7 +13,7 @@ import os
 import stat
 from pathlib import Path
 
-from skatelib.pipeline.build import trust
+from skatelib.pipeline.ocp import trust
 
 _OPEN = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)  # a fifo does not block
 
