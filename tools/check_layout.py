@@ -6,7 +6,8 @@
   ``library``; ``control/`` (the controller a robot runs) only ``library`` and ``runtime``, never
   the proving ground, the twin or the pipeline; ``sim/`` only ``library`` and ``runtime``;
   ``proving/`` (the proving ground) anything but ``pipeline``; ``pipeline/ocp/`` (the engine, with
-  its compile cache's trust) no robot subpackage, nor the build, the views or the CLI.
+  its compile cache's trust) no robot subpackage, nor the build, the views or the CLI;
+  ``pipeline/build/`` neither the views nor the CLI (it reports through callbacks).
 * The library file's names stay in ``library/``: no ``/model`` attribute or dataset name of the
   records (:mod:`skatelib.library.model`) and no entry or root attribute name of the schema as a
   literal key (``x["name"]``, ``x.get("name")``, ``{"name": ...}``) in another package (read the
@@ -33,6 +34,7 @@ FORBIDDEN = {  # folder -> imported packages it must not use
     "control": ("skatelib.pipeline", "skatelib.sim", "skatelib.proving"),
     "sim": ("skatelib.pipeline", "skatelib.control", "skatelib.proving"),
     "proving": ("skatelib.pipeline",),
+    "pipeline/build": ("skatelib.pipeline.views", "skatelib.pipeline.cli"),
     "pipeline/ocp": ("skatelib.pipeline.quadruped", "skatelib.pipeline.humanoid", "skatelib.pipeline.build",
                      "skatelib.pipeline.views", "skatelib.pipeline.cli"),
 }

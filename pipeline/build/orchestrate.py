@@ -5,8 +5,9 @@ The kind (:class:`skatelib.pipeline.kinds.RobotKind`) supplies what differs: ``c
 refuses its own options before anything runs, ``announce(cfg)``, ``tasks(cfg, ipopt)`` cuts the
 build into picklable tasks (:class:`skatelib.pipeline.build.contract.BuildTask`), ``prepare(cfg,
 opts)`` readies what the workers share, ``write(cfg, out, outcomes, opts)`` writes the library and
-``summary(written)`` prints its table. The sweep, the entry cache, the progress bar, interruption
-and the exit code are the same for every kind.
+``summary(written)`` prints its table. The sweep, the entry cache, the progress events
+(``on_entry``: the command line draws them as its progress bar, :mod:`skatelib.pipeline.cli.build_run`),
+interruption and the exit code are the same for every kind; nothing here prints.
 """
 
 from __future__ import annotations
@@ -17,12 +18,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rich.markup import escape
-from skatelib.library.errors import Interrupted, SkatelibError
-from skatelib.pipeline.build.contract import BuildOptions, BuildRun, EntryEvent, Outcome, ProgressFn, Written
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.build.contract import BuildOptions, Outcome, ProgressFn, Written
 from skatelib.pipeline.build.sweep import run_sweep
 from skatelib.pipeline.kinds import KindConfig, kind_of
-from skatelib.pipeline.views.console import console, count
 
 
 @dataclass(frozen=True)
@@ -69,28 +68,6 @@ def build_library(config: Any, out: Path | None = None, options: BuildOptions | 
     return BuildReport(written, time.perf_counter() - t0)
 
 
-class _Progress:
-    """The progress bar's text: the entries being solved and the last one finished."""
-
-    def __init__(self, bar: Any, task: Any):
-        self.bar, self.task = bar, task
-        self.done: list[str] = []
-        self.flying: list[str] = []  # oldest first
-
-    def __call__(self, event: EntryEvent) -> None:
-        if not event.done:
-            self.flying.append(event.key)
-        else:
-            self.done.append(event.key)
-            if event.key in self.flying:
-                self.flying.remove(event.key)
-        text = f"solving {', '.join(self.flying)}" if self.flying else "solving"
-        if event.done:
-            status = "ok" if event.success else event.status.split(":")[0]
-            text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
-        self.bar.update(self.task, advance=1 if event.done else 0, description=escape(text))
-
-
 def check_options(cfg: Any, opts: BuildOptions) -> None:
     """Refuse options that cannot work before anything runs: a dask backend without a reachable
     scheduler, an unwritable cache folder, and what the kind's ``check`` refuses."""
@@ -103,40 +80,3 @@ def check_options(cfg: Any, opts: BuildOptions) -> None:
     if opts.cache:
         check_cache_dir()
     kind_of(cfg).check(cfg, opts)
-
-
-def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
-    """``skatelib build``: check the options, sweep with a progress bar, print the kind's table.
-
-    Raises:
-        Interrupted: On Ctrl-C or SIGTERM (what is cached is kept; no library is written).
-    """
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    kind = kind_of(cfg)
-    check_options(cfg, opts)
-    total = sum(t.n_entries for t in kind.tasks(cfg))
-    console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
-    kind.announce(cfg)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("eta"), TimeRemainingColumn(), console=console, disable=not opts.progress) as bar:
-        progress = _Progress(bar, bar.add_task("solving", total=total))
-        try:
-            report = build_library(cfg, out, opts, on_entry=progress)
-        except KeyboardInterrupt:
-            kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
-                    else "nothing is cached (--no-cache)")
-            raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
-    kind.summary(report.written)
-    for o in report.outcomes:
-        if o.note:
-            console.print(f"[yellow]note:[/] {escape(o.note)}")
-    console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
-    return BuildRun(report.path, len(report.failed))

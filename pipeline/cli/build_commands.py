@@ -85,8 +85,9 @@ def build(
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
     from skatelib.pipeline.build.contract import BuildOptions
-    from skatelib.pipeline.build.orchestrate import default_output, run_build
+    from skatelib.pipeline.build.orchestrate import default_output
     from skatelib.pipeline.build.preflight import check_output
+    from skatelib.pipeline.cli.build_run import run_build
     from skatelib.pipeline.config import load_config
 
     cfg = load_config(config)
@@ -112,7 +113,7 @@ def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[floa
 
     from skatelib.library.compare import Tolerance, compare_files
     from skatelib.library.reader import read_library
-    from skatelib.pipeline.build.orchestrate import run_build
+    from skatelib.pipeline.cli.build_run import run_build
     from skatelib.pipeline.views.diff_view import show_diff
 
     read_library(reference)  # a missing or damaged reference is refused before any solve (exit 3)
