@@ -5,16 +5,12 @@ mu_mpc; with the feedback's torque maps, the loaded legs' joint torques within t
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from skatelib.control.linear_model import Feedback
+from skatelib.control.mpc_config import MpcConfig
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import BOARD, I_BOARD_ROLL, SWING
 from skatelib.library.rotations import board_rotations, skew
-
-if TYPE_CHECKING:
-    from skatelib.control.mpc import MpcConfig
 
 NF = 12  # force variables per step
 # The first step's deck pyramids also hold this far beyond the roll the update predicts at its end:

@@ -34,13 +34,14 @@ the prediction carries them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from skatelib.control.contact_rows import NF, step_constraints
 from skatelib.control.joint_qp import solve_joints
 from skatelib.control.linear_model import Discretizer, Feedback, continuous_model
+from skatelib.control.mpc_config import MpcConfig
 from skatelib.control.params import SkateParams
 from skatelib.library.channels import NU, NX, S_Q, S_VEL, SWING
 
@@ -52,50 +53,6 @@ ROBOT_VZ_REDUCED = S_VEL.start + 2  # the robot's vertical speed (before the joi
 def board_heading(x: np.ndarray) -> np.ndarray:
     """(2,) the board's forward direction in the world (its yaw is the robot's)."""
     return np.array([np.cos(x[5]), np.sin(x[5])])
-
-
-@dataclass(frozen=True)
-class MpcConfig:
-    """MPC settings.
-
-    Attributes:
-        rate_hz: Update rate (the paper: 30 Hz).
-        horizon: Steps N (the paper's MIT-Cheetah lineage: 10).
-        mu: Friction coefficient the MPC assumes (its pyramid is inside this cone); None: the
-            one the library was planned with (``friction_mu_plan``, a margin inside ``friction_mu``).
-        facets: Sides of the friction pyramid (4 or more).
-        f_min_N / f_max_N: Normal force bounds of a loaded foot.
-        q_weights / r_weights: Diagonals of Q (28) and R (24).
-        solver: ``daqp``, ``proxqp`` or ``osqp`` (module docstring).
-        disturbance_gain: Gain of the board-acceleration disturbance observer per update (0: off).
-        coast_gain: Gain per update of the coast observer (:class:`CoastObserver`).
-        torque_steps: Steps of the horizon with torque rows (1: the applied force only; on the
-            default library all 10 gave the same verdicts and torques at 0.2 ms more per update).
-        coast_compensation: Move each push's speed reference by what the following coast will
-            gain or lose against the plan (measured while coasting; before the first coast, see
-            :meth:`EntryReference.prior_coast_mps2`), so that the entry still ends at its label;
-            False: track the plan's speeds.
-    """
-
-    rate_hz: float = 30.0
-    horizon: int = 10
-    mu: float | None = None
-    facets: int = 8
-    f_min_N: float = 0.0
-    f_max_N: float = 120.0
-    solver: str = "daqp"
-    disturbance_gain: float = 0.3
-    coast_gain: float = 0.2
-    torque_steps: int = 1
-    coast_compensation: bool = True
-    q_weights: tuple[float, ...] = field(default_factory=lambda: (
-        (4e4, 4e4, 4e4) + (4e3, 4e3, 2e3) + (300.0, 300.0, 300.0) + (20.0, 20.0, 20.0) + (1.0,) * 12
-        + (2e3, 2e3) + (2e3, 5.0)))
-    r_weights: tuple[float, ...] = field(default_factory=lambda: (1e-2,) * 12 + (1e-2,) * 12)
-
-    @property
-    def dt(self) -> float:
-        return 1.0 / self.rate_hz
 
 
 @dataclass(frozen=True)

@@ -73,3 +73,19 @@ def test_checker_keeps_the_library_file_names_in_library(tmp_path):
         "control/bad.py:2: the library file's name 'board_mass_kg'",
         "control/bad.py:2: the library file's name 'board_tanh_scale_s_per_m'",
         "pipeline/bad.py:2: the library file's name 'config_resolved_json'"], found
+
+
+def test_checker_finds_an_import_cycle_hidden_by_a_local_import(tmp_path):
+    """A doctored tree: a.py imports b at the top, b.py imports a inside a function and c under
+    TYPE_CHECKING, c imports b: one cycle of three modules, however the imports hide."""
+    check = _checker()
+    (tmp_path / "control").mkdir()
+    (tmp_path / "control" / "a.py").write_text("from skatelib.control.b import f\n")
+    (tmp_path / "control" / "b.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from skatelib.control import c\n\n\n"
+        "def f():\n    from skatelib.control.a import f as g\n    return g\n")
+    (tmp_path / "control" / "c.py").write_text("import skatelib.control.b\n")
+    (tmp_path / "control" / "d.py").write_text("import skatelib.control.a\n")  # imports into the cycle: not in it
+    found = check.problems(tmp_path)
+    assert found == ["import cycle: skatelib.control.a -> skatelib.control.b -> skatelib.control.c "
+                     "(move what they share into a module of its own)"], found

@@ -12,6 +12,8 @@
   records (:mod:`skatelib.library.model`) and no entry or root attribute name of the schema as a
   literal key (``x["name"]``, ``x.get("name")``, ``{"name": ...}``) in another package (read the
   record, or use the schema's constant).
+* No import cycle among skatelib's modules, counting imports inside functions and under
+  ``TYPE_CHECKING`` (a cycle hidden by a local import is still a cycle).
 * ``library/`` and ``runtime/`` (what a robot installs) import only the standard library, numpy,
   h5py and skatelib; ``control/`` besides them only pinocchio, scipy, its QP solvers and
   threadpoolctl (the ``[control]`` extra).
@@ -79,6 +81,61 @@ def _imports(tree: ast.AST) -> list[tuple[int, str]]:
     return out
 
 
+def _module_name(rel: str) -> str:
+    parts = rel.removesuffix(".py").split("/")
+    return ".".join(["skatelib", *(parts[:-1] if parts[-1] == "__init__" else parts)])
+
+
+def _edges(modules: dict[str, ast.AST]) -> dict[str, set[str]]:
+    """Each module's skatelib imports (anywhere in it), resolved to the modules of the tree."""
+    def resolve(name: str) -> str:
+        while name and name not in modules:
+            name = name.rsplit(".", 1)[0] if "." in name else ""
+        return name
+
+    edges: dict[str, set[str]] = {m: set() for m in modules}
+    for m, tree in modules.items():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [f"{node.module}.{a.name}" for a in node.names]
+            else:
+                continue
+            edges[m] |= {r for n in names if n.startswith("skatelib.") and (r := resolve(n)) and r != m}
+    return edges
+
+
+def cycles(modules: dict[str, ast.AST]) -> list[list[str]]:
+    """The import cycles (strongly connected components of more than one module), each sorted."""
+    edges, index, low, stack, found = _edges(modules), {}, {}, [], []
+    on_stack: set[str] = set()
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in edges[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while (w := stack.pop()) != v:
+                on_stack.discard(w)
+                component.append(w)
+            on_stack.discard(v)
+            if component:
+                found.append(sorted([v, *component]))
+
+    for v in modules:
+        if v not in index:
+            visit(v)
+    return found
+
+
 def _sizes(path: Path, rel: str, tree: ast.AST, n_lines: int) -> list[str]:
     found = []
     if n_lines > MAX_MODULE_LINES:
@@ -97,10 +154,11 @@ def problems(root: Path) -> list[str]:
     found: list[str] = []
     names = file_names()
     paths = [p for top in PACKAGES for p in sorted((root / top).rglob("*.py"))]
+    modules: dict[str, ast.AST] = {}
     for path in paths:
         rel = path.relative_to(root).as_posix()
         text = path.read_text()
-        tree = ast.parse(text, filename=rel)
+        tree = modules[_module_name(rel)] = ast.parse(text, filename=rel)
         found += _sizes(path, rel, tree, len(text.splitlines()))
         top = rel.split("/")[0]
         if top != "library":
@@ -114,6 +172,8 @@ def problems(root: Path) -> list[str]:
             if rel.startswith(folder + "/"):
                 found += [f"{rel}:{line}: imports {name} ({folder}/ must not)"
                           for line, name in _imports(tree) if name.startswith(banned)]
+    found += [f"import cycle: {' -> '.join(c)} (move what they share into a module of its own)"
+              for c in cycles(modules)]
     return found
 
 
@@ -125,7 +185,7 @@ def main() -> None:
     if found:
         sys.exit(1)
     print(f"layout ok: modules <= {MAX_MODULE_LINES} lines, functions <= {MAX_FUNCTION_LINES}, "
-          "imports follow the data path")
+          "imports follow the data path, no import cycle")
 
 
 if __name__ == "__main__":

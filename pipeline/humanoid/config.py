@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library.errors import ConfigError
-from skatelib.pipeline.config import CONFIG_DIR, MetaConfig, build_section, check_unique_keys, sections
-from skatelib.pipeline.config import setting as _f
+from skatelib.pipeline.config_tables import CONFIG_DIR, MetaConfig, build_section, check_unique_keys, sections
+from skatelib.pipeline.config_tables import setting as _f
 
 
 @dataclass(frozen=True)

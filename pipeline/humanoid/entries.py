@@ -24,19 +24,8 @@ from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
 from skatelib.pipeline.humanoid.body import BodyMotion
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.motion import Motion, plan_json
+from skatelib.pipeline.humanoid.motion import node_arrays, plan_json
 from skatelib.pipeline.humanoid.tasks import EntryOutcome, entry_name
-from skatelib.pipeline.ocp.gpm import GaussPseudospectral
-
-
-def node_arrays(m: Motion, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every solved step's node times (S, N+2), states at tau_0..tau_N and the end (S, N+2, 6) and
-    controls at the LG nodes (S, N, 3)."""
-    support = GaussPseudospectral(n_nodes).support
-    nodes_t = np.stack([r.t0 + np.concatenate([(support + 1) / 2 * r.spec.duration_s, [r.spec.duration_s]])
-                        for r in m.steps])
-    nodes_state = np.stack([np.vstack([r.X, r.Xf]) for r in m.steps])
-    return nodes_t, nodes_state, np.stack([r.U for r in m.steps])
 
 
 def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:

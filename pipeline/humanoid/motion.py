@@ -204,3 +204,13 @@ def _contact_at(r: StepResult, t: float) -> np.ndarray:
 
 __all__ = ["Motion", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
            "stored_plan", "walking_steps"]
+
+
+def node_arrays(m: Motion, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every solved step's node times (S, N+2), states at tau_0..tau_N and the end (S, N+2, 6) and
+    controls at the LG nodes (S, N, 3)."""
+    support = GaussPseudospectral(n_nodes).support
+    nodes_t = np.stack([r.t0 + np.concatenate([(support + 1) / 2 * r.spec.duration_s, [r.spec.duration_s]])
+                        for r in m.steps])
+    nodes_state = np.stack([np.vstack([r.X, r.Xf]) for r in m.steps])
+    return nodes_t, nodes_state, np.stack([r.U for r in m.steps])

@@ -3,15 +3,13 @@ plan, with scipy's barycentric interpolation and numpy polynomials (not skatelib
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
+from skatelib.pipeline.humanoid.config import HumanoidConfig
+from skatelib.pipeline.humanoid.motion import Motion, node_arrays, step_model
 from skatelib.pipeline.humanoid.step import StepModel, StepSpec
-
-if TYPE_CHECKING:
-    from skatelib.pipeline.humanoid.config import HumanoidConfig
-    from skatelib.pipeline.humanoid.motion import Motion
 
 
 def _lg_nodes(n: int) -> np.ndarray:
@@ -105,9 +103,6 @@ def failures(report: dict[str, float], tol: float = 1e-6) -> list[str]:
 
 def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
     """The independent step checks (``skatelib validate``'s) on a solved motion's node values."""
-    from skatelib.pipeline.humanoid.entries import node_arrays
-    from skatelib.pipeline.humanoid.motion import step_model
-
     if not motion.success:
         return ()
     nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from skatelib.pipeline.config import setting as _f
+from skatelib.pipeline.config_tables import setting as _f
 
 _RAKE = ("no longer read: it was used as gamma of Eq. (11), the pivot's angle from the vertical, while "
          "configs gave the angle from the ground. Write pivot_from_horizontal_rad = the trucks' pivot axis angle "

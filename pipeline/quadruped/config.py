@@ -12,8 +12,8 @@ from typing import Any
 
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ConfigError
-from skatelib.pipeline.config import MetaConfig, build_section, check_unique_keys, sections
-from skatelib.pipeline.config import setting as _f
+from skatelib.pipeline.config_tables import MetaConfig, build_section, check_unique_keys, sections
+from skatelib.pipeline.config_tables import setting as _f
 from skatelib.pipeline.quadruped.board_config import BoardConfig, ContactConfig
 from skatelib.pipeline.quadruped.ride_config import TerminalConfig, TransitionsConfig
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from skatelib.pipeline.config import setting as _f
+from skatelib.pipeline.config_tables import setting as _f
 
 
 @dataclass(frozen=True)
