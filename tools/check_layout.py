@@ -108,7 +108,11 @@ def _edges(modules: dict[str, ast.AST]) -> dict[str, set[str]]:
 
 def cycles(modules: dict[str, ast.AST]) -> list[list[str]]:
     """The import cycles (strongly connected components of more than one module), each sorted."""
-    edges, index, low, stack, found = _edges(modules), {}, {}, [], []
+    edges = _edges(modules)
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
     on_stack: set[str] = set()
 
     def visit(v: str) -> None:
