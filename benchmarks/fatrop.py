@@ -23,9 +23,9 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU
 from skatelib.pipeline.ocp.shooting import window_stage
-from skatelib.pipeline.quadruped.knots import N_PARAMS, NXA
-from skatelib.pipeline.quadruped.problem import PushoffProblem
-from skatelib.pipeline.quadruped.terms import DynamicsDefect
+from skatelib.pipeline.quadruped.problem.knots import N_PARAMS, NXA
+from skatelib.pipeline.quadruped.problem.problem import PushoffProblem
+from skatelib.pipeline.quadruped.problem.terms import DynamicsDefect
 
 from benchmarks.figures import Figure, Measured
 
@@ -135,8 +135,8 @@ def measure() -> list[Measured]:
     multiple of IPOPT's (the target: at most IPOPT's, to make it the default)."""
     from skatelib.library.margins import forward_speed
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.quadruped import pushoff
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
+    from skatelib.pipeline.quadruped.problem import pushoff
 
     base = load_config(None, QuadrupedConfig)
     cfg = dataclasses.replace(base, optimization=dataclasses.replace(base.optimization, compile=False))

@@ -10,8 +10,8 @@ import time
 from typing import Any
 
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import pushoff
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
+from skatelib.pipeline.quadruped.problem import pushoff
 
 from benchmarks.figures import Figure, Measured
 

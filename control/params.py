@@ -81,7 +81,7 @@ class SkateParams:
 
     def roll_torque(self, phi: float, psi: float) -> float:
         """The trucks' torque on the deck about its roll axis and the deck's weight's [N m] (the
-        trucks' kinematics: see ``skatelib.pipeline.quadruped.board``)."""
+        trucks' kinematics: see ``skatelib.pipeline.quadruped.model.board``)."""
         c = math.cos(self.pivot_rad)
         if c < 1e-9:  # a vertical pivot: the linear spring of Eq. (6)
             trucks = -self.kb_Nm_per_rad * phi

@@ -24,7 +24,7 @@ def twin_figures(source: Path | Any) -> Any:
     if source.meta.kind != "quadruped":
         raise SkatelibError(f"{source.path}: the twin is a quadruped's; this config is {source.meta.kind}")
     from skatelib.pipeline.quadruped.entries import quadruped_model
-    from skatelib.pipeline.quadruped.system import SkateSystem
+    from skatelib.pipeline.quadruped.model.system import SkateSystem
 
     record = quadruped_model(source, SkateSystem.from_config(source))
     return TwinFigures.from_record(record, source.urdf_path.read_text())

@@ -1,7 +1,7 @@
 """The board alone in the twin, measured the way a bench test would measure a real board: its yaw
 rate with the deck held rolled (steering), its roll under a known lateral load, its coasting
 deceleration, and the lateral load at which a wheel lifts. Each returns what it measured; what the
-optimizer's model predicts is computed elsewhere (``skatelib.pipeline.quadruped.board``), so a
+optimizer's model predicts is computed elsewhere (``skatelib.pipeline.quadruped.model.board``), so a
 test can set the two side by side."""
 
 from __future__ import annotations

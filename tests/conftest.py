@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 
 @pytest.fixture(scope="session")

@@ -15,8 +15,8 @@ from skatelib.pipeline.build import sweep
 from skatelib.pipeline.build.contract import BuildOptions
 from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped.attempts import retry_ladder
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart, solver_options
+from skatelib.pipeline.quadruped.problem.attempts import retry_ladder
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, WarmStart, solver_options
 from skatelib.runtime import MotionLibrary
 
 from tests.helpers import CLI, TINY

@@ -22,7 +22,8 @@ from skatelib.pipeline.build.preflight import check_cache_dir
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.ocp import trust
 from skatelib.pipeline.ocp.stagewise import CompileTarget, c_compiler, compiled_stage_functions
-from skatelib.pipeline.quadruped import pushoff, tasks
+from skatelib.pipeline.quadruped import tasks
+from skatelib.pipeline.quadruped.problem import pushoff
 
 from tests.helpers import CLI, TINY
 

@@ -103,7 +103,7 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
     the cold barrier and the config's initial bound multipliers; an unknown warm strategy is refused
     by its key."""
     import numpy as np
-    from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart, solver_options
+    from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, WarmStart, solver_options
 
     c = load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "adaptive"\nwarm_mu_init = 3e-5\n'
                                      'bound_mult_init = 2e-3\nwarm_bound_push = 3e-5\n'))

@@ -312,8 +312,8 @@ def test_leg_kinematics_agree_with_the_pipelines_chains(lib):
     torques -J^T R^T f of the optimization; inverse kinematics recovers perturbed joint angles."""
     import casadi as ca
     from skatelib.control.kinematics import LegKinematics
-    from skatelib.pipeline.quadruped.dynamics import joint_torques
     from skatelib.pipeline.quadruped.kind import system_from_library
+    from skatelib.pipeline.quadruped.model.dynamics import joint_torques
 
     kin = LegKinematics.from_library(lib)
     system = system_from_library(lib)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from skatelib.pipeline.quadruped.dynamics import (
+from skatelib.pipeline.quadruped.model.dynamics import (
     dynamics_function,
     joint_torques,
     modes_for,

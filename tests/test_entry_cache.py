@@ -7,8 +7,9 @@ import dataclasses
 import pytest
 from skatelib.pipeline.build import sweep
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import costs as pushoff_costs
-from skatelib.pipeline.quadruped import pushoff, tasks
+from skatelib.pipeline.quadruped import tasks
+from skatelib.pipeline.quadruped.problem import costs as pushoff_costs
+from skatelib.pipeline.quadruped.problem import pushoff
 
 from tests.helpers import TINY
 

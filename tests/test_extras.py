@@ -31,7 +31,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
     ("pipeline/twin_track.py", ("build", "control", "sim")),  # track --plant mujoco
     ("pipeline/twin_ride.py", ("build", "control", "sim")),  # track --ride --plant mujoco
-    ("pipeline/quadruped/twin_judge.py", ("build", "control", "sim")),  # [transitions] twin_judge
+    ("pipeline/quadruped/transitions/twin_judge.py", ("build", "control", "sim")),  # [transitions] twin_judge
     ("pipeline/exports.py", ("build", "export")),  # export --format mcap
     ("pipeline/**/*.py", ("build",)),
     ("library/*.py", ()),

@@ -10,7 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import pushoff
+from skatelib.pipeline.quadruped.problem import pushoff
 
 from benchmarks.fatrop import lift
 from tests.helpers import TINY

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from skatelib.pipeline.ocp.integrators import integrator, phi_functions
-from skatelib.pipeline.quadruped.dynamics import dynamics_function, modes_for, rk4_step
+from skatelib.pipeline.quadruped.model.dynamics import dynamics_function, modes_for, rk4_step
 
 
 def test_phi_functions_satisfy_their_recurrence():

@@ -10,11 +10,11 @@ import pytest
 from skatelib.library.channels import BOARD
 from skatelib.library.margins import friction_margins
 from skatelib.library.rotations import board_rotations
-from skatelib.pipeline.quadruped import problem, pushoff
-from skatelib.pipeline.quadruped.bounds import bound_terms
-from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, solve
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory, judge
+from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory, judge
+from skatelib.pipeline.quadruped.problem import problem, pushoff
+from skatelib.pipeline.quadruped.problem.bounds import bound_terms
+from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, solve
 
 
 @pytest.fixture(scope="module")
@@ -132,8 +132,8 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
     import copy
 
     import pinocchio as pin
-    from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
-    from skatelib.pipeline.quadruped.measures import max_torque as _max_torque
+    from skatelib.pipeline.quadruped.checks.measures import max_torque as _max_torque
+    from skatelib.pipeline.quadruped.model.leg_dynamics import rigid_leg_torques
 
     r = honest
     full = rigid_leg_torques(system, r.t, r.state, r.control, r.contact, r.foot_pos)
@@ -143,7 +143,7 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
         robot.model.inertias[j] = pin.Inertia.Zero()
     # The quasi-static torques act at the sphere centres; put the contact points there to compare.
     import casadi as ca
-    from skatelib.pipeline.quadruped.dynamics import foot_centres_world
+    from skatelib.pipeline.quadruped.model.dynamics import foot_centres_world
 
     x = ca.SX.sym("x", 28)
     centres_fn = ca.Function("c", [x], [foot_centres_world(system, x)])

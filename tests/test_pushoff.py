@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from skatelib.library.channels import CONTROL_NAMES, GROUND, LEGS, STATE_NAMES
 from skatelib.pipeline.ocp.terms import Box, variable_bounds
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, problem_for, solve
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, problem_for, solve
 
 from tests import reference_model as ref
 
@@ -37,7 +37,7 @@ def test_solve_converges_to_target_speed(solved):
 def test_fine_step_numpy_reintegration_matches_every_interval(solved, system):
     """Re-integrating each shooting interval with a 20-step RK4 of the numpy reference model
     (pinocchio kinematics) lands within 1e-3 of the next knot."""
-    from skatelib.pipeline.quadruped.dynamics import modes_for
+    from skatelib.pipeline.quadruped.model.dynamics import modes_for
 
     mode = modes_for(system.push_leg)["accelerating"]
     worst = 0.0

@@ -8,8 +8,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from skatelib.library.errors import ModelError
-from skatelib.pipeline.quadruped.dynamics import foot_centres_world
-from skatelib.pipeline.quadruped.robot import Quadruped
+from skatelib.pipeline.quadruped.model.dynamics import foot_centres_world
+from skatelib.pipeline.quadruped.model.robot import Quadruped
 
 from tests.reference_model import foot_centres_world as pin_feet
 

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from skatelib.library.channels import BOARD, GROUND, LEGS, SWING
-from skatelib.pipeline.quadruped.schedule import knot_schedule
+from skatelib.pipeline.quadruped.model.schedule import knot_schedule
 
 
 @settings(max_examples=60, deadline=None)

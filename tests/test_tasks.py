@@ -64,7 +64,7 @@ def test_an_entrys_time_is_every_attempt(monkeypatch):
     their build and solve times (the build table's row is the entry's own time, not its last try's)."""
     from dataclasses import dataclass
 
-    from skatelib.pipeline.quadruped import attempts
+    from skatelib.pipeline.quadruped.problem import attempts
 
     @dataclass(frozen=True)
     class Timed:

@@ -18,11 +18,11 @@ from skatelib.library.margins import momentum_speed
 from skatelib.pipeline.build.contract import BuildOptions
 from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped.chain import chain_gaps
-from skatelib.pipeline.quadruped.problem import transition_window
-from skatelib.pipeline.quadruped.riding import barycentric
-from skatelib.pipeline.quadruped.schedule import knot_schedule
-from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.checks.chain import chain_gaps
+from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory
+from skatelib.pipeline.quadruped.model.riding import barycentric
+from skatelib.pipeline.quadruped.model.schedule import knot_schedule
+from skatelib.pipeline.quadruped.problem.problem import transition_window
 from skatelib.runtime import EntryNotFound, MotionLibrary
 
 from tests.helpers import CLI

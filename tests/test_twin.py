@@ -14,7 +14,7 @@ mujoco = pytest.importorskip("mujoco")
 
 from skatelib.pipeline.config import load_config  # noqa: E402
 from skatelib.pipeline.quadruped.config import QuadrupedConfig  # noqa: E402
-from skatelib.pipeline.quadruped.system import SkateSystem  # noqa: E402
+from skatelib.pipeline.quadruped.model.system import SkateSystem  # noqa: E402
 from skatelib.pipeline.twin import twin_figures  # noqa: E402
 from skatelib.sim.robot import JOINTS  # noqa: E402
 from skatelib.sim.rolling import WHEELS  # noqa: E402

@@ -1,5 +1,5 @@
 """The board alone: the twin (a MuJoCo board of real joints, ``skatelib.sim``) against what the
-optimizer's board model predicts (``pipeline/quadruped/board_statics.py``), each measured in its
+optimizer's board model predicts (``pipeline/quadruped/model/board_statics.py``), each measured in its
 own code, within 5 %: steering, roll under a lateral load, coasting deceleration, the load offset
 at which a wheel lifts. Each check also fails against the board model as the paper's equations
 read before it was corrected (the negative controls)."""
@@ -15,10 +15,10 @@ import pytest
 pytest.importorskip("mujoco")
 
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped import board_statics as model
-from skatelib.pipeline.quadruped.board import BoardModel
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model import board_statics as model
+from skatelib.pipeline.quadruped.model.board import BoardModel
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 from skatelib.pipeline.twin import twin_figures
 from skatelib.sim import board_checks as twin
 

@@ -12,7 +12,7 @@ from skatelib.library.errors import ConfigError
 from skatelib.pipeline.build.contract import BuildOptions
 from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, check_twin_judge
+from skatelib.pipeline.quadruped.transitions.twin_judge import TWIN_REFUSED, check_twin_judge
 from skatelib.runtime import MotionLibrary
 
 pytest.importorskip("mujoco")

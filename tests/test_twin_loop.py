@@ -179,9 +179,9 @@ def shove_lib(tmp_path_factory):
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import build_library
     from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.quadruped import problem, pushoff
-    from skatelib.pipeline.quadruped.bounds import bound_terms
-    from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
+    from skatelib.pipeline.quadruped.problem import problem, pushoff
+    from skatelib.pipeline.quadruped.problem.bounds import bound_terms
+    from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
 
     def board_only(self, n):
         lo, hi = np.full((n, 4), -np.inf), np.full((n, 4), np.inf)

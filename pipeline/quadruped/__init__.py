@@ -1,3 +1,6 @@
-"""The quadruped on the skateboard: robot (URDF), board, system, dynamics (Eq. 3-9), the push
-schedule, the push-off terms and problem, its independent physics checks, library entries and
-the reachable-speed frontier."""
+"""The quadruped on the skateboard. The kind's parts the build calls by name (``config`` with its
+tables ``board_config`` and ``ride_config``, ``kind``, ``builder``, ``plots``, ``rerun``) and the
+build's glue (``tasks``, ``entries``, ``frontier``) sit here; the rest in rooms: ``model`` (robot,
+board, dynamics Eq. 3-14, schedule, riding stance), ``problem`` (the push-off NLP and its solve),
+``checks`` (the independent physics checks, chain continuity) and ``transitions`` (their tasks and
+the twin's judgement)."""

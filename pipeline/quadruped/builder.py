@@ -14,7 +14,7 @@ from skatelib.library.schema import entry_key
 from skatelib.pipeline.build.contract import BuildOptions, Outcome, Written
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.tasks import BuildTask, EntryOutcome, ordered, tasks_for
-from skatelib.pipeline.quadruped.transition_tasks import TransitionTask
+from skatelib.pipeline.quadruped.transitions.tasks import TransitionTask
 from skatelib.pipeline.views.console import console, entry_table, err_console, fmt, frontier_table, label_error
 
 
@@ -23,7 +23,7 @@ def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     ``--no-cache`` (with the cache on, ``build.check_options`` has checked it already). A twin
     judge must be able to run."""
     from skatelib.pipeline.build.preflight import check_cache_dir
-    from skatelib.pipeline.quadruped.twin_judge import check_twin_judge
+    from skatelib.pipeline.quadruped.transitions.twin_judge import check_twin_judge
 
     check_twin_judge(cfg)
     if cfg.optimization.compile and not opts.cache:
@@ -52,7 +52,7 @@ def one_start_up(cfg: QuadrupedConfig, velocity_mps: float, strides: int) -> Qua
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask | TransitionTask]:
     """One warm-start chain per stride count (most strides first, for load balance), then one per
     start speed of the transitions."""
-    from skatelib.pipeline.quadruped.transition_tasks import transition_tasks
+    from skatelib.pipeline.quadruped.transitions.tasks import transition_tasks
 
     return [*tasks_for(cfg, ipopt), *transition_tasks(cfg, ipopt)]
 
@@ -61,7 +61,7 @@ def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     """Compile the stage functions in this process first (loky), so that parallel workers load them
     instead of all compiling."""
     if cfg.optimization.compile and opts.backend == "loky":
-        from skatelib.pipeline.quadruped.pushoff import problem_for
+        from skatelib.pipeline.quadruped.problem.pushoff import problem_for
 
         problem_for(cfg, min(cfg.sweep.strides))
 
@@ -72,7 +72,7 @@ def write(cfg: QuadrupedConfig, out: Path, finished: Sequence[Outcome], opts: Bu
     The frontier (or None) is the result's ``extra``."""
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, find_frontier, frontier_json, library_searches
-    from skatelib.pipeline.quadruped.system import SkateSystem
+    from skatelib.pipeline.quadruped.model.system import SkateSystem
 
     outcomes = ordered(cast("list[EntryOutcome]", list(finished)))
     entries = [entry_from_result(o.result, o.attempts, o.physics, o.cache_key) for o in outcomes]

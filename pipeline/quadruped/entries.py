@@ -16,8 +16,8 @@ from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.pushoff import SolveResult
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.pushoff import SolveResult
 
 BOARD_POS_COLUMNS = ("board_x", "board_y", "board_z", "board_yaw")
 BOARD_POS_UNITS = ("m", "m", "m", "rad")

@@ -19,10 +19,10 @@ import json
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
-from skatelib.pipeline.quadruped.attempts import solve_with_retries
+from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, solve
-from skatelib.pipeline.quadruped.verify import judge
+from skatelib.pipeline.quadruped.problem.attempts import solve_with_retries
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult, WarmStart, solve
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ VENDOR_INERTIA_KGM2 = (0.07641, 0.17843, 0.19758)
 
 def print_model(cfg: QuadrupedConfig) -> None:
     """SRB mass and inertia from the URDF beside the vendor MPC's, the board's figures, the stance."""
-    from skatelib.pipeline.quadruped.system import SkateSystem
+    from skatelib.pipeline.quadruped.model.system import SkateSystem
 
     s = SkateSystem.from_config(cfg)
     t = Table(title=f"{cfg.meta.name}: single rigid body at the nominal stance (pinocchio ccrba)")
@@ -66,7 +66,7 @@ def system_from_library(lib: MotionLibrary) -> Any:
             ground: its steering read that angle as the paper's gamma from the vertical), or a
             stored config this version cannot rebuild.
     """
-    from skatelib.pipeline.quadruped.system import SkateSystem
+    from skatelib.pipeline.quadruped.model.system import SkateSystem
 
     if not lib.quadruped_model.board.modelled_trucks:
         raise LibraryFormatError(lib.path, "/model/@board_pivot_from_horizontal_rad", OLD_BOARD)
@@ -88,7 +88,7 @@ OLD_BOARD = ("built with the old board model: its trucks steered by K_board = l 
 
 def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
     """The independent physics checks of every successful entry; returns the failures."""
-    from skatelib.pipeline.quadruped.verify import Trajectory, check_trajectory
+    from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory
 
     system = system_from_library(lib)
     bad = 0
@@ -112,7 +112,7 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
 def validate_chain(lib: MotionLibrary, report: ReportFn) -> int:
     """Chain continuity (:mod:`.chain`): every end that meets a transition's start agrees with it
     within the end's tolerances; one line for the library, one per junction that does not."""
-    from skatelib.pipeline.quadruped.chain import chain_gaps
+    from skatelib.pipeline.quadruped.checks.chain import chain_gaps
 
     gaps = chain_gaps(lib)
     if not gaps:

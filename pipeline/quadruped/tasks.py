@@ -13,10 +13,10 @@ from skatelib.library import schema
 from skatelib.pipeline.build import codec
 from skatelib.pipeline.build.cache import cache_key, cached_or_solved
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
-from skatelib.pipeline.quadruped.attempts import solve_with_retries
+from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solver_options
-from skatelib.pipeline.quadruped.verify import judge
+from skatelib.pipeline.quadruped.problem.attempts import solve_with_retries
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult, WarmStart, problem_for, solver_options
 
 codec.register(SolveResult, WarmStart)  # what the entry cache holds
 

@@ -21,8 +21,7 @@ from skatelib.library.channels import (
     U_QD,
 )
 from skatelib.library.margins import friction_margins, momentum_speed
-from skatelib.pipeline.quadruped.leg_dynamics import rigid_leg_torques
-from skatelib.pipeline.quadruped.measures import (
+from skatelib.pipeline.quadruped.checks.measures import (
     board_slip,
     defect,
     ground_slip,
@@ -32,12 +31,13 @@ from skatelib.pipeline.quadruped.measures import (
     swing_clearance,
     wheel_loads,
 )
-from skatelib.pipeline.quadruped.report import PhysicsReport
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.checks.report import PhysicsReport
+from skatelib.pipeline.quadruped.model.leg_dynamics import rigid_leg_torques
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 if TYPE_CHECKING:
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
-    from skatelib.pipeline.quadruped.pushoff import SolveResult
+    from skatelib.pipeline.quadruped.problem.pushoff import SolveResult
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
 def judge(config: QuadrupedConfig, r: SolveResult) -> tuple[SolveResult, dict[str, float]]:
     """Run the independent physics checks on a converged result; a result that fails them is
     returned with ``success = False`` and the failed checks as its status."""
-    from skatelib.pipeline.quadruped.pushoff import problem_for
+    from skatelib.pipeline.quadruped.problem.pushoff import problem_for
 
     if not r.success:
         return r, {}

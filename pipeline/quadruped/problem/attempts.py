@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from skatelib.pipeline.build import interrupt
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, SolveResult, solve
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult, solve
 
 
 def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.library.channels import I_BOARD_ROLL, S_BOARD_V, S_OMEGA, S_Q, S_RPY, S_VEL, U_QD
-from skatelib.pipeline.quadruped.system import END_BAND_M
+from skatelib.pipeline.quadruped.model.system import END_BAND_M
 from skatelib.runtime import Entry, MotionLibrary
 from skatelib.runtime.routes import speed_key
 

@@ -1,7 +1,7 @@
 """The build tasks of the transitions (``[transitions]``): one per start speed, its targets solved
 from the nearest outwards, each with the fewest strides that pass the independent physics checks
 (``[transitions] strides`` tried in order) and, with ``[transitions] twin_judge``, the closed
-loop on the physical twin (:mod:`skatelib.pipeline.quadruped.twin_judge`); warm-started from the
+loop on the physical twin (:mod:`skatelib.pipeline.quadruped.transitions.twin_judge`); warm-started from the
 last success of the same stride count and knot window in the task (the transitions from the
 fastest speed share one window; a window's kept constraint rows, and so the multipliers a warm
 start carries, differ from another's). A cell that passes with no stride count is stored as the
@@ -13,12 +13,12 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
+from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.problem import Window
-from skatelib.pipeline.quadruped.pushoff import PushoffSpec, WarmStart
+from skatelib.pipeline.quadruped.problem.problem import Window
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, WarmStart
 from skatelib.pipeline.quadruped.tasks import EntryOutcome, cached_solve, entry_key
-from skatelib.pipeline.quadruped.twin_judge import TWIN_REFUSED, twin_refusals
-from skatelib.pipeline.quadruped.verify import judge
+from skatelib.pipeline.quadruped.transitions.twin_judge import TWIN_REFUSED, twin_refusals
 from skatelib.pipeline.views.console import count
 
 

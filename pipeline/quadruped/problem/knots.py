@@ -11,7 +11,7 @@ from typing import Any
 
 import casadi as ca
 from skatelib.library.channels import CONTROL_NAMES, NX, S_BOARD_V, S_RPY, STATE_NAMES
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 NXA = NX + 2  # transcription state: the 28 channels, board_x, board_y
 I_BOARD_XY = slice(NX, NX + 2)

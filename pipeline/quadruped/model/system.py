@@ -11,10 +11,10 @@ import numpy as np
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
 from skatelib.pipeline.ocp.rotations import rpy_to_matrix
-from skatelib.pipeline.quadruped.board import BoardModel
 from skatelib.pipeline.quadruped.config import ContactConfig, QuadrupedConfig
-from skatelib.pipeline.quadruped.riding import riding_pose
-from skatelib.pipeline.quadruped.robot import DampedNewton, Quadruped, SingleRigidBody
+from skatelib.pipeline.quadruped.model.board import BoardModel
+from skatelib.pipeline.quadruped.model.riding import riding_pose
+from skatelib.pipeline.quadruped.model.robot import DampedNewton, Quadruped, SingleRigidBody
 
 
 @dataclass(frozen=True)

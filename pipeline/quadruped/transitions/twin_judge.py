@@ -24,7 +24,7 @@ from skatelib.pipeline.build.cache import cache_key, cached_or_solved
 
 if TYPE_CHECKING:
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
-    from skatelib.pipeline.quadruped.pushoff import SolveResult
+    from skatelib.pipeline.quadruped.problem.pushoff import SolveResult
 
 FIELD = "transitions.twin_judge"
 TWIN_REFUSED = "Twin_Refused"  # the status of a candidate the twin refused
@@ -88,7 +88,7 @@ def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> 
     from skatelib.control.mpc import MpcConfig
     from skatelib.control.settings import TrackSettings
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
-    from skatelib.pipeline.quadruped.problem import system_for
+    from skatelib.pipeline.quadruped.problem.problem import system_for
     from skatelib.proving.twin.track import ride_twin
     from skatelib.proving.twin.verdict import twin_result
     from skatelib.runtime import MotionLibrary

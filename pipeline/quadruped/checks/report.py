@@ -1,11 +1,11 @@
-"""What the independent physics checks of :mod:`skatelib.pipeline.quadruped.verify` measured on one
+"""What the independent physics checks of :mod:`skatelib.pipeline.quadruped.checks.verify` measured on one
 trajectory (:class:`PhysicsReport`) and what they accept (:class:`Tolerances`)."""
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,7 @@ class PhysicsReport:
         max_joint_limit_violation_rad: Largest joint-angle excursion past a limit [rad].
         max_torque_Nm: Largest quasi-static joint torque [N m] (limit: ``torque_limit_Nm``).
         max_torque_rigid_legs_Nm: Largest joint torque with the legs' own mass, by pinocchio inverse
-            dynamics of the whole URDF (:mod:`skatelib.pipeline.quadruped.leg_dynamics`) [N m].
+            dynamics of the whole URDF (:mod:`skatelib.pipeline.quadruped.model.leg_dynamics`) [N m].
         max_joint_velocity_radps: Largest joint speed [rad/s].
         max_board_roll_rad: Largest |deck roll| [rad].
         final_board_speed_mps: Board speed along its heading at the end [m/s].

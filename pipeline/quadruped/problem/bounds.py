@@ -1,6 +1,6 @@
 """Variable bounds of the push-off NLP (Sec. IV-B) as terms that name the channels they bound.
 
-The knot vector (:mod:`skatelib.pipeline.quadruped.knots`) is the transcription state followed by
+The knot vector (:mod:`skatelib.pipeline.quadruped.problem.knots`) is the transcription state followed by
 the 24 controls; ``columns`` turns channel names into its columns. The NLP's bounds are the
 intersection of these boxes (:func:`skatelib.pipeline.ocp.terms.variable_bounds`).
 """
@@ -13,9 +13,9 @@ import numpy as np
 from skatelib.library.channels import BOARD, SWING
 from skatelib.pipeline.ocp.terms import INF, BoundTerm, Box
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.knots import NXA, columns
-from skatelib.pipeline.quadruped.schedule import KnotSchedule
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.knots import NXA, columns
 
 LAST = slice(-1, None)
 BEFORE_LAST = slice(-2, -1)

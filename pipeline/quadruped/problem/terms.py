@@ -1,7 +1,8 @@
 """Constraint terms of the push-off trajectory optimization (Sec. IV-B); the costs are in
-:mod:`skatelib.pipeline.quadruped.costs`, the variable bounds in :mod:`~skatelib.pipeline.quadruped.bounds`.
+:mod:`skatelib.pipeline.quadruped.problem.costs`, the variable bounds in
+:mod:`~skatelib.pipeline.quadruped.problem.bounds`.
 
-The knot vector's layout and the stage parameters are in :mod:`skatelib.pipeline.quadruped.knots`.
+The knot vector's layout and the stage parameters are in :mod:`skatelib.pipeline.quadruped.problem.knots`.
 """
 
 from __future__ import annotations
@@ -21,10 +22,17 @@ from skatelib.library.channels import (
 )
 from skatelib.pipeline.ocp.terms import Stage, fixed
 from skatelib.pipeline.quadruped.config import StanceConfig
-from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world, joint_torques
-from skatelib.pipeline.quadruped.knots import NXA, P_DRIVE, P_MU_GROUND, board_origin, forward_speed, heading_frame
-from skatelib.pipeline.quadruped.schedule import KnotSchedule
-from skatelib.pipeline.quadruped.system import END_BAND_M, SkateSystem
+from skatelib.pipeline.quadruped.model.dynamics import board_rotation, foot_centres_world, joint_torques
+from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.model.system import END_BAND_M, SkateSystem
+from skatelib.pipeline.quadruped.problem.knots import (
+    NXA,
+    P_DRIVE,
+    P_MU_GROUND,
+    board_origin,
+    forward_speed,
+    heading_frame,
+)
 
 INF = np.inf
 

@@ -1,4 +1,4 @@
-"""The measures of :mod:`skatelib.pipeline.quadruped.verify`, each on the stored arrays of one
+"""The measures of :mod:`skatelib.pipeline.quadruped.checks.verify`, each on the stored arrays of one
 trajectory: how it ends, the fine re-integration's defect, foot slip on the ground and on the deck,
 the swinging foot's clearance and the joint torques. None uses the transcription."""
 
@@ -9,8 +9,8 @@ import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_RPY, S_VEL, SWING
 from skatelib.library.margins import momentum_speed
 from skatelib.library.rotations import board_rotations
-from skatelib.pipeline.quadruped.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.dynamics import dynamics_function, joint_torques, modes_for, rk4_step
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 
 def riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, float]:

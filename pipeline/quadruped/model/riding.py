@@ -39,7 +39,7 @@ def riding_pose(robot: Any, targets: np.ndarray, com_offset: np.ndarray, push: i
     """Trunk (x, y, roll, pitch) and joint angles (12,) of the riding stance, by a small NLP (IPOPT).
 
     Args:
-        robot: The :class:`~skatelib.pipeline.quadruped.robot.Quadruped`.
+        robot: The :class:`~skatelib.pipeline.quadruped.model.robot.Quadruped`.
         targets: (4, 3) foot centres relative to the nominal trunk origin (the four-leg stance's
             frame, the push foot at its lifted point) [m].
         com_offset: The centre of mass in the trunk frame [m].

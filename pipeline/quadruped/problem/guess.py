@@ -7,10 +7,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F
-from skatelib.pipeline.quadruped.knots import I_BOARD_XY, NXA
-from skatelib.pipeline.quadruped.robot import DampedNewton, foot_position_leg
-from skatelib.pipeline.quadruped.schedule import KnotSchedule
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.robot import DampedNewton, foot_position_leg
+from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.knots import I_BOARD_XY, NXA
 
 
 def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v_from: float, v_target: float,

@@ -18,7 +18,7 @@ import numpy as np
 from skatelib.library.margins import forward_speed
 from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.problem import START_UP, PushoffProblem, Window, system_for, transition_window
+from skatelib.pipeline.quadruped.problem.problem import START_UP, PushoffProblem, Window, system_for, transition_window
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""What the optimizer's board model (:mod:`skatelib.pipeline.quadruped.board`) predicts for the
+"""What the optimizer's board model (:mod:`skatelib.pipeline.quadruped.model.board`) predicts for the
 board on its own, in the terms a bench test measures a real board in: the yaw rate at a held roll
 (Eq. 14), the roll under a vertical load off the centre line (Eq. 6-8 in equilibrium), the coasting
 deceleration (Eq. 9b-10) and the load offset at which a wheel lifts (the wheel-load limit). The
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from skatelib.pipeline.quadruped.board import BoardModel
+from skatelib.pipeline.quadruped.model.board import BoardModel
 
 
 def yaw_rate(board: BoardModel, roll_rad: float, speed_mps: float) -> float:

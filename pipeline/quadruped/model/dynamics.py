@@ -34,7 +34,7 @@ from skatelib.library.channels import (
 )
 from skatelib.pipeline.ocp.integrators import rk4
 from skatelib.pipeline.ocp.rotations import euler_rate_map, rot_x, rot_z, rpy_to_matrix
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 
 @dataclass(frozen=True)

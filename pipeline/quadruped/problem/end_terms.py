@@ -1,7 +1,7 @@
 """Constraint terms of how a push-off or transition ends (Sec. IV-B's last knot): robot and board at
 the target speed together, the body over the deck where the riding stance has it
-(:mod:`skatelib.pipeline.quadruped.riding`). The other end conditions are variable bounds
-(:mod:`skatelib.pipeline.quadruped.bounds`)."""
+(:mod:`skatelib.pipeline.quadruped.model.riding`). The other end conditions are variable bounds
+(:mod:`skatelib.pipeline.quadruped.problem.bounds`)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,14 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import S_BOARD_V, S_POS, S_RPY, S_VEL
 from skatelib.pipeline.ocp.terms import Stage
-from skatelib.pipeline.quadruped.knots import P_SPEED_SCALE, P_TARGET, board_origin, forward_speed, heading_frame
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.knots import (
+    P_SPEED_SCALE,
+    P_TARGET,
+    board_origin,
+    forward_speed,
+    heading_frame,
+)
 
 INF = np.inf
 

@@ -23,14 +23,16 @@ from skatelib.pipeline.build.cache import cache_dir
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
-from skatelib.pipeline.quadruped.bounds import bound_terms
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
-from skatelib.pipeline.quadruped.contact_terms import GentleContact, WheelLoads
-from skatelib.pipeline.quadruped.costs import EffortCost, TerminalSpeedCost, TrackingCost
-from skatelib.pipeline.quadruped.dynamics import contact_points_world, dynamics_function, modes_for
-from skatelib.pipeline.quadruped.end_terms import FinalSpeed, RidingEnd
-from skatelib.pipeline.quadruped.guess import initial_guess
-from skatelib.pipeline.quadruped.knots import (
+from skatelib.pipeline.quadruped.model.dynamics import contact_points_world, dynamics_function, modes_for
+from skatelib.pipeline.quadruped.model.schedule import KnotSchedule, knot_schedule
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.bounds import bound_terms
+from skatelib.pipeline.quadruped.problem.contact_terms import GentleContact, WheelLoads
+from skatelib.pipeline.quadruped.problem.costs import EffortCost, TerminalSpeedCost, TrackingCost
+from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
+from skatelib.pipeline.quadruped.problem.guess import initial_guess
+from skatelib.pipeline.quadruped.problem.knots import (
     I_BOARD_XY,
     N_PARAMS,
     NXA,
@@ -42,9 +44,7 @@ from skatelib.pipeline.quadruped.knots import (
     P_TERMINAL,
     P_VDES,
 )
-from skatelib.pipeline.quadruped.schedule import KnotSchedule, knot_schedule
-from skatelib.pipeline.quadruped.system import SkateSystem
-from skatelib.pipeline.quadruped.terms import (
+from skatelib.pipeline.quadruped.problem.terms import (
     DynamicsDefect,
     FeetOnBoard,
     FrictionCones,
@@ -201,7 +201,7 @@ class PushoffProblem:
         return P.reshape(-1)  # row-major (N, n_p) == column-major (n_p, N)
 
     def bound_terms(self, v_from: float) -> list[Any]:
-        """The bound terms of a start at ``v_from`` (:mod:`skatelib.pipeline.quadruped.bounds`)."""
+        """The bound terms of a start at ``v_from`` (:mod:`skatelib.pipeline.quadruped.problem.bounds`)."""
         return bound_terms(self.config, self.system, self.schedule, self.start_state(v_from))
 
     def bounds(self, v_from: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -24,9 +24,9 @@ import numpy as np
 from skatelib.library.channels import I_BOARD_ROLL, NX, S_RPY, SWING
 from skatelib.pipeline.ocp.terms import Stage
 from skatelib.pipeline.quadruped.board_config import ContactConfig
-from skatelib.pipeline.quadruped.dynamics import board_rotation, foot_centres_world
-from skatelib.pipeline.quadruped.schedule import KnotSchedule
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.dynamics import board_rotation, foot_centres_world
+from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 INF = np.inf
 

@@ -11,8 +11,8 @@ import numpy as np
 from skatelib.library.channels import I_BOARD_ROLL, S_BOARD_V, S_OMEGA, S_POS, S_Q, S_RPY, S_VEL, U_F, U_QD
 from skatelib.pipeline.ocp.terms import Stage
 from skatelib.pipeline.quadruped.config import WeightsConfig
-from skatelib.pipeline.quadruped.knots import P_RATE, P_TARGET, P_TERMINAL, P_VDES, board_origin, forward_speed
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
+from skatelib.pipeline.quadruped.problem.knots import P_RATE, P_TARGET, P_TERMINAL, P_VDES, board_origin, forward_speed
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 from skatelib.library.channels import S_OMEGA, S_POS, S_Q, S_RPY, S_VEL, SWING, U_QD
-from skatelib.pipeline.quadruped.system import SkateSystem
+from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 
 def rigid_leg_torques(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray,
