@@ -32,6 +32,7 @@ from skatelib.proving.setup import ClosedLoop
 from skatelib.proving.twin.metrics import Meter, TwinMeasures, planned_floor_near
 from skatelib.proving.twin.record import TwinRecord
 from skatelib.proving.twin.sensors import MultibodyPlant, SensedState, Sensors
+from skatelib.runtime import Entry, MotionLibrary
 
 PRELOAD_M = 2e-4  # the deck feet start this far into the deck (a foot above it would start in the air)
 FALL_HEIGHT_M = 0.10  # trunk this close above the deck's top: fallen
@@ -62,13 +63,15 @@ class Ride:
     speed_mps: float = 0.0
 
 
-def entry_ride(lib: Any, key: str | Any, loop: ClosedLoop, foot_radius_m: float) -> Ride:
+def entry_ride(lib: MotionLibrary, key: str | Entry, loop: ClosedLoop, foot_radius_m: float) -> Ride:
     """An entry (by key, or an entry made of the library's: a chained ride), its transfer and the
     ride after it; a transition starts rolling at its start speed."""
     entry = lib[key] if isinstance(key, str) else key
+    if entry.board_pos is None:
+        raise ValueError(f"{entry.key}: not a quadruped entry (no board)")
     ref = EntryReference(lib, entry, loop.model, loop.settings)
-    return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64),
-                np.asarray(entry.board_pos[0], dtype=np.float64), np.asarray(entry.board_pos[-1], dtype=np.float64),
+    board = np.asarray(entry.board_pos, dtype=np.float64)
+    return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64), board[0], board[-1],
                 speed_mps=entry.from_velocity_mps)
 
 
@@ -93,7 +96,7 @@ class TwinLoop:
     a chained ride; :func:`entry_ride`) or a :class:`Ride`, by the robot side's controller
     (:class:`skatelib.control.controller.SkateController`) on its sensed states."""
 
-    def __init__(self, lib: Any, key: Any, loop: ClosedLoop, plant: MultibodyPlant,
+    def __init__(self, lib: MotionLibrary, key: str | Entry | Ride, loop: ClosedLoop, plant: MultibodyPlant,
                  settings: TwinLoopSettings | None = None, keep: bool = False):
         self.loop, self.plant, self.keep = loop, plant, keep
         self.cfg = settings or TwinLoopSettings()

@@ -6,15 +6,18 @@ stage is judged by the plant's momentum speed at its end, the run by the twin's 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+
+from skatelib.control.mpc_config import MpcConfig
+from skatelib.control.settings import TrackSettings
+from skatelib.proving.ride import RideResult
 
 
-def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: Any, settings: Any,
-              outputs: tuple[bool, Path | None] = (False, None)) -> Any:
+def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: MpcConfig, settings: TrackSettings,
+              outputs: tuple[bool, Path | None] = (False, None)) -> RideResult:
     """Ride ``stages`` on the twin with ``perturb``'s errors; a :class:`skatelib.proving.ride.RideResult`
     whose ``run`` is the twin's verdict. ``outputs``: whether to keep the run as an entry (for a
     recording), and a video to render it to (MuJoCo's offscreen renderer)."""
-    from skatelib.proving.ride import RideResult, judge_stages, plan_ride
+    from skatelib.proving.ride import judge_stages, plan_ride
     from skatelib.proving.twin.track import check_twin, ride_twin
     from skatelib.proving.twin.verdict import twin_result
 

@@ -9,10 +9,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
+from skatelib.control.mpc_config import MpcConfig
+from skatelib.control.settings import TrackSettings
 from skatelib.library.errors import SkatelibError
-from skatelib.runtime import MotionLibrary
+from skatelib.runtime import Entry, MotionLibrary
+
+if TYPE_CHECKING:  # MuJoCo's side, imported when a job runs (check_twin names the missing extra)
+    from skatelib.proving.steer import SteerResult
+    from skatelib.proving.twin.loop import TwinRun
+    from skatelib.proving.twin.verdict import TwinResult
+    from skatelib.sim.errors import TwinErrors
+    from skatelib.sim.plant import TwinPlant
 
 
 @dataclass(frozen=True)
@@ -25,12 +34,12 @@ class TwinJob:
     path: str
     key: str
     perturb: str
-    mpc: Any
-    settings: Any
+    mpc: MpcConfig
+    settings: TrackSettings
     video: str | None = None
     keep_run: bool = False
 
-    def __call__(self) -> tuple[Any, str | None, Any]:
+    def __call__(self) -> tuple[TwinResult, str | None, Entry | None]:
         from skatelib.library import schema
         from skatelib.proving.twin.verdict import twin_result
 
@@ -42,8 +51,8 @@ class TwinJob:
         return twin_result(self.key, label, run), written, entry
 
 
-def ride_twin(lib: MotionLibrary, what: Any, perturb: str, controller: tuple[Any, Any],
-              outputs: tuple[bool, Path | None] = (False, None)) -> tuple[Any, str | None]:
+def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: tuple[MpcConfig, TrackSettings],
+              outputs: tuple[bool, Path | None] = (False, None)) -> tuple[TwinRun, str | None]:
     """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
     with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread.
     ``outputs``: whether to keep the run's record, and a video to render it to. Returns the run
@@ -76,10 +85,10 @@ class TwinSteerJob:
     path: str
     speed_mps: float
     perturb: str
-    mpc: Any
-    settings: Any
+    mpc: MpcConfig
+    settings: TrackSettings
 
-    def __call__(self) -> Any:
+    def __call__(self) -> SteerResult:
         from skatelib.control.params import SkateParams
         from skatelib.proving.setup import ClosedLoop
         from skatelib.proving.twin.loop import TwinLoopSettings
@@ -96,7 +105,7 @@ class TwinSteerJob:
                               self.speed_mps, SteerRun(loop=sensors))
 
 
-def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[Any, Any]:
+def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[TwinPlant, TwinErrors]:
     from skatelib.sim.errors import parse_twin_perturbation
     from skatelib.sim.figures import TwinFigures
     from skatelib.sim.plant import TwinPlant
@@ -120,7 +129,8 @@ def check_twin(path: Path, perturb: str) -> MotionLibrary:
     return lib
 
 
-def twin_steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: Any, settings: Any) -> list[TwinSteerJob]:
+def twin_steer_jobs(path: Path, speeds: Sequence[float], perturb: str, mpc: MpcConfig,
+                    settings: TrackSettings) -> list[TwinSteerJob]:
     """One steering job per speed on the twin."""
     check_twin(path, perturb)
     return [TwinSteerJob(str(path), v, perturb, mpc, settings) for v in speeds]
@@ -131,7 +141,8 @@ def video_path(video: Path, key: str, several: bool) -> Path:
     return video.with_name(f"{video.stem}-{key}{video.suffix}") if several else video
 
 
-def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = None, settings: Any = None,
+def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcConfig | None = None,
+              settings: TrackSettings | None = None,
               outputs: tuple[Path | None, bool] = (None, False)) -> list[TwinJob]:
     """One twin job per chosen entry (all successful ones by default); ``outputs``: a video to
     render each run to (:func:`video_path`), and whether to keep the runs for a recording.
@@ -142,14 +153,10 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: Any = N
     """
     video, keep_runs = outputs
     lib = check_twin(path, perturb)
-    from skatelib.control.mpc import MpcConfig
-    from skatelib.control.settings import TrackSettings
-
     chosen = list(keys) if keys else [e.key for e in lib if e.success]
     for k in chosen:
         lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
-    mpc = mpc or MpcConfig()
-    settings = settings or TrackSettings()
+    mpc, settings = mpc or MpcConfig(), settings or TrackSettings()
     if video is not None:
         from skatelib.sim.video import FORMATS
 
