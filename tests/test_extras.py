@@ -22,6 +22,7 @@ IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distri
 # matching group counts. Rerun and matplotlib views are commands of the pipeline: build comes too.
 GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("control/**/*.py", ("control",)),
+    ("proving/**/*.py", ("control", "sim")),  # the proving ground: track, its twin and maneuvers
     ("sim/video.py", ("sim", "video")),
     ("sim/*.py", ("sim",)),
     ("pipeline/views/rerun_*.py", ("build", "viz")),
@@ -29,8 +30,6 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/views/figures.py", ("build", "plot")),
     ("pipeline/*/plots.py", ("build", "plot")),
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
-    ("pipeline/twin_track.py", ("build", "control", "sim")),  # track --plant mujoco
-    ("pipeline/twin_ride.py", ("build", "control", "sim")),  # track --ride --plant mujoco
     ("pipeline/quadruped/transitions/twin_judge.py", ("build", "control", "sim")),  # [transitions] twin_judge
     ("pipeline/exports.py", ("build", "export")),  # export --format mcap
     ("pipeline/**/*.py", ("build",)),
@@ -75,7 +74,7 @@ def _group(rel: str) -> tuple[str, ...]:
 
 
 def _modules() -> list[str]:
-    tops = ("pipeline", "library", "runtime", "control", "sim")
+    tops = ("pipeline", "library", "runtime", "control", "sim", "proving")
     return sorted(p.relative_to(ROOT).as_posix() for t in tops for p in (ROOT / t).rglob("*.py"))
 
 
