@@ -13,6 +13,10 @@ Choices beyond the printed equations (each written where it is used):
   positions from velocities, Euler angles from rates) and the 2 x 2 deck-roll block, so
   exp(A dt) = I + A dt outside the roll block and the roll block's is computed once.
 * ``B_vB`` and ``C_vB`` per mode as printed; sign() of the feedback forward speed with a dead band.
+* The board's velocity turns with its yaw (the wheels roll along the heading and do not slide):
+  the centripetal term v_fwd * yaw_rate across the heading, which Eq. (9a) leaves out, with the
+  forward speed frozen at the feedback's (as the attitudes are), so that it is linear in the
+  angular velocity and A stays nilpotent outside the roll block.
 """
 
 from __future__ import annotations
@@ -100,6 +104,8 @@ def continuous_model(p: SkateParams, fb: Feedback, contact: np.ndarray,
     else:
         C[24:26] = T_vB @ R.T @ g
     B[12:24, 12:24] = np.eye(12)
+    left = np.array([-np.sin(yaw), np.cos(yaw)])
+    A[24:26, 9:12] = np.outer(left * float(forward_speed(x)), euler_rate_map(rpy)[2])
     return A, B, C
 
 

@@ -155,7 +155,9 @@ class Plant:
         ds[6:9] = acc
         ds[9:12] = w_dot
         ds[12:24] = qd
-        ds[24:26] = heading * a_fwd
+        # The wheels roll along the heading: the velocity turns with the yaw (the centripetal term).
+        yaw_rate = float((euler_rate_map(rpy) @ w)[2])
+        ds[24:26] = heading * a_fwd + np.array([-heading[1], heading[0]]) * (v_fwd * yaw_rate)
         ds[I_BOARD_ROLL] = s[I_BOARD_ROLL_RATE]
         ds[I_BOARD_ROLL_RATE] = psi_dot
         ds[NX:NX + 2] = s[24:26]

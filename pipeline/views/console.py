@@ -157,20 +157,21 @@ def twin_table(results: list[Any], perturb: str) -> int:
     """Print the verdicts of the runs on the twin; returns how many failed."""
     t = Table(title=escape(f"full physics (MuJoCo twin, MPC 30 Hz + whole-body 510 Hz), errors: {perturb}"))
     for col in ("entry", "label", "p/m end", "delivered", "error", "slip max", "floor", "wheel lift",
-                "heading err", "lateral", "roll max", "tau max", "sat", "WBC/MPC ms", "verdict"):
+                "heading err", "lateral", "crab max", "roll max", "tau max", "sat", "WBC/MPC ms", "verdict"):
         t.add_column(escape(col), justify="right")
     for r in results:
         t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
                   label_error(r.label_mps, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
                   str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
-                  f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}", f"{100 * r.saturated_share:.1f}%",
-                  f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+                  f"{r.max_crab_rad:.3f}", f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}",
+                  f"{100 * r.saturated_share:.1f}%", f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
     console.print(t)
     console.print(escape("p/m end, delivered: the momentum speed of robot and board when the entry ends, and 1 s "
                          "later plus what the floor's force on the wheels took [m/s]; slip max: the largest slip "
                          "of a stance at its contact point; floor, wheel lift: ticks (2 ms) of unplanned floor "
                          "contact and with a wheel off the floor; heading err, lateral: the board against the "
-                         "plan when the entry ends; sat: the share of ticks with a joint at its torque limit"))
+                         "plan when the entry ends; crab max: the deck's velocity from its heading [rad]; sat: the "
+                         "share of ticks with a joint at its torque limit"))
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))

@@ -18,6 +18,7 @@ from skatelib.library.channels import GROUND
 
 WHEEL_LIFT_TICKS = 5  # a wheel without load for this many ticks in a row has lifted off
 CONTACT_GRACE_S = 0.03  # a foot on the floor this close to a planned stance on the floor is not unplanned
+CRAB_MIN_MPS = 0.1  # the crab angle is measured above this speed (slower, its direction is noise)
 
 
 @dataclass
@@ -42,6 +43,7 @@ class TwinMeasures:
     lateral_at_end_m: float = float("nan")
     heading_at_stop_rad: float = float("nan")
     system_mass_kg: float = float("nan")
+    max_crab_rad: float = 0.0  # the deck's velocity from its heading, while it rolls faster than CRAB_MIN_MPS
 
     def max_slip_m(self) -> float:
         return max(self.slips_m, default=0.0)
@@ -115,6 +117,10 @@ class Meter:
             m.momentum_after_1s_mps = float(st.system_v[0:2] @ heading)
         if len(m.stage_speeds_mps) < len(self.stage_ends) and t >= self.stage_ends[len(m.stage_speeds_mps)] - 1e-9:
             m.stage_speeds_mps.append(float(st.system_v[0:2] @ heading))
+        forward = float(st.deck_v[0:2] @ heading)
+        if abs(forward) > CRAB_MIN_MPS:
+            across = float(st.deck_v[1] * heading[0] - st.deck_v[0] * heading[1])
+            m.max_crab_rad = max(m.max_crab_rad, abs(float(np.arctan2(across, abs(forward)))))
 
 
     def drift(self, st: Any, t: float, t_end: float, board_end: np.ndarray) -> None:

@@ -10,10 +10,12 @@
 * a floor contact the plan has no place for (a foot on the floor away from a planned stance
   there, or any other geom);
 * a wheel off the floor for 5 ticks (10 ms) or more;
-* the board's heading at the entry's end more than 0.1 rad from the plan's.
+* the board's heading at the entry's end more than 0.1 rad from the plan's;
+* the board more than 2 cm to the side of the plan's when the entry ends (its wheels roll along
+  the heading: a plan whose board slid sideways, or a controller that steers off, ends aside).
 
-Reported besides: the lateral drift against the plan at the end, the heading when the run
-stops, torque saturation, the largest deck roll, the controllers' times.
+Reported besides: the largest crab angle (the deck's velocity from its heading), the heading when
+the run stops, torque saturation, the largest deck roll, the controllers' times.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from skatelib.proving.verdict import speed_verdict
 
 SLIP_LIMIT_M = 0.01
 HEADING_LIMIT_RAD = 0.1
+LATERAL_LIMIT_M = 0.02  # the board to the side of the plan's when the entry ends
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,7 @@ class TwinResult:
     heading_error_rad: float
     lateral_drift_m: float
     heading_at_stop_rad: float
+    max_crab_rad: float
     max_deck_roll_rad: float
     max_torque_Nm: float
     saturated_share: float
@@ -78,12 +82,15 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
         reasons.append(f"a wheel left the floor for up to {m.max_wheel_lift_ms:.0f} ms")
     if not abs(m.heading_at_end_rad) <= HEADING_LIMIT_RAD:
         reasons.append(f"heading {m.heading_at_end_rad:+.3f} rad from the plan's at the entry's end")
+    if not abs(m.lateral_at_end_m) <= LATERAL_LIMIT_M:
+        reasons.append(f"the board {100 * m.lateral_at_end_m:+.1f} cm to the side of the plan's at the entry's end "
+                       f"(at most {100 * LATERAL_LIMIT_M:.0f} cm)")
     return TwinResult(
         key=key, label_mps=label, momentum_at_end_mps=m.momentum_at_end_mps, delivered_mps=delivered,
         speed_error=err, max_slip_m=slip, touchdowns=len(m.slips_m), floor_touch_ticks=m.floor_touch_ticks,
         wheel_lift_ticks=m.wheel_lift_ticks, min_wheel_load_N=m.min_wheel_load_N,
         heading_error_rad=m.heading_at_end_rad, lateral_drift_m=m.lateral_at_end_m,
-        heading_at_stop_rad=m.heading_at_stop_rad, max_deck_roll_rad=m.max_deck_roll_rad,
+        heading_at_stop_rad=m.heading_at_stop_rad, max_crab_rad=m.max_crab_rad, max_deck_roll_rad=m.max_deck_roll_rad,
         max_torque_Nm=m.max_torque_Nm, saturated_share=m.saturated_ticks / max(m.ticks, 1),
         wbc_median_ms=_ms(run.wbc_times_s), mpc_median_ms=_ms(run.mpc_times_s), fall=run.fall,
         passed=not reasons, reasons="; ".join(reasons))

@@ -27,6 +27,14 @@ def riding_end(system: SkateSystem, x: np.ndarray, label: float) -> dict[str, fl
     }
 
 
+def board_lateral_speed(state: np.ndarray) -> float:
+    """The board's largest velocity across its heading over the knots [m/s] (no model code: the
+    stored yaw and board velocity)."""
+    yaw = state[:, S_RPY][:, 2]
+    left = np.stack([-np.sin(yaw), np.cos(yaw)], axis=-1)
+    return float(np.abs(np.einsum("kj,kj->k", left, state[:, S_BOARD_V])).max(initial=0.0))
+
+
 def defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
     """Largest mismatch between each knot and a fine RK4 re-integration from the one before."""
     f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])

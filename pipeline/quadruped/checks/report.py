@@ -23,6 +23,8 @@ class Tolerances:
     angular_speed_radps: float = 0.05
     clearance_m: float = 1e-4
     near_ground_speed_mps: float = 0.005  # over the limit (the optimizer's bound eases off smoothly)
+    lateral_speed_mps: float = 0.02  # the board across its heading: its wheels roll, they do not slide
+    stop_speed_mps: float = 0.02  # a stop's board at its end, in every direction
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,10 @@ class PhysicsReport:
             near-ground height (``[contact]``) [m/s].
         max_near_ground_descent_mps: Its largest descent speed there [m/s].
         final_push_foot_height_m: The push foot's height above the ground at the end [m].
+        max_board_lateral_speed_mps: The board's largest velocity across its heading at a knot:
+            its wheels roll along the heading and cannot slide sideways [m/s].
+        final_board_speed_norm_mps: The board's speed at the end in any direction [m/s] (a stop
+            ends at rest).
     """
 
     max_defect: float
@@ -91,6 +97,8 @@ class PhysicsReport:
     max_near_ground_descent_mps: float
     final_push_foot_height_m: float
     start_momentum_speed_mps: float = 0.0
+    max_board_lateral_speed_mps: float = 0.0
+    final_board_speed_norm_mps: float = 0.0
     from_velocity_mps: float = 0.0
     braking: bool = False  # a slow-down or stop: the planted foot brakes
     stop: bool = False  # a stop (label 0): the momentum speed's error is the speed left [m/s]
@@ -132,6 +140,12 @@ class PhysicsReport:
             (self.final_angular_speed_radps > tol.angular_speed_radps,
              f"body turns at {self.final_angular_speed_radps:.3f} rad/s at the end"),
             (self.min_wheel_load_N < -tol.force_N, f"a wheel lifts (its side's load {self.min_wheel_load_N:.2f} N)"),
+            (self.max_board_lateral_speed_mps > tol.lateral_speed_mps,
+             f"the board slides sideways at {self.max_board_lateral_speed_mps:.3f} m/s across its heading "
+             f"(wheels roll; at most {tol.lateral_speed_mps})"),
+            (self.stop and self.final_board_speed_norm_mps > tol.stop_speed_mps,
+             f"a stop ends with the board moving {self.final_board_speed_norm_mps:.3f} m/s "
+             f"(at most {tol.stop_speed_mps} in every direction)"),
             (self.final_push_foot_height_m < system.end_push_foot_height_m - tol.clearance_m,
              f"push foot {self.final_push_foot_height_m:.3f} m above the ground at the end "
              f"(at least {system.end_push_foot_height_m})"),

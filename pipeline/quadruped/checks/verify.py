@@ -15,6 +15,7 @@ import numpy as np
 from skatelib.library.channels import (
     GROUND,
     I_BOARD_ROLL,
+    S_BOARD_V,
     S_Q,
     S_RPY,
     SWING,
@@ -22,6 +23,7 @@ from skatelib.library.channels import (
 )
 from skatelib.library.margins import friction_margins, momentum_speed
 from skatelib.pipeline.quadruped.checks.measures import (
+    board_lateral_speed,
     board_slip,
     defect,
     ground_slip,
@@ -103,6 +105,8 @@ def check_trajectory(system: SkateSystem, traj: Trajectory, target_velocity_mps:
         max_near_ground_speed_mps=near[0], max_near_ground_descent_mps=near[1],
         final_push_foot_height_m=float(foot_pos[-1, p, 2]),
         start_momentum_speed_mps=float(momentum_speed(state[0], system.srb.mass_kg, system.board.mass_kg)),
+        max_board_lateral_speed_mps=board_lateral_speed(state),
+        final_board_speed_norm_mps=float(np.linalg.norm(state[-1, S_BOARD_V])),
         from_velocity_mps=from_velocity_mps, braking=drive < 0, stop=target_velocity_mps == 0,
     )
 

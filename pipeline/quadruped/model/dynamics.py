@@ -113,13 +113,18 @@ def state_derivative(system: SkateSystem, mode: Mode, x: Any, u: Any, cr: Any) -
     # Eq. (7), last row: the feet push the deck with -f_i.
     psi_dot = ((-(R_B.T @ torque_board))[0] + board.roll_torque(roll_b, psi_b)) / board.roll_inertia_kgm2
     heading = ca.vertcat(ca.cos(yaw), ca.sin(yaw))
+    v_fwd = ca.dot(heading, x[S_BOARD_V])  # S_x R_B^T v_B: roll does not change the x component
     if mode.accelerating:
-        v_fwd = ca.dot(heading, x[S_BOARD_V])  # S_x R_B^T v_B: roll does not change the x component
         rolling = board.friction_force(v_fwd, board.wheel_load(f_board[2]))  # Eq. (9b), (10)
         a_fwd = ((-(R_B.T @ f_board))[0] - rolling) / board.mass_kg
     else:
         a_fwd = (R.T @ acc)[0]  # Eq. (5a): the robot's acceleration along its own x axis
-    v_board_dot = heading * a_fwd  # Eq. (5a) / (9a): T_vB and S_xy R_B map x^B to the world
+    # Eq. (5a) / (9a): T_vB and S_xy R_B map x^B to the world; the wheels roll along the heading and
+    # do not slide, so as the board yaws its velocity turns with it: the centripetal term
+    # v_fwd * yaw_rate across the heading, which the paper's Eq. (9a) leaves out.
+    yaw_rate = (euler_rate_map(rpy) @ omega)[2]
+    left = ca.vertcat(-ca.sin(yaw), ca.cos(yaw))
+    v_board_dot = heading * a_fwd + left * (v_fwd * yaw_rate)
     return ca.vertcat(
         vel,
         euler_rate_map(rpy) @ omega,
