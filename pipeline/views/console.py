@@ -164,7 +164,8 @@ def twin_table(results: list[Any], perturb: str) -> int:
                   label_error(r.label_mps, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
                   str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
                   f"{r.max_crab_rad:.3f}", f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}",
-                  f"{100 * r.saturated_share:.1f}%", f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
+                  f"{100 * r.saturated_share:.1f}%", f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}",
+                  "[green]pass[/]" if r.passed else "[red]FAIL[/]")
     console.print(t)
     console.print(escape("p/m end, delivered: the momentum speed of robot and board when the entry ends, and 1 s "
                          "later plus what the floor's force on the wheels took [m/s]; slip max: the largest slip "
