@@ -92,4 +92,8 @@ def xdot(system, mode, x: np.ndarray, u: np.ndarray, cr: np.ndarray) -> np.ndarr
     else:
         a = (R.T @ vdot)[0]
         vb = np.array([np.cos(yaw) * a, np.sin(yaw) * a])
-    return np.concatenate([x[6:9], euler_rates(x[3], x[4], w), vdot, wdot, u[12:24], vb, [psi, psidot]])
+    # The wheels roll: the board's velocity turns with its yaw (v_fwd times the yaw rate, across).
+    rates = euler_rates(x[3], x[4], w)
+    v_fwd = np.cos(yaw) * x[24] + np.sin(yaw) * x[25]
+    vb = vb + v_fwd * rates[2] * np.array([-np.sin(yaw), np.cos(yaw)])
+    return np.concatenate([x[6:9], rates, vdot, wdot, u[12:24], vb, [psi, psidot]])
