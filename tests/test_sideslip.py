@@ -75,7 +75,7 @@ def test_the_mpc_model_turns_the_board_velocity_with_the_yaw():
     x[11] = r  # level trunk: the yaw rate is omega_z
     fb = Feedback(x=x, r_robot=np.zeros((3, 4)), r_board=np.zeros((3, 4)))
     for accelerating in (True, False):
-        A, B, C = continuous_model(p, fb, np.full(4, BOARD), accelerating)
+        A, _, C = continuous_model(p, fb, np.full(4, BOARD), accelerating)
         v_dot = (A @ x + C)[24:26]
         left, heading = np.array([-np.sin(yaw), np.cos(yaw)]), np.array([np.cos(yaw), np.sin(yaw)])
         assert left @ v_dot == pytest.approx(v * r, rel=1e-12)
