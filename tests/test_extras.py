@@ -22,7 +22,8 @@ IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distri
 # matching group counts. Rerun and matplotlib views are commands of the pipeline: build comes too.
 GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("control/**/*.py", ("control",)),
-    ("proving/**/*.py", ("control", "sim")),  # the proving ground: track, its twin and maneuvers
+    ("proving/twin/*.py", ("control", "sim")),  # track --plant mujoco, its rides and maneuvers
+    ("proving/*.py", ("control",)),  # track on the model plant, rides, the steering experiment
     ("sim/video.py", ("sim", "video")),
     ("sim/*.py", ("sim",)),
     ("pipeline/views/rerun_*.py", ("build", "viz")),

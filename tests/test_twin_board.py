@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import ClassVar
 
 import pytest
 
@@ -102,17 +101,20 @@ def test_the_calibration_case_survives(default):
 
 
 def test_a_library_of_the_old_board_model_is_refused(tmp_path):
-    """A library whose /model has no truck pivot angle from the ground (the old steering reading)
-    is refused by the checks that rebuild its model, naming the attribute and what to do."""
+    """A library whose /model has no truck pivot angle from the ground (the old steering reading:
+    format 1.1's ``board_rake_front_rad``) is refused by the checks that rebuild its model, naming
+    the attribute and what to do."""
     from pathlib import Path
 
     from skatelib.library.errors import LibraryFormatError
     from skatelib.pipeline.quadruped.kind import system_from_library
+    from skatelib.runtime import MotionLibrary
 
-    class OldLibrary:
-        path = Path("old.h5")
-        model: ClassVar[dict[str, float]] = {"board_rake_front_rad": 1.1904, "board_K_board_m": 0.613}
-
+    lib = MotionLibrary.open(Path(__file__).resolve().parent / "data" / "tiny-reference.h5")
+    for k in ("board_pivot_from_horizontal_rad", "board_roll_axis_height_m", "board_deck_mass_kg",
+              "board_wheel_track_m", "board_wheel_load_margin", "board_rolling_coeff", "board_rolling_coeff_plan"):
+        del lib.model[k]
+    lib.model["board_rake_front_rad"] = 1.1904
     with pytest.raises(LibraryFormatError, match=r"old board model.*rebuild") as e:
-        system_from_library(OldLibrary())  # type: ignore[arg-type]
+        system_from_library(lib)
     assert "board_pivot_from_horizontal_rad" in str(e.value)
