@@ -137,6 +137,11 @@ class TwinPlant:
     def timestep_s(self) -> float:
         return float(self.m.opt.timestep)
 
+    @property
+    def axle_below_deck_m(self) -> float:
+        """The axles (the deck's roll axis) below the deck's top, where the deck's state is given [m]."""
+        return float(self.f.board.axle_below_deck_m)
+
     def qpos(self) -> np.ndarray:
         """The whole configuration (robot and board), as MuJoCo orders it."""
         return np.array(self.d.qpos)

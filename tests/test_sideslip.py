@@ -1,7 +1,7 @@
 """The board's wheels roll along its heading and do not slide: the plan's board velocity stays
 along the heading at every knot (checked by validate in its own code), a stop ends at rest in
 every direction, the MPC's model and the model plant turn the velocity with the yaw, and the
-twin's verdict fails a board that ends to the side of the plan's. Negative controls: a library
+twin reports the board's drift and crab angle. Negative controls: a library
 built with the old model (Eq. 9a without the centripetal term: tests/data/old-sideslip.h5, a
 speed-up and a stop of the old default library) and doctored entries are refused."""
 
@@ -22,7 +22,7 @@ from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajecto
 from skatelib.proving.plant import Plant
 from skatelib.proving.twin.loop import TwinRun
 from skatelib.proving.twin.metrics import TwinMeasures
-from skatelib.proving.twin.verdict import LATERAL_LIMIT_M, twin_result
+from skatelib.proving.twin.verdict import twin_result
 from skatelib.runtime import MotionLibrary
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -105,13 +105,10 @@ class _NoForce:
     external_N = None
 
 
-@pytest.mark.parametrize(("lateral", "passed"), [(0.015, True), (-0.03, False)])
-def test_the_twins_verdict_fails_a_board_to_the_side_of_the_plan(lateral, passed):
+def test_the_twins_verdict_reports_the_drift_and_the_crab_angle():
+    """The board's lateral drift and crab angle are reported (not failures: docs/closed-loop.md)."""
     m = TwinMeasures(momentum_at_end_mps=0.5, momentum_after_1s_mps=0.49, friction_loss_Ns=0.1,
-                     system_mass_kg=10.7, heading_at_end_rad=0.01, lateral_at_end_m=lateral, max_crab_rad=0.004)
+                     system_mass_kg=10.7, heading_at_end_rad=0.01, lateral_at_end_m=-0.03, max_crab_rad=0.004)
     res = twin_result("v0.50_s2", 0.5, TwinRun(m))
-    assert res.passed is passed, res.reasons
-    assert res.max_crab_rad == 0.004 and res.lateral_drift_m == lateral
-    if not passed:
-        assert f"-3.0 cm to the side of the plan's at the entry's end (at most {100 * LATERAL_LIMIT_M:.0f} cm)" \
-            in res.reasons
+    assert res.passed, res.reasons
+    assert res.max_crab_rad == 0.004 and res.lateral_drift_m == -0.03

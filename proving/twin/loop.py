@@ -109,7 +109,7 @@ class TwinLoop:
         self.ctrl = SkateController(lib, ride.ref, ride.plan, p, loop.mpc, self.cfg.wbc, rates)
         self.dt = rates.update_s
         self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
-        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, self.ref.stage_ends)
+        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, self.ref.stage_ends, plant.axle_below_deck_m)
         self.run = TwinRun(self.meter.m)
         self.board_end = ride.board_end
         self._start(ride)

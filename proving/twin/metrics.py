@@ -52,8 +52,10 @@ class TwinMeasures:
 class Meter:
     """Updates :class:`TwinMeasures` from each tick's true state."""
 
-    def __init__(self, tick_s: float, torque_limit_Nm: float, stage_ends: tuple[float, ...] = ()):
+    def __init__(self, tick_s: float, torque_limit_Nm: float, stage_ends: tuple[float, ...] = (),
+                 axle_below_deck_m: float = 0.0):
         self.m = TwinMeasures()
+        self.axle = np.array([0.0, 0.0, -axle_below_deck_m])  # in the deck frame: where the wheels roll
         self.stage_ends = stage_ends
         self.tick_s = tick_s
         self.limit = torque_limit_Nm
@@ -117,9 +119,11 @@ class Meter:
             m.momentum_after_1s_mps = float(st.system_v[0:2] @ heading)
         if len(m.stage_speeds_mps) < len(self.stage_ends) and t >= self.stage_ends[len(m.stage_speeds_mps)] - 1e-9:
             m.stage_speeds_mps.append(float(st.system_v[0:2] @ heading))
-        forward = float(st.deck_v[0:2] @ heading)
+        # At the axles, not the deck's top: a rolling deck's top swings sideways over the wheels.
+        v_axle = st.deck_v + np.cross(st.deck_omega, st.deck_R @ self.axle)
+        forward = float(v_axle[0:2] @ heading)
         if abs(forward) > CRAB_MIN_MPS:
-            across = float(st.deck_v[1] * heading[0] - st.deck_v[0] * heading[1])
+            across = float(v_axle[1] * heading[0] - v_axle[0] * heading[1])
             m.max_crab_rad = max(m.max_crab_rad, abs(float(np.arctan2(across, abs(forward)))))
 
 

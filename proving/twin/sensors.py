@@ -24,6 +24,9 @@ class MultibodyPlant(Protocol):
     @property
     def timestep_s(self) -> float: ...
 
+    @property
+    def axle_below_deck_m(self) -> float: ...  # the deck's roll axis below its top (its state's origin)
+
     def qpos(self) -> np.ndarray: ...
 
     def place(self, trunk_pos: np.ndarray, trunk_quat_wxyz: np.ndarray, q: np.ndarray,
