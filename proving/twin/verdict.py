@@ -13,8 +13,8 @@
 * the board's heading at the entry's end more than 0.1 rad from the plan's.
 
 Reported besides: the board's lateral drift from the plan's at the entry's end (not a failure:
-under the default model errors the controller lets the board drift up to 5.5 cm to the side on
-the fastest, longest start-ups; docs/closed-loop.md), the largest crab angle (the velocity at the
+under the default model errors the controller lets the board drift up to 6 cm to the side on the
+fastest, longest entries; docs/closed-loop.md), the largest crab angle (the velocity at the
 axles from the heading), the heading when the run stops, torque saturation, the largest deck
 roll, the controllers' times.
 """
