@@ -95,10 +95,12 @@ def test_a_wbc_without_friction_rows_slips(libs):
 def test_a_plan_balanced_on_an_edge_tips_over(libs):
     """An entry planned without the deck support margin ends its push with the body on the line
     between two feet on the deck, the third nearly unloaded: the single rigid body holds it, the
-    twin's swinging leg tips it over during the transfer. The same entry planned with the margin
-    (each deck foot at least 10 % of the weight) rides through."""
+    twin's swinging leg tips it during the transfer (over, or onto one side's wheels, lifting the
+    other's for over a tenth of a second). The same entry planned with the margin (each deck foot
+    at least 10 % of the weight) rides through."""
     edge = _ride(libs["edge"])
-    assert edge.fall and not edge.passed, edge
+    assert not edge.passed, edge
+    assert edge.fall or ("wheel left the floor" in edge.reasons and edge.wheel_lift_ticks > 50), edge
     margin = _ride(libs["margin"])
     assert margin.passed, margin.reasons
 
