@@ -38,8 +38,11 @@ def no_room(path: Path, needed: int | None, error: OSError | None = None) -> Out
 
 
 @contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
+def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder; on success it replaces ``path``, on error it is removed.
+
+    Args:
+        mode: The file's permission bits; None: an ordinary file's (0666 less the umask).
 
     Raises:
         OutputError: The device (or a quota or a file-size limit) had no room for the file.
@@ -51,9 +54,11 @@ def atomic_path(path: Path) -> Iterator[Path]:
     tmp = new_file(path.parent, path.name)
     try:
         yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a library is an ordinary file
+        if mode is None:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask  # mkstemp makes 0600; a library is an ordinary file
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException as e:
         with contextlib.suppress(FileNotFoundError):
@@ -79,9 +84,10 @@ def confined(folder: Path, name: str) -> Path:
     return folder / name
 
 
-def write_atomic(path: Path, data: bytes | bytearray) -> Path:
-    """Write ``data`` to ``path`` whole or not at all, refusing before writing a byte when the
-    folder has less free space than the data needs.
+def write_atomic(path: Path, data: bytes | bytearray, mode: int | None = None) -> Path:
+    """Write ``data`` to ``path`` whole or not at all (with permission bits ``mode``, as
+    :func:`atomic_path`), refusing before writing a byte when the folder has less free space than
+    the data needs.
 
     Raises:
         OutputError: No room for it (the path, the size and the free space named).
@@ -91,7 +97,7 @@ def write_atomic(path: Path, data: bytes | bytearray) -> Path:
     free = _free_bytes(path.parent)
     if free is not None and free < len(data):
         raise no_room(path, len(data))
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+    with atomic_path(path, mode) as tmp, open(tmp, "wb") as f:
         f.write(data)
         f.flush()
         os.fsync(f.fileno())  # a full device can refuse the data only when it is written out

@@ -53,8 +53,10 @@ def write_library(
     model_arrays: Mapping[str, np.ndarray],
     model_text: Mapping[str, str],
     entries: Sequence[EntryRecord],
+    mode: int | None = None,
 ) -> Path:
-    """Write a complete library file; a reader never sees a half-written one.
+    """Write a complete library file; a reader never sees a half-written one. ``mode``: the file's
+    permission bits (None: an ordinary file's, 0666 less the umask).
 
     Raises:
         ValueError: When entries disagree on their dataset names or trailing shapes, or a key is not
@@ -101,7 +103,7 @@ def write_library(
     _write_h5(buffer, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
     raw = bytearray(buffer.getbuffer())
     seal(raw, marker)
-    return write_atomic(path, raw)
+    return write_atomic(path, raw, mode)
 
 
 @dataclass(frozen=True)

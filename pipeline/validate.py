@@ -28,9 +28,11 @@ def closed_loop_verdicts(path: Path, perturb: str, jobs: int, plant: str = "mode
 
     Raises:
         ImportError: When the controller's packages are missing (names the extra).
+        OutputError: When the file is not to be rewritten (read-only, another user's), before any ride.
     """
-    from skatelib.library.amend import amend_library
+    from skatelib.library.amend import amend_library, check_amendable
 
+    check_amendable(path)  # before the rides, which take minutes
     errors = "" if perturb == "none" else perturb
     try:
         if plant == "mujoco":

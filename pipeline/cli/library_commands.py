@@ -73,7 +73,8 @@ def validate(
     library: LibArg,
     closed_loop: Annotated[bool, typer.Option(
         "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
-                              "verdict in the library (entry attribute closed_loop_json).")] = False,
+                              "verdict in the library (entry attribute closed_loop_json); the file must be "
+                              "writable and keeps its permissions.")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,
     jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries tracked in parallel.")] = 2,
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
@@ -82,8 +83,11 @@ def validate(
              "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
+    from skatelib.library.amend import check_amendable
     from skatelib.pipeline.validate import validate_library
 
+    if closed_loop:
+        check_amendable(library)  # the verdicts are stored in the file: refused before any check or ride
     verdicts: list[dict[str, Any]] = []
 
     def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
