@@ -10,10 +10,11 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
+from skatelib.library.atomic import write_atomic
 from skatelib.library.errors import LibraryFormatError, OutputError
 from skatelib.library.reader import read_library
 from skatelib.library.records import EntryRecord
-from skatelib.library.writer import write_library
+from skatelib.library.writer import library_bytes
 
 _ANY_WRITE = stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH
 
@@ -61,4 +62,5 @@ def amend_library(path: Path | str, root_attrs: Mapping[str, Any],
     root = {k: v for k, v in data.attrs.items() if k not in protected} | dict(root_attrs)
     entries = [EntryRecord(key=r.key, attrs={**r.attrs, **entry_attrs.get(r.key, {})}, arrays=dict(r.arrays),
                          columns=dict(r.columns), units=dict(r.units)) for r in data.entries.values()]
-    return write_library(path, root, data.model_attrs, data.model_arrays, data.model_text, entries, mode)
+    raw = library_bytes(root, data.model_attrs, data.model_arrays, data.model_text, entries)
+    return write_atomic(Path(path), raw, mode)
