@@ -1,7 +1,7 @@
 """Files that appear whole or not at all: a temporary file in the target folder (named as
 :mod:`skatelib.library.temporaries` names skatelib's), then ``os.replace`` (libraries, cached
-entries, recordings, figures); and output file names taken from a file's content, kept inside
-their folder."""
+entries, recordings, figures); folders of files all or none (exports); and output file names taken
+from a file's content, kept inside their folder."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from skatelib.library.errors import OutputError
-from skatelib.library.temporaries import new_file
+from skatelib.library.temporaries import MARKER, new_file, temporary_folder
 
 # A write that fails for want of room: a full device, a quota, a file-size limit.
 NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
@@ -65,6 +65,46 @@ def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
             os.unlink(tmp)
         if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(path, None, e) from e
+        raise
+
+
+@contextlib.contextmanager
+def atomic_folder(out: Path) -> Iterator[Path]:
+    """Yield an empty staging folder for the files of the folder ``out``, all or none: when the
+    block ends without error the staging folder becomes ``out`` (when ``out`` did not exist) or its
+    files move into ``out``; on error (an interrupt included) it is removed, and so is every folder
+    made for ``out``: nothing is left that was not there.
+
+    Raises:
+        OutputError: The device (or a quota or a file-size limit) had no room for the files.
+    """
+    out = Path(out)
+    missing = []  # out and its ancestors that do not exist yet, deepest first
+    p = out
+    while not p.exists() and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    home = out.parent if missing else out  # the staging folder's place: beside a new out, inside an old one
+    try:
+        home.mkdir(parents=True, exist_ok=True)
+        with temporary_folder(home, out.name) as staging:
+            yield staging
+            if missing:
+                (staging / MARKER).unlink()
+                umask = os.umask(0)
+                os.umask(umask)
+                os.chmod(staging, 0o777 & ~umask)  # mkdtemp makes 0700; out is an ordinary folder
+                os.rename(staging, out)
+            else:
+                for f in sorted(staging.iterdir()):
+                    if f.name != MARKER:
+                        os.replace(f, out / f.name)
+    except BaseException as e:
+        for d in missing:
+            with contextlib.suppress(OSError):
+                d.rmdir()  # only an empty one: what this call made
+        if isinstance(e, OSError) and e.errno in NO_ROOM:
+            raise no_room(out, None, e) from e
         raise
 
 
