@@ -9,6 +9,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
+from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_JOBS, MAX_RTOL, finite
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
 from skatelib.pipeline.views.console import console, count, frontier_table
@@ -22,6 +23,7 @@ class Backend(enum.StrEnum):
 
 
 VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, defined with the config
+STRIDE_RANGE = tuple(round(x) for x in field_range(SweepConfig, "strides"))
 
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 
@@ -61,7 +63,8 @@ OutOpt = Annotated[Path | None, typer.Option(
 def build(
     config: ConfigArg = None,
     out: OutOpt = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")
+                    ] = 2,
     backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
                        ] = Backend.loky,
     scheduler: Annotated[str | None, typer.Option(
@@ -79,8 +82,10 @@ def build(
     check: Annotated[Path | None, typer.Option(
         "--check", help="Build into a temporary file and compare it with this library as `skatelib diff` does, "
                         "without writing or replacing anything; exit 1 when they differ.")] = None,
-    atol: Annotated[float, typer.Option("--atol", min=0.0, help="With --check: absolute tolerance.")] = 0.0,
-    rtol: Annotated[float, typer.Option("--rtol", min=0.0, help="With --check: relative tolerance.")] = 0.0,
+    atol: Annotated[float, typer.Option("--atol", min=0.0, max=MAX_ATOL, callback=finite,
+                                        help="With --check: absolute tolerance.")] = 0.0,
+    rtol: Annotated[float, typer.Option("--rtol", min=0.0, max=MAX_RTOL, callback=finite,
+                                        help="With --check: relative tolerance.")] = 0.0,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
@@ -132,18 +137,22 @@ def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[floa
 
 def frontier(
     config: ConfigArg = None,
-    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", help="Stride counts (repeatable); "
+    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", min=STRIDE_RANGE[0], max=STRIDE_RANGE[1],
+                                                      help="Stride counts (repeatable); "
                                                       "default: the config's sweep (with --from or --stops: "
                                                       "its transitions').")] = None,
     from_speeds: Annotated[list[float] | None, typer.Option(
-        "--from", min=0.05, max=3.0, help="Search the fastest speed-up from this riding speed instead of the "
-                                          "start-ups (repeatable) [m/s].")] = None,
+        "--from", min=0.05, max=3.0, callback=finite,
+        help="Search the fastest speed-up from this riding speed instead of the start-ups (repeatable) [m/s].")
+                                        ] = None,
     stops: Annotated[bool, typer.Option("--stops", help="Search the fastest speed a stop stops from.")] = False,
-    start: Annotated[float, typer.Option(min=0.05, max=3.0, help="First speed tried [m/s].")] = 0.5,
-    step: Annotated[float, typer.Option(min=0.01, max=1.0, help="Climbing step [m/s].")] = 0.25,
-    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, help="Bisection resolution [m/s].")] = 0.02,
-    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, help="Highest speed tried [m/s].")] = 3.0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes.")] = 2,
+    start: Annotated[float, typer.Option(min=0.05, max=3.0, callback=finite, help="First speed tried [m/s].")] = 0.5,
+    step: Annotated[float, typer.Option(min=0.01, max=1.0, callback=finite, help="Climbing step [m/s].")] = 0.25,
+    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, callback=finite,
+                                              help="Bisection resolution [m/s].")] = 0.02,
+    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, callback=finite, help="Highest speed tried [m/s].")
+                         ] = 3.0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes.")] = 2,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
@@ -181,8 +190,10 @@ def frontier(
 
 def solve(
     velocity: Annotated[float, typer.Option("--velocity", "-V", min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
+                                            callback=finite,
                                             help="Target board speed, m/s (the range of sweep.velocities_mps).")],
-    strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
+    strides: Annotated[int, typer.Option("--strides", "-s", min=STRIDE_RANGE[0], max=STRIDE_RANGE[1],
+                                         help="Number of push strides.")],
     out: Annotated[Path | None, typer.Option(
         "-o", "--out", help="One-entry library to write (.h5).",
         show_default="out/<config's meta.name>-v<velocity>_s<strides>.h5")] = None,

@@ -11,6 +11,8 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
+from skatelib.library.perturb import BOUNDS, bounds_text
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, perturbation
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -65,7 +67,8 @@ def info(
 PerturbOpt = Annotated[str, typer.Option(
     help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
          "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
-         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned.")]
+         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned. Ranges: "
+         f"{bounds_text(BOUNDS)}.", callback=perturbation)]
 DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 
 
@@ -76,7 +79,7 @@ def validate(
                               "verdict in the library (entry attribute closed_loop_json); the file must be "
                               "writable and keeps its permissions.")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries tracked in parallel.")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Entries tracked in parallel.")] = 2,
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
     plant: Annotated[PlantKind, typer.Option(
         help="With --closed-loop: model (the verdicts in closed_loop_json) or mujoco (the twin under the "

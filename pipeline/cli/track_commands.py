@@ -17,6 +17,7 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -39,9 +40,9 @@ def track(
                       ] = QpSolver.daqp,
     mpc_mu: Annotated[float | None, typer.Option(
         help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
-             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries run in parallel.")] = 2,
+             "planning value friction_mu_plan.", min=0.05, max=2.0, callback=finite)] = None,
+    seed: Annotated[int, typer.Option(min=0, max=MAX_SEED, help="Seed of the feedback noise.")] = 0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Entries run in parallel.")] = 2,
     progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     save: Annotated[Path | None, typer.Option(
         help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run (either plant)."
