@@ -126,12 +126,26 @@ def test_membership_keys_and_repr(lib):
 
 
 @pytest.mark.parametrize("args", [(0.0, -1, 0.03), (0.0, 0, 0.03), (float("nan"), 3, 0.03), (0.0, 3, 0.0),
-                                  (0.0, 3, -0.03), (0.0, 3, float("nan")), (float("inf"), 3, 0.03)])
+                                  (0.0, 3, -0.03), (0.0, 3, float("nan")), (float("inf"), 3, 0.03),
+                                  (0.0, 10, 1e308), (0.0, 10, 60.001)])
 def test_window_refuses_bad_arguments(lib, args):
-    """n < 1, a non-finite t0, dt <= 0 or non-finite: a ValueError naming the argument (it returned
-    1023 rows for n = -1, raised IndexError for n = 0 or a NaN t0)."""
+    """n < 1, a non-finite t0, dt <= 0, non-finite or absurd: a ValueError naming the argument (it
+    returned 1023 rows for n = -1, raised IndexError for n = 0, a NaN t0 or dt = 1e308)."""
     with pytest.raises(ValueError, match=r"window\(t0, n, dt\): (t0|n|dt) must"):
         lib["v0.30_s1"].window(*args)
+    with pytest.raises(ValueError, match=r"\): (t0|t|n|dt) must"):
+        lib["v0.30_s1"].array_window("foot_pos", *args)
+
+
+def test_window_takes_steps_up_to_its_bound(lib):
+    """dt up to WINDOW_MAX_DT_S (a minute) clamps to the entry's ends; the refusal names the range."""
+    from skatelib.runtime.entry import WINDOW_MAX_DT_S
+
+    e = lib["v0.30_s1"]
+    w = e.window(0.0, 3, WINDOW_MAX_DT_S)
+    assert np.allclose(w.state[1:], e.state[-1], rtol=0, atol=1e-12) and np.array_equal(w.t, [0.0, 60.0, 120.0])
+    with pytest.raises(ValueError, match=r"dt must be a step in seconds in \(0, 60\].*got 1e\+308"):
+        e.window(0.0, 10, 1e308)
 
 
 @pytest.mark.parametrize("t", [float("nan"), float("inf"), -float("inf")])
