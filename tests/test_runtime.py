@@ -37,15 +37,17 @@ def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryRecord:
                      units={"state": STATE_UNITS, "control": CONTROL_UNITS})
 
 
+_ROOT = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",
+         schema.A_GIT_COMMIT: "x", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "", schema.A_CASADI: "x",
+         schema.A_IPOPT: "x", schema.A_PINOCCHIO: "x"}
+_MODEL = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0) | {"friction_mu": 0.6}
+_LIMITS = {schema.D_JOINT_LOWER: np.full(12, -0.5), schema.D_JOINT_UPPER: np.full(12, 0.5)}
+
+
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
     p = tmp_path_factory.mktemp("rt") / "lib.h5"
-    root = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",
-            schema.A_GIT_COMMIT: "x", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "", schema.A_CASADI: "x",
-            schema.A_IPOPT: "x", schema.A_PINOCCHIO: "x"}
-    model = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0) | {"friction_mu": 0.6}
-    arrays = {schema.D_JOINT_LOWER: np.full(12, -0.5), schema.D_JOINT_UPPER: np.full(12, 0.5)}
-    write_library(p, root, model, arrays, {}, [_entry(0.3, seed=1), _entry(0.5, seed=2), _entry(0.5, 2, seed=3)])
+    write_library(p, _ROOT, _MODEL, _LIMITS, {}, [_entry(0.3, seed=1), _entry(0.5, seed=2), _entry(0.5, 2, seed=3)])
     return MotionLibrary.open(p)
 
 
@@ -98,6 +100,24 @@ def test_blend_is_the_linear_mix_and_checked(lib):
     assert b.check.min_friction_margin_N == pytest.approx(0.6 * 20.0)
     with pytest.raises(EntryNotFound, match="outside"):
         lib.blend(0.9, 1)
+
+
+def test_blend_picks_start_ups_whatever_strides_transitions_have(tmp_path):
+    """A library of two-stride start-ups and a one-stride transition (the default library's shape):
+    blend(v) without strides mixes the start-ups around v (it took the transitions' 1 stride as a
+    start-up's and raised EntryNotFound 'strides=1'); a speed only a transition reaches is outside."""
+    path = tmp_path / "ride.h5"
+    ride = _entry(0.5, 1, seed=4)
+    ride = EntryRecord(key=schema.entry_key(0.5, 1, 0.3), attrs={**ride.attrs, schema.A_FROM_VELOCITY: 0.3},
+                       arrays=ride.arrays, columns=ride.columns, units=ride.units)
+    write_library(path, _ROOT, _MODEL, _LIMITS, {}, [_entry(0.3, 2, seed=1), _entry(0.7, 2, seed=2), ride])
+    rides = MotionLibrary.open(path)
+    b = rides.blend(0.6)
+    assert b.attrs["blend_sources"] == ("v0.30_s2", "v0.70_s2") and b.n_strides == 2
+    a, c = rides["v0.30_s2"], rides["v0.70_s2"]
+    assert np.allclose(b.state, 0.25 * a.state + 0.75 * c.state)
+    with pytest.raises(EntryNotFound, match="outside"):
+        rides.blend(0.8)
 
 
 def test_blend_strict_rejects_a_blend_that_misses_its_margins(lib):
