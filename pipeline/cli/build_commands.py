@@ -12,7 +12,7 @@ from rich.markup import escape
 from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_JOBS, MAX_RTOL, finite
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
-from skatelib.pipeline.views.console import console, count, frontier_table
+from skatelib.pipeline.views.console import console, count, frontier_table, mesh_note
 
 
 class Backend(enum.StrEnum):
@@ -45,6 +45,7 @@ def model(
         if twin is None:
             raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
                                      param_hint="CONFIG")
+        mesh_note(config)
         console.print(escape(f"wrote {write_twin(config, twin)}"))
         return
     from skatelib.pipeline.config import load_config

@@ -18,6 +18,7 @@ from skatelib.pipeline.views.console import (
     count,
     jsonable,
     left_out,
+    mesh_note,
     track_table,
     twin_table,
     viewer_hint,
@@ -105,16 +106,7 @@ def validate(
                       if problems
                       else "[green]all entries valid[/]" if usable
                       else "[bold red]no entry of this library was solved: nothing in it can be used[/]")
-    failed = 0
-    results: list[Any] = []
-    if closed_loop:
-        from skatelib.pipeline.validate import closed_loop_verdicts
-
-        results = closed_loop_verdicts(library, perturb, jobs, plant.value)
-        table = twin_table if plant is PlantKind.mujoco else track_table
-        failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
-        if not as_json:
-            console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    results, failed = _closed_loop(library, perturb, jobs, plant, as_json) if closed_loop else ([], 0)
     if as_json:
         doc = {"library": str(library), "valid": not problems and usable, "usable": usable, "entries": verdicts}
         if closed_loop:
@@ -123,6 +115,21 @@ def validate(
         print(json.dumps(doc, indent=1, default=jsonable))
     if problems or failed or not usable:
         raise typer.Exit(1)
+
+
+def _closed_loop(library: Path, perturb: str, jobs: int, plant: PlantKind, as_json: bool) -> tuple[list[Any], int]:
+    """``validate --closed-loop``: every entry ridden, the verdicts stored and (unless ``as_json``)
+    shown; returns them and how many failed."""
+    from skatelib.pipeline.validate import closed_loop_verdicts
+
+    if plant is PlantKind.mujoco:
+        mesh_note(library)
+    results = closed_loop_verdicts(library, perturb, jobs, plant.value)
+    table = twin_table if plant is PlantKind.mujoco else track_table
+    failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
+    if not as_json:
+        console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    return results, failed
 
 
 def inspect(
@@ -145,6 +152,7 @@ def inspect(
         save = library.with_suffix(".rrd")
     if save is not None:
         check_output(save, [library], force, what="recording")
+    mesh_note(library)
     roots = inspect_library(library, entry, save, spawn, overlay)
     where = escape(f" to {save}; {viewer_hint(save)}") if save else ""
     console.print(f"logged {count(len(roots), 'entry')}{where}")
