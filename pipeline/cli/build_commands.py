@@ -26,6 +26,9 @@ VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, define
 STRIDE_RANGE = tuple(round(x) for x in field_range(SweepConfig, "strides"))
 
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
+YesOpt = Annotated[bool, typer.Option(
+    "--yes", help="Go on past the size bounds (500 entries, 100,000 variables in one solve): a build that large "
+                  "can take hours and many GB of memory.")]
 
 
 def model(
@@ -87,6 +90,7 @@ def build(
                                         help="With --check: absolute tolerance.")] = 0.0,
     rtol: Annotated[float, typer.Option("--rtol", min=0.0, max=MAX_RTOL, callback=finite,
                                         help="With --check: relative tolerance.")] = 0.0,
+    yes: YesOpt = False,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
@@ -97,7 +101,7 @@ def build(
     from skatelib.pipeline.config import load_config
 
     cfg = load_config(config)
-    opts = BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier)
+    opts = BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier, yes)
     if check is not None:
         if out is not None:
             raise typer.BadParameter("--check compares with LIB and writes nothing: leave out -o", param_hint="-o")
@@ -155,15 +159,18 @@ def frontier(
                          ] = 3.0,
     jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes.")] = 2,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
+    yes: YesOpt = False,
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (climb, then bisection): of the start-ups, or of the speed-ups from riding speeds (--from) and
     the stops (--stops)."""
     from skatelib.library.atomic import write_atomic
     from skatelib.pipeline.build.preflight import check_cache_dir, check_output
+    from skatelib.pipeline.build.size import check_size
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, Lane, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.size import frontier_size, probes
 
     cfg = load_config(config, QuadrupedConfig)
     if out is not None:
@@ -174,6 +181,8 @@ def frontier(
     lanes = [Lane(v) for v in sorted(set(from_speeds or ()))] + ([Lane(stop=True)] if stops else [])
     counts = sorted(set(strides or (cfg.transitions.strides if lanes else cfg.sweep.strides)))
     searches = [(lane, n) for lane in lanes or [Lane()] for n in counts]
+    check_size(cfg.path, frontier_size(cfg, [(not lane.start_up, n) for lane, n in searches],
+                                       probes(start, step, resolution, max_speed)), yes)
     kinds = ", ".join(sorted({lane.label for lane, _ in searches}))
     console.print(f"searching {count(len(searches), 'frontier')} ({kinds}; {', '.join(map(str, counts))} strides; "
                   "each a climb and a bisection of solves on its own worker, about 10-60 s each)")
@@ -201,6 +210,7 @@ def solve(
     config: ConfigArg = None,
     config_option: Annotated[Path | None, typer.Option("--config", help="The same, as an option.")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
+    yes: YesOpt = False,
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build.contract import BuildOptions
@@ -213,6 +223,11 @@ def solve(
         raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
     cfg = load_config(config or config_option, QuadrupedConfig)
     from skatelib.library.schema import entry_key
+    from skatelib.pipeline.build.size import check_size
+    from skatelib.pipeline.quadruped.builder import one_start_up, summary
+    from skatelib.pipeline.quadruped.size import build_size
+
+    check_size(cfg.path, build_size(one_start_up(cfg, velocity, strides)), yes)
 
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
@@ -220,8 +235,6 @@ def solve(
         from skatelib.pipeline.build.preflight import check_cache_dir
 
         check_cache_dir(entries_too=False)
-    from skatelib.pipeline.quadruped.builder import one_start_up, summary
-
     cfg = one_start_up(cfg, velocity, strides)  # that entry alone: no transitions
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
 
