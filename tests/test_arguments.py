@@ -89,3 +89,13 @@ def test_a_perturbation_out_of_range_is_refused_before_any_ride():
                                capture_output=True, text=True, timeout=120)
             assert r.returncode == 2, r.stdout + r.stderr
             assert says in r.stderr and "allowed:" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_validate_refuses_a_bad_perturbation_before_checking(lib_copy):
+    """`validate --closed-loop --perturb noise=-1`: exit 2 before the physics checks and any ride
+    (the perturbation was read after them), the file untouched."""
+    before = Path(lib_copy).read_bytes()
+    r = subprocess.run([*CLI, "validate", lib_copy, "--closed-loop", "--perturb", "noise=-1"], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 2 and "noise would be -1" in r.stderr, r.stdout + r.stderr
+    assert "valid" not in r.stdout and Path(lib_copy).read_bytes() == before

@@ -87,11 +87,10 @@ def validate(
              "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
-    from skatelib.library.amend import check_amendable
-    from skatelib.pipeline.validate import validate_library
+    from skatelib.pipeline.validate import closed_loop_jobs, validate_library
 
-    if closed_loop:
-        check_amendable(library)  # the verdicts are stored in the file: refused before any check or ride
+    # the rides made (the file writable, --perturb parsed) before any check or ride
+    rides = closed_loop_jobs(library, perturb, plant.value) if closed_loop else []
     verdicts: list[dict[str, Any]] = []
 
     def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
@@ -106,7 +105,7 @@ def validate(
                       if problems
                       else "[green]all entries valid[/]" if usable
                       else "[bold red]no entry of this library was solved: nothing in it can be used[/]")
-    results, failed = _closed_loop(library, perturb, jobs, plant, as_json) if closed_loop else ([], 0)
+    results, failed = _closed_loop(library, (perturb, rides), jobs, plant, as_json) if closed_loop else ([], 0)
     if as_json:
         doc = {"library": str(library), "valid": not problems and usable, "usable": usable, "entries": verdicts}
         if closed_loop:
@@ -117,14 +116,16 @@ def validate(
         raise typer.Exit(1)
 
 
-def _closed_loop(library: Path, perturb: str, jobs: int, plant: PlantKind, as_json: bool) -> tuple[list[Any], int]:
-    """``validate --closed-loop``: every entry ridden, the verdicts stored and (unless ``as_json``)
-    shown; returns them and how many failed."""
+def _closed_loop(library: Path, rides: tuple[str, list[Any]], jobs: int, plant: PlantKind,
+                 as_json: bool) -> tuple[list[Any], int]:
+    """``validate --closed-loop``: ``rides`` (the plant's name and the jobs) ridden, the verdicts
+    stored and (unless ``as_json``) shown; returns them and how many failed."""
     from skatelib.pipeline.validate import closed_loop_verdicts
 
+    perturb, calls = rides
     if plant is PlantKind.mujoco:
         mesh_note(library)
-    results = closed_loop_verdicts(library, perturb, jobs, plant.value)
+    results = closed_loop_verdicts(library, perturb, calls, jobs, plant.value)
     table = twin_table if plant is PlantKind.mujoco else track_table
     failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
     if not as_json:
