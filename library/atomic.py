@@ -89,6 +89,8 @@ def atomic_folder(out: Path) -> Iterator[Path]:
         home.mkdir(parents=True, exist_ok=True)
         with temporary_folder(home, out.name) as staging:
             yield staging
+            for f in staging.iterdir():
+                _flush(f)
             if missing:
                 (staging / MARKER).unlink()
                 umask = os.umask(0)
@@ -106,6 +108,15 @@ def atomic_folder(out: Path) -> Iterator[Path]:
         if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(out, None, e) from e
         raise
+
+
+def _flush(path: Path) -> None:
+    """Write a file's data out to the device (a full one may refuse it only then)."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def confined(folder: Path, name: str) -> Path:
