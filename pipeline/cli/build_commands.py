@@ -9,6 +9,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
+from skatelib.pipeline.build.size import MAX_ENTRIES, MAX_SOLVE_VARIABLES
 from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_JOBS, MAX_RTOL, finite
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
@@ -27,8 +28,8 @@ STRIDE_RANGE = tuple(round(x) for x in field_range(SweepConfig, "strides"))
 
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 YesOpt = Annotated[bool, typer.Option(
-    "--yes", help="Go on past the size bounds (500 entries, 100,000 variables in one solve): a build that large "
-                  "can take hours and many GB of memory.")]
+    "--yes", help=f"Go on past the size bounds ({MAX_ENTRIES} entries, {MAX_SOLVE_VARIABLES:,} variables in one "
+                  "solve): a build that large can take hours and many GB of memory.")]
 
 
 def model(
