@@ -1,7 +1,7 @@
 """Files that appear whole or not at all: a temporary file in the target folder (named as
 :mod:`skatelib.library.temporaries` names skatelib's), then ``os.replace`` (libraries, cached
-entries, recordings, figures); and output file names taken from a file's content, kept inside
-their folder."""
+entries, recordings, figures); folders of files all or none (exports); and output file names taken
+from a file's content, kept inside their folder."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from skatelib.library.errors import OutputError
-from skatelib.library.temporaries import new_file
+from skatelib.library.temporaries import MARKER, new_file, temporary_folder
 
 # A write that fails for want of room: a full device, a quota, a file-size limit.
 NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
@@ -38,8 +38,11 @@ def no_room(path: Path, needed: int | None, error: OSError | None = None) -> Out
 
 
 @contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
+def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder; on success it replaces ``path``, on error it is removed.
+
+    Args:
+        mode: The file's permission bits; None: an ordinary file's (0666 less the umask).
 
     Raises:
         OutputError: The device (or a quota or a file-size limit) had no room for the file.
@@ -51,9 +54,11 @@ def atomic_path(path: Path) -> Iterator[Path]:
     tmp = new_file(path.parent, path.name)
     try:
         yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a library is an ordinary file
+        if mode is None:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask  # mkstemp makes 0600; a library is an ordinary file
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException as e:
         with contextlib.suppress(FileNotFoundError):
@@ -61,6 +66,57 @@ def atomic_path(path: Path) -> Iterator[Path]:
         if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(path, None, e) from e
         raise
+
+
+@contextlib.contextmanager
+def atomic_folder(out: Path) -> Iterator[Path]:
+    """Yield an empty staging folder for the files of the folder ``out``, all or none: when the
+    block ends without error the staging folder becomes ``out`` (when ``out`` did not exist) or its
+    files move into ``out``; on error (an interrupt included) it is removed, and so is every folder
+    made for ``out``: nothing is left that was not there.
+
+    Raises:
+        OutputError: The device (or a quota or a file-size limit) had no room for the files.
+    """
+    out = Path(out)
+    missing = []  # out and its ancestors that do not exist yet, deepest first
+    p = out
+    while not p.exists() and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    home = out.parent if missing else out  # the staging folder's place: beside a new out, inside an old one
+    try:
+        home.mkdir(parents=True, exist_ok=True)
+        with temporary_folder(home, out.name) as staging:
+            yield staging
+            for f in staging.iterdir():
+                _flush(f)
+            if missing:
+                (staging / MARKER).unlink()
+                umask = os.umask(0)
+                os.umask(umask)
+                os.chmod(staging, 0o777 & ~umask)  # mkdtemp makes 0700; out is an ordinary folder
+                os.rename(staging, out)
+            else:
+                for f in sorted(staging.iterdir()):
+                    if f.name != MARKER:
+                        os.replace(f, out / f.name)
+    except BaseException as e:
+        for d in missing:
+            with contextlib.suppress(OSError):
+                d.rmdir()  # only an empty one: what this call made
+        if isinstance(e, OSError) and e.errno in NO_ROOM:
+            raise no_room(out, None, e) from e
+        raise
+
+
+def _flush(path: Path) -> None:
+    """Write a file's data out to the device (a full one may refuse it only then)."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def confined(folder: Path, name: str) -> Path:
@@ -79,9 +135,10 @@ def confined(folder: Path, name: str) -> Path:
     return folder / name
 
 
-def write_atomic(path: Path, data: bytes | bytearray) -> Path:
-    """Write ``data`` to ``path`` whole or not at all, refusing before writing a byte when the
-    folder has less free space than the data needs.
+def write_atomic(path: Path, data: bytes | bytearray, mode: int | None = None) -> Path:
+    """Write ``data`` to ``path`` whole or not at all (with permission bits ``mode``, as
+    :func:`atomic_path`), refusing before writing a byte when the folder has less free space than
+    the data needs.
 
     Raises:
         OutputError: No room for it (the path, the size and the free space named).
@@ -91,7 +148,7 @@ def write_atomic(path: Path, data: bytes | bytearray) -> Path:
     free = _free_bytes(path.parent)
     if free is not None and free < len(data):
         raise no_room(path, len(data))
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+    with atomic_path(path, mode) as tmp, open(tmp, "wb") as f:
         f.write(data)
         f.flush()
         os.fsync(f.fileno())  # a full device can refuse the data only when it is written out

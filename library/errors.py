@@ -24,6 +24,9 @@ class ConfigError(SkatelibError):
         self.message = message
         super().__init__(f"{self.path}: [{key}] {message}")
 
+    def __reduce__(self) -> tuple[type, tuple[Path, str, str]]:
+        return type(self), (self.path, self.key, self.message)  # whole across processes (a worker's error)
+
 
 class ModelError(SkatelibError):
     """A robot description cannot be used (missing joint or frame, wrong joint type)."""
@@ -44,6 +47,9 @@ class LibraryFormatError(SkatelibError):
         self.message = message
         super().__init__(f"{self.path}: {field}: {message}")
 
+    def __reduce__(self) -> tuple[type, tuple[Path, str, str]]:
+        return type(self), (self.path, self.field, self.message)
+
 
 class OutputError(SkatelibError):
     """An output path cannot or must not be written (a directory, the input itself, a foreign file,
@@ -58,6 +64,9 @@ class OutputError(SkatelibError):
         self.path = Path(path)
         self.message = message
         super().__init__(f"{self.path}: {message}")
+
+    def __reduce__(self) -> tuple[type, tuple[Path, str]]:
+        return type(self), (self.path, self.message)
 
 
 class Interrupted(SkatelibError):

@@ -60,7 +60,21 @@ def write_library(
         ValueError: When entries disagree on their dataset names or trailing shapes, or a key is not
             a plain name (``schema.ENTRY_KEY_RULE``).
     """
-    path = Path(path)
+    return write_atomic(Path(path), library_bytes(root_attrs, model_attrs, model_arrays, model_text, entries))
+
+
+def library_bytes(
+    root_attrs: Mapping[str, Any],
+    model_attrs: Mapping[str, Any],
+    model_arrays: Mapping[str, np.ndarray],
+    model_text: Mapping[str, str],
+    entries: Sequence[EntryRecord],
+) -> bytearray:
+    """The bytes of a complete, sealed library file (:func:`write_library` writes them).
+
+    Raises:
+        ValueError: As :func:`write_library`.
+    """
     names = _dataset_names(entries)
     root = {
         **{k: jsonable(v) for k, v in root_attrs.items()},
@@ -101,7 +115,7 @@ def write_library(
     _write_h5(buffer, index, _Model(model_attrs, model_arrays, model_text), entries, marker)
     raw = bytearray(buffer.getbuffer())
     seal(raw, marker)
-    return write_atomic(path, raw)
+    return raw
 
 
 @dataclass(frozen=True)

@@ -22,12 +22,13 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skatelib.library import schema
-from skatelib.library.atomic import confined, write_atomic
+from skatelib.library.atomic import atomic_folder, confined, write_atomic
 from skatelib.library.compare import column_names
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord
@@ -56,9 +57,8 @@ def solved(data: LibraryData) -> dict[str, EntryRecord]:
     return {k: e for k, e in data.entries.items() if bool(e.attrs.get(schema.A_SUCCESS, False))}
 
 
-def write_npz(path: Path, out: Path) -> list[Path]:
-    data = read_library(path)
-    written = []
+def npz_files(data: LibraryData) -> Iterator[tuple[str, bytes]]:
+    """Each solved entry as ``<key>.npz``: its arrays, column names and units."""
     for key, e in solved(data).items():
         arrays: dict[str, np.ndarray] = {k: np.asarray(v) for k, v in e.arrays.items()}
         for k in e.columns:
@@ -66,13 +66,11 @@ def write_npz(path: Path, out: Path) -> list[Path]:
             arrays[f"{k}__units"] = np.array(list(e.units.get(k, [""] * len(e.columns[k]))))
         buffer = io.BytesIO()
         np.savez(buffer, **arrays)  # type: ignore[arg-type]
-        written.append(write_atomic(confined(out, f"{key}.npz"), buffer.getvalue()))
-    return written
+        yield f"{key}.npz", buffer.getvalue()
 
 
-def write_csv(path: Path, out: Path) -> list[Path]:
-    data = read_library(path)
-    written = []
+def csv_files(data: LibraryData) -> Iterator[tuple[str, bytes]]:
+    """Each solved entry as ``<key>.csv``: a row per knot (:func:`headers`)."""
     for key, e in solved(data).items():
         heads, table = headers(e)
         text = io.StringIO()
@@ -80,8 +78,26 @@ def write_csv(path: Path, out: Path) -> list[Path]:
         w.writerow(heads)
         for row in table:
             w.writerow(["" if np.isnan(v) else repr(float(v)) for v in row])
-        written.append(write_atomic(confined(out, f"{key}.csv"), text.getvalue().encode()))
-    return written
+        yield f"{key}.csv", text.getvalue().encode()
+
+
+def write_folder(out: Path, files: Iterable[tuple[str, bytes]]) -> list[Path]:
+    """Write ``files`` (name, bytes) into the folder ``out``, all or none
+    (:func:`skatelib.library.atomic.atomic_folder`); each name a plain one kept inside it."""
+    names = []
+    with atomic_folder(out) as staging:
+        for name, data in files:
+            confined(staging, name).write_bytes(data)
+            names.append(name)
+    return [out / name for name in names]
+
+
+def write_npz(path: Path, out: Path) -> list[Path]:
+    return write_folder(out, npz_files(read_library(path)))
+
+
+def write_csv(path: Path, out: Path) -> list[Path]:
+    return write_folder(out, csv_files(read_library(path)))
 
 
 def write_mcap(path: Path, out: Path) -> list[Path]:
@@ -109,6 +125,7 @@ def write_mcap(path: Path, out: Path) -> list[Path]:
 
 def export(path: Path, fmt: str, out: Path) -> list[Path]:
     """Write the library at ``path`` as ``fmt`` (:data:`FORMATS`) to ``out`` (a folder for npz and
-    csv, a file for mcap); every file whole or not at all."""
+    csv, a file for mcap): the file whole or not at all, the folder's files all or none (an
+    interrupted or failed export leaves no file and no folder it made)."""
     writers: dict[str, Any] = {"npz": write_npz, "csv": write_csv, "mcap": write_mcap}
     return list(writers[fmt](path, out))

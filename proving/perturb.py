@@ -4,18 +4,17 @@ controller's model, and the disturbances of a run beyond them."""
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 from skatelib.control.params import SkateParams
 from skatelib.library.errors import SkatelibError
-from skatelib.library.perturb import perturbation_items
+from skatelib.library.perturb import BOUNDS, FACTOR, bounded, perturbation_items
 
 
 class PerturbationError(SkatelibError, ValueError):
-    """A ``--perturb`` item is malformed or names an unknown key."""
-
+    """A ``--perturb`` item is malformed, names an unknown key or a value out of its range."""
 
 
 # --perturb key -> the SkateParams field it changes.
@@ -58,9 +57,11 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
     ``impulse_t`` [s], ``init=0.01`` [m]). ``rolling`` changes the rolling-resistance coefficient
     (the force at the nominal weight); the force follows the plant's weight (``mass``, ``board_mass``).
     ``tanh`` is the plant's k of Eq. (10) [s/m] (``tanh=500``: rolling resistance close to Coulomb's).
+    Each key's value (a factor of the nominal one for the figures that scale) within
+    :data:`skatelib.library.perturb.BOUNDS`.
 
     Raises:
-        PerturbationError: Naming the item and the valid keys.
+        PerturbationError: Naming the item and the valid keys, or the value and its allowed range.
     """
     changes: dict[str, Any] = {}
     extra: dict[str, float] = {}
@@ -68,18 +69,17 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
         if key in EXTRA_KEYS:
             if relative:
                 raise PerturbationError(f"--perturb {item!r}: {key} takes an absolute value")
-            extra[key] = number
+            extra[key] = bounded(item, key, number, PerturbationError)
             continue
         field = PERTURB_KEYS[key]
         base = getattr(nominal, field)
-        if relative:
-            new = base * (1.0 + number / 100.0)
-        elif key == "inertia":
-            new = base * number  # a matrix: a plain number is a factor
+        if relative or key == "inertia":  # a plain number for inertia (a matrix) is a factor
+            factor = 1.0 + number / 100.0 if relative else number
+            new = base * factor
         else:
             new = number
-        if np.any(np.asarray(new) <= 0) and key != "rolling":
-            raise PerturbationError(f"--perturb {item!r}: {key} would be {new}; it must stay positive")
+            factor = number / base if base else (1.0 if number == 0 else math.inf)
+        bounded(item, key, factor if BOUNDS[key].unit == FACTOR else float(new), PerturbationError)
         changes[field] = new
     # Rolling resistance is a coefficient times the weight on the wheels (Eq. 9b, the config's
     # rolling_friction_coeff): a heavier or lighter robot or board changes the force with it.

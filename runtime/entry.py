@@ -19,6 +19,10 @@ from skatelib.runtime.blend import BlendCheck
 from skatelib.runtime.references import Channels, Sample, Window
 
 WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the entry's own knots)
+# The longest step of a window [s]: a minute, beyond any entry (seconds long; past its end the
+# reference holds its last state). Far larger steps overflowed the index arithmetic (dt = 1e308
+# made NaN indices and an IndexError).
+WINDOW_MAX_DT_S = 60.0
 
 
 class EntryNotFound(SkatelibError):
@@ -183,12 +187,13 @@ class Entry:
         (n, 24), contact codes (n, 4) and times (n,). Clamped to the entry like :meth:`sample`.
 
         ``n`` is at most :data:`WINDOW_MAX_N` (10 000: any controller's horizon, and a bound on what
-        one call allocates, about 5 MB), or the entry's own knot count if that is larger.
+        one call allocates, about 5 MB), or the entry's own knot count if that is larger; ``dt`` is
+        at most :data:`WINDOW_MAX_DT_S` (60 s).
 
         Raises:
             TypeError: When ``n`` is not an integer.
-            ValueError: When ``t0`` or ``dt`` is not finite, ``dt <= 0``, ``n < 1`` or ``n`` is
-                beyond the bound.
+            ValueError: When ``t0`` or ``dt`` is not finite, ``dt`` is not in (0, 60] s, ``n < 1`` or
+                ``n`` is beyond the bound (naming the argument and its range).
         """
         if not isinstance(n, (int, np.integer)) or isinstance(n, bool):
             raise TypeError(f"window(t0, n, dt): n must be an integer count of steps, got {n!r}")
@@ -197,8 +202,9 @@ class Entry:
                              "(skatelib.runtime.entry.WINDOW_MAX_N); sample a longer span in several windows")
         if not isfinite(t0):
             raise ValueError(f"window(t0, n, dt): t0 must be a finite time in seconds, got {t0!r}")
-        if not (isfinite(dt) and dt > 0.0):
-            raise ValueError(f"window(t0, n, dt): dt must be a positive, finite step in seconds, got {dt!r}")
+        if not (isfinite(dt) and 0.0 < dt <= WINDOW_MAX_DT_S):
+            raise ValueError(f"window(t0, n, dt): dt must be a step in seconds in (0, {WINDOW_MAX_DT_S:g}] "
+                             f"(skatelib.runtime.entry.WINDOW_MAX_DT_S), got {dt!r}")
         if n < 1:
             raise ValueError(f"window(t0, n, dt): n must be at least 1, got {n!r}")
         if not self._ready:

@@ -166,8 +166,9 @@ class MotionLibrary:
 
     def blend(self, velocity: float, strides: int | None = None, strict: bool = True,
               margin: BlendMargin = DEFAULT_MARGIN) -> Entry:
-        """Linear blend of the two successful entries around ``velocity`` [m/s] with the same strides
-        (the fewest strides whose entries bracket it when ``strides`` is None).
+        """Linear blend of the two successful start-ups (from rest) around ``velocity`` [m/s] with the
+        same strides (the fewest strides whose start-ups bracket it when ``strides`` is None; the
+        transitions' stride counts play no part).
 
         Both entries share the contact schedule (same period and duty), so phases align knot by
         knot. The blend is checked against Coulomb cones and joint limits with ``margin``
@@ -188,7 +189,9 @@ class MotionLibrary:
         return e
 
     def _bracket(self, velocity: float, strides: int | None) -> tuple[Entry, Entry]:
-        counts = [strides] if strides is not None else sorted({e.n_strides for e in self if e.success})
+        # The start-ups' stride counts only: a transition's count may be one no start-up has.
+        counts = [strides] if strides is not None else sorted(
+            {e.n_strides for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(0.0)})
         for s in counts:
             c = sorted(self._candidates(s), key=lambda e: e.target_velocity_mps)
             lo = [e for e in c if e.target_velocity_mps <= velocity]

@@ -11,6 +11,9 @@ Keys (``KEY=VALUE,...``; ``+10%`` relative, a plain number absolute):
 * ``payload`` [kg] at ``payload_x``, ``payload_y``, ``payload_z`` [m] in the trunk frame;
 * ``noise`` [m, rad; 5x per second for velocities] and ``delay`` [s]: the controller's state
   feedback.
+
+Each value within its range (:data:`skatelib.library.perturb.BOUNDS`; a factor of the planned
+figure for ``mass``, ``kb``, ``bb``, ``rolling``, ``armature``).
 """
 
 from __future__ import annotations
@@ -18,11 +21,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from skatelib.library.errors import SkatelibError
-from skatelib.library.perturb import perturbation_items
+from skatelib.library.perturb import bounded, perturbation_items
 
 
 class TwinPerturbationError(SkatelibError, ValueError):
-    """A ``--perturb`` item the twin does not know or cannot take."""
+    """A ``--perturb`` item the twin does not know, or a value out of its range."""
 
 
 @dataclass(frozen=True)
@@ -51,29 +54,24 @@ DEFAULT_TWIN_PERTURBATION = "mass=+10%,mu=0.5,kb=-20%,rolling=+100%"
 
 
 def parse_twin_perturbation(text: str, library_mu: float) -> TwinErrors:
-    """``KEY=VALUE,...`` (module docstring) as :class:`TwinErrors`.
+    """``KEY=VALUE,...`` (module docstring) as :class:`TwinErrors`, each value (a factor for the
+    figures that scale) within :data:`skatelib.library.perturb.BOUNDS`.
 
     Raises:
-        TwinPerturbationError: Naming the item and the valid keys.
+        TwinPerturbationError: Naming the item and the valid keys, or the value and its allowed range.
     """
     changes: dict[str, float] = {}
     payload_pos = [0.0, 0.0, 0.0]
     for item, key, number, relative in perturbation_items(text, TWIN_KEYS, TwinPerturbationError):
         if key in _SCALES:
             scale = 1.0 + number / 100.0 if relative else number
-            if scale <= 0:
-                raise TwinPerturbationError(f"--perturb {item!r}: the factor would be {scale:g}; it must stay positive")
-            changes[_SCALES[key]] = scale
+            changes[_SCALES[key]] = bounded(item, key, scale, TwinPerturbationError)
         elif key == "mu" and relative:
-            changes["floor_mu"] = library_mu * (1.0 + number / 100.0)
+            changes["floor_mu"] = bounded(item, key, library_mu * (1.0 + number / 100.0), TwinPerturbationError)
         elif relative:
             raise TwinPerturbationError(f"--perturb {item!r}: {key} takes an absolute value")
         elif key in _PAYLOAD_AXES:
-            payload_pos[_PAYLOAD_AXES[key]] = number
-        elif number < 0 or (key == "mu" and number == 0):
-            raise TwinPerturbationError(f"--perturb {item!r}: {key} must be positive")
+            payload_pos[_PAYLOAD_AXES[key]] = bounded(item, key, number, TwinPerturbationError)
         else:
-            changes[_ABSOLUTE[key]] = number
-    if changes.get("floor_mu", 1.0) <= 0:
-        raise TwinPerturbationError(f"--perturb {text!r}: mu must stay positive")
+            changes[_ABSOLUTE[key]] = bounded(item, key, number, TwinPerturbationError)
     return replace(TwinErrors(), payload_pos_m=(payload_pos[0], payload_pos[1], payload_pos[2]), **changes)

@@ -9,6 +9,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from skatelib.library.errors import ModelError
+from skatelib.library.urdf import without_meshes
 from skatelib.sim.board import FLOOR_BIT, FOOT_BIT
 from skatelib.sim.figures import GEAR_RATIO, JOINT_DAMPING_NMS, ROTOR_INERTIA_KGM2, TwinFigures
 
@@ -24,10 +26,15 @@ _IMPORT = ('<mujoco><compiler discardvisual="false" fusestatic="false" balancein
 
 
 def robot_spec(f: TwinFigures) -> Any:
-    """The robot as an ``MjSpec`` (its world holds the trunk, now floating)."""
+    """The robot as an ``MjSpec`` (its world holds the trunk, now floating), from the URDF's
+    primitive shapes: MuJoCo reads no mesh file named in it (:mod:`skatelib.library.urdf`).
+
+    Raises:
+        ModelError: A foot link without a primitive shape (the twin's feet are its spheres).
+    """
     import mujoco
 
-    urdf = re.sub(r"(<robot[^>]*>)", r"\1" + _IMPORT, f.urdf, count=1)
+    urdf = re.sub(r"(<robot[^>]*>)", r"\1" + _IMPORT, without_meshes(f.urdf), count=1)
     spec = mujoco.MjSpec.from_string(urdf)
     trunk = spec.body("trunk")
     trunk.add_freejoint(name="trunk_free")
@@ -50,4 +57,9 @@ def robot_spec(f: TwinFigures) -> Any:
             g.solimp = list(FOOT_SOLIMP)
         else:
             g.contype, g.conaffinity = 0, FLOOR_BIT
+    shaped = {g.parent.name for g in spec.geoms}
+    bare = [f"{leg}_foot" for leg in LEGS if f"{leg}_foot" not in shaped]
+    if bare:
+        raise ModelError(f"the robot description gives {', '.join(bare)} no primitive shape (a sphere): the twin's "
+                         "feet are those shapes (mesh files are not read)")
     return spec

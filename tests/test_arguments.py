@@ -1,10 +1,13 @@
 """The same argument rules across commands: a worker count below one is refused by every command
-that takes one, and a ``--perturb`` key given twice is refused naming the key (the parser kept the
-last one silently)."""
+that takes one, a ``--perturb`` key given twice is refused naming the key (the parser kept the
+last one silently), every numeric option refuses NaN, infinities and values beyond its range, and a
+``--perturb`` that names nothing or a value out of range is refused before any work."""
 
 from __future__ import annotations
 
+import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -26,3 +29,73 @@ def test_a_twin_perturbation_key_given_twice_is_refused():
     with pytest.raises(TwinPerturbationError, match="kb is given twice"):
         parse_twin_perturbation("kb=-20%,mass=+10%,kb=-30%", 0.6)
     assert parse_twin_perturbation("kb=-20%,mass=+10%", 0.6) is not None
+
+
+REFERENCE = Path(__file__).parent / "data" / "tiny-reference.h5"
+LIB = "LIB"  # a copy of the reference (validate --closed-loop would write into the file, were it to run)
+
+
+@pytest.fixture
+def lib_copy(tmp_path):
+    path = tmp_path / "lib.h5"
+    shutil.copyfile(REFERENCE, path)
+    return str(path)
+
+
+@pytest.mark.parametrize(("args", "option"), [
+    (["frontier", "-s", "0"], "--strides"),  # an IndexError
+    (["frontier", "-s", "21"], "--strides"),
+    (["frontier", "--from", "nan"], "--from"),
+    (["frontier", "--start", "inf"], "--start"),
+    (["solve", "-V", "nan", "-s", "1"], "--velocity"),
+    (["solve", "-V", "0.5", "-s", "0"], "--strides"),
+    (["track", LIB, "--seed", "-1"], "--seed"),  # numpy's error, after the command had started
+    (["track", LIB, "--mpc-mu", "nan"], "--mpc-mu"),
+    (["track", LIB, "-j", "100000"], "--jobs"),
+    (["diff", LIB, LIB, "--atol", "nan"], "--atol"),
+    (["diff", LIB, LIB, "--atol", "inf"], "--atol"),
+    (["diff", LIB, LIB, "--rtol", "-1"], "--rtol"),
+    (["build", "--check", LIB, "--rtol", "nan"], "--rtol"),
+    (["validate", LIB, "--closed-loop", "-j", "1000"], "--jobs"),
+])
+def test_a_number_out_of_its_range_is_a_usage_error(args, option, lib_copy):
+    """Each numeric option refuses NaN, infinities and values beyond its stated range: exit 2 naming
+    the option, before any work."""
+    from skatelib.pipeline.cli.app import app
+    from typer.testing import CliRunner
+
+    r = CliRunner().invoke(app, [lib_copy if a == LIB else a for a in args])
+    assert r.exit_code == 2, r.output
+    assert option in r.output and "Traceback" not in r.output
+
+
+@pytest.mark.parametrize("command", [["track", LIB], ["validate", LIB, "--closed-loop"]])
+@pytest.mark.parametrize("text", ["", " ", ",", " , "])
+def test_a_perturbation_naming_nothing_is_refused(command, text, lib_copy):
+    """`--perturb ''` ran the plant as planned and passed: exit 2 saying to write 'none' for that."""
+    from skatelib.pipeline.cli.app import app
+    from typer.testing import CliRunner
+
+    r = CliRunner().invoke(app, [lib_copy if a == LIB else a for a in command] + ["--perturb", text])
+    assert r.exit_code == 2 and "--perturb" in r.output and "'none'" in r.output, r.output
+
+
+def test_a_perturbation_out_of_range_is_refused_before_any_ride():
+    """`track --perturb noise=-1` (taken as no noise) and `mass=1e308` (a speed of nan): exit 2,
+    one message naming the key, the value and the range, on either plant."""
+    for plant in ("model", "mujoco"):
+        for text, says in (("noise=-1", "noise would be -1"), ("mass=1e308", "mass would be")):
+            r = subprocess.run([*CLI, "track", str(REFERENCE), "--plant", plant, "--perturb", text],
+                               capture_output=True, text=True, timeout=120)
+            assert r.returncode == 2, r.stdout + r.stderr
+            assert says in r.stderr and "allowed:" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_validate_refuses_a_bad_perturbation_before_checking(lib_copy):
+    """`validate --closed-loop --perturb noise=-1`: exit 2 before the physics checks and any ride
+    (the perturbation was read after them), the file untouched."""
+    before = Path(lib_copy).read_bytes()
+    r = subprocess.run([*CLI, "validate", lib_copy, "--closed-loop", "--perturb", "noise=-1"], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 2 and "noise would be -1" in r.stderr, r.stdout + r.stderr
+    assert "valid" not in r.stdout and Path(lib_copy).read_bytes() == before

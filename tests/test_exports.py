@@ -5,6 +5,9 @@ states and foot forces at the entry's times."""
 from __future__ import annotations
 
 import csv
+import stat
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -115,3 +118,64 @@ def test_failed_entries_are_left_out_and_named(tmp_path):
     r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "csv")])
     assert r.returncode == 0 and "left out 1 failed entry" in r.stdout, r.stdout + r.stderr
     assert list((tmp_path / "csv").iterdir()) == []
+
+
+REFERENCE = Path(__file__).parent / "data" / "tiny-reference.h5"  # two solved entries
+
+
+@pytest.mark.parametrize("fmt", ["npz", "csv"])
+@pytest.mark.parametrize("existing", [False, True])
+def test_an_interrupted_export_leaves_nothing(tmp_path, monkeypatch, fmt, existing):
+    """Ctrl-C while the second entry is converted: no file of the export, no temporary, and no
+    folder it made (the old code left the first entry's file in a new folder); a folder that was
+    there keeps exactly what it had."""
+    from skatelib.pipeline import exports
+
+    out = tmp_path / "a" / "b"
+    if existing:
+        out.mkdir(parents=True)
+        (out / "mine.txt").write_text("the user's")
+    convert = exports.headers if fmt == "csv" else np.savez
+    calls = []
+
+    def second_interrupts(*args: Any, **kw: Any) -> Any:
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return convert(*args, **kw)
+
+    if fmt == "csv":
+        monkeypatch.setattr(exports, "headers", second_interrupts)
+    else:
+        monkeypatch.setattr(exports.np, "savez", second_interrupts)
+    with pytest.raises(KeyboardInterrupt):
+        exports.export(REFERENCE, fmt, out)
+    assert len(calls) == 2
+    if existing:
+        assert sorted(p.name for p in tmp_path.rglob("*")) == ["a", "b", "mine.txt"]
+    else:
+        assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failed_export_leaves_no_folder(tmp_path):
+    """`export` of a damaged library into a new folder: exit 3, and the folder (and its new parent)
+    is not made (the old code made it before reading the library)."""
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(REFERENCE.read_bytes()[:5000])
+    r = _cli(["export", str(bad), "-f", "csv", "-o", str(tmp_path / "new" / "csv")])
+    assert r.returncode == 3, r.stdout + r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.h5"]
+
+
+def test_a_complete_export_makes_an_ordinary_folder(tmp_path):
+    """The files all arrive, in a folder with the mode mkdir gives (not the staging folder's 0700),
+    with nothing else in it; into an existing folder they join what was there."""
+    out = tmp_path / "new" / "npz"
+    written = _cli(["export", str(REFERENCE), "-f", "npz", "-o", str(out)])
+    assert written.returncode == 0, written.stdout + written.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["v0.30_s1.npz", "v0.40_s1.npz"]
+    assert stat.S_IMODE(out.stat().st_mode) == stat.S_IMODE((tmp_path / "new").stat().st_mode)
+    (out / "v0.30_s1.npz").unlink()
+    (out / "mine.txt").write_text("the user's")
+    assert _cli(["export", str(REFERENCE), "-f", "npz", "-o", str(out)]).returncode == 0
+    assert sorted(p.name for p in out.iterdir()) == ["mine.txt", "v0.30_s1.npz", "v0.40_s1.npz"]

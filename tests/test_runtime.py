@@ -37,15 +37,17 @@ def _entry(v: float, strides: int = 1, seed: int = 0) -> EntryRecord:
                      units={"state": STATE_UNITS, "control": CONTROL_UNITS})
 
 
+_ROOT = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",
+         schema.A_GIT_COMMIT: "x", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "", schema.A_CASADI: "x",
+         schema.A_IPOPT: "x", schema.A_PINOCCHIO: "x"}
+_MODEL = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0) | {"friction_mu": 0.6}
+_LIMITS = {schema.D_JOINT_LOWER: np.full(12, -0.5), schema.D_JOINT_UPPER: np.full(12, 0.5)}
+
+
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory):
     p = tmp_path_factory.mktemp("rt") / "lib.h5"
-    root = {schema.A_KIND: "quadruped", schema.A_NAME: "t", schema.A_SKATELIB_VERSION: "0", schema.A_CREATED: "x",
-            schema.A_GIT_COMMIT: "x", schema.A_GIT_DIRTY: False, schema.A_CONFIG_TOML: "", schema.A_CASADI: "x",
-            schema.A_IPOPT: "x", schema.A_PINOCCHIO: "x"}
-    model = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0) | {"friction_mu": 0.6}
-    arrays = {schema.D_JOINT_LOWER: np.full(12, -0.5), schema.D_JOINT_UPPER: np.full(12, 0.5)}
-    write_library(p, root, model, arrays, {}, [_entry(0.3, seed=1), _entry(0.5, seed=2), _entry(0.5, 2, seed=3)])
+    write_library(p, _ROOT, _MODEL, _LIMITS, {}, [_entry(0.3, seed=1), _entry(0.5, seed=2), _entry(0.5, 2, seed=3)])
     return MotionLibrary.open(p)
 
 
@@ -100,6 +102,24 @@ def test_blend_is_the_linear_mix_and_checked(lib):
         lib.blend(0.9, 1)
 
 
+def test_blend_picks_start_ups_whatever_strides_transitions_have(tmp_path):
+    """A library of two-stride start-ups and a one-stride transition (the default library's shape):
+    blend(v) without strides mixes the start-ups around v (it took the transitions' 1 stride as a
+    start-up's and raised EntryNotFound 'strides=1'); a speed only a transition reaches is outside."""
+    path = tmp_path / "ride.h5"
+    ride = _entry(0.5, 1, seed=4)
+    ride = EntryRecord(key=schema.entry_key(0.5, 1, 0.3), attrs={**ride.attrs, schema.A_FROM_VELOCITY: 0.3},
+                       arrays=ride.arrays, columns=ride.columns, units=ride.units)
+    write_library(path, _ROOT, _MODEL, _LIMITS, {}, [_entry(0.3, 2, seed=1), _entry(0.7, 2, seed=2), ride])
+    rides = MotionLibrary.open(path)
+    b = rides.blend(0.6)
+    assert b.attrs["blend_sources"] == ("v0.30_s2", "v0.70_s2") and b.n_strides == 2
+    a, c = rides["v0.30_s2"], rides["v0.70_s2"]
+    assert np.allclose(b.state, 0.25 * a.state + 0.75 * c.state)
+    with pytest.raises(EntryNotFound, match="outside"):
+        rides.blend(0.8)
+
+
 def test_blend_strict_rejects_a_blend_that_misses_its_margins(lib):
     """The joints of the test entries come within 0.2 rad of their limits: a margin of 0.3 rad
     rejects the blend (strict, the default), and strict=False returns it with the failed check."""
@@ -126,12 +146,26 @@ def test_membership_keys_and_repr(lib):
 
 
 @pytest.mark.parametrize("args", [(0.0, -1, 0.03), (0.0, 0, 0.03), (float("nan"), 3, 0.03), (0.0, 3, 0.0),
-                                  (0.0, 3, -0.03), (0.0, 3, float("nan")), (float("inf"), 3, 0.03)])
+                                  (0.0, 3, -0.03), (0.0, 3, float("nan")), (float("inf"), 3, 0.03),
+                                  (0.0, 10, 1e308), (0.0, 10, 60.001)])
 def test_window_refuses_bad_arguments(lib, args):
-    """n < 1, a non-finite t0, dt <= 0 or non-finite: a ValueError naming the argument (it returned
-    1023 rows for n = -1, raised IndexError for n = 0 or a NaN t0)."""
+    """n < 1, a non-finite t0, dt <= 0, non-finite or absurd: a ValueError naming the argument (it
+    returned 1023 rows for n = -1, raised IndexError for n = 0, a NaN t0 or dt = 1e308)."""
     with pytest.raises(ValueError, match=r"window\(t0, n, dt\): (t0|n|dt) must"):
         lib["v0.30_s1"].window(*args)
+    with pytest.raises(ValueError, match=r"\): (t0|t|n|dt) must"):
+        lib["v0.30_s1"].array_window("foot_pos", *args)
+
+
+def test_window_takes_steps_up_to_its_bound(lib):
+    """dt up to WINDOW_MAX_DT_S (a minute) clamps to the entry's ends; the refusal names the range."""
+    from skatelib.runtime.entry import WINDOW_MAX_DT_S
+
+    e = lib["v0.30_s1"]
+    w = e.window(0.0, 3, WINDOW_MAX_DT_S)
+    assert np.allclose(w.state[1:], e.state[-1], rtol=0, atol=1e-12) and np.array_equal(w.t, [0.0, 60.0, 120.0])
+    with pytest.raises(ValueError, match=r"dt must be a step in seconds in \(0, 60\].*got 1e\+308"):
+        e.window(0.0, 10, 1e308)
 
 
 @pytest.mark.parametrize("t", [float("nan"), float("inf"), -float("inf")])

@@ -36,6 +36,16 @@ def test_a_bad_error_set_is_refused_before_any_solve(tmp_path):
     assert str(cfg.path) in str(e.value)
 
 
+@pytest.mark.parametrize(("judge", "says"), [("", "names no model error"), (" , ", "names no model error"),
+                                            ("mass=1e308", "allowed: 0.1x to 10x")])
+def test_an_empty_or_out_of_range_error_set_is_refused(tmp_path, judge, says):
+    """An error set naming nothing (it judged on the twin as planned under the name '') or a value
+    out of its range: refused naming the config and the field."""
+    cfg = _config(tmp_path, [judge])
+    with pytest.raises(ConfigError, match=rf"transitions\.twin_judge.*{says}"):
+        check_twin_judge(cfg)
+
+
 def test_the_twin_keeps_what_it_rides_and_refuses_what_it_cannot(tmp_path, monkeypatch):
     monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))  # the second build reuses the solves
     opts = BuildOptions(jobs=1, cache=True, progress=False)

@@ -19,6 +19,7 @@ class BuildOptions:
     progress: bool = True
     cache: bool = True
     frontier: bool = False
+    yes: bool = False  # go on past the size bounds (skatelib.pipeline.build.size)
 
 
 @dataclass(frozen=True)

@@ -73,8 +73,10 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool | None = No
 
 
 def check_folder(out: Path) -> None:
-    """A folder that a command writes files into (``plot -o``): not a file, creatable, writable;
-    stale temporaries of killed writers removed.
+    """A folder that a command writes files into (``plot -o``, ``export -o``): not a file, and
+    writable, or (when it does not exist) its nearest existing parent writable; nothing is made
+    here (the command makes the folder with its files, so that a failure leaves none). Stale
+    temporaries of killed writers are removed there and beside it.
 
     Raises:
         OutputError: Saying what to do.
@@ -82,8 +84,15 @@ def check_folder(out: Path) -> None:
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputError(out, "is a file; name a folder for the files, e.g. out/figures")
-    _writable(out, out, "the folder cannot be written ({why}); choose another one")
-    remove_stale_temporaries(out)
+    existing = out
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OutputError(out, f"{existing} is a file, so the folder cannot be made; choose another one")
+    _writable(existing, out, "the folder cannot be written ({why}); choose another one" if existing == out
+              else "it would be made in {folder}, which cannot be written ({why}); choose another one")
+    for folder in {existing, existing.parent}:
+        remove_stale_temporaries(folder)
 
 
 def _writable(folder: Path, named: Path, message: str) -> None:

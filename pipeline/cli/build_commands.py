@@ -9,9 +9,11 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
+from skatelib.pipeline.build.size import MAX_ENTRIES, MAX_SOLVE_VARIABLES
+from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_JOBS, MAX_RTOL, finite
 from skatelib.pipeline.config import field_range
 from skatelib.pipeline.quadruped.config import SweepConfig
-from skatelib.pipeline.views.console import console, count, frontier_table
+from skatelib.pipeline.views.console import console, count, frontier_table, mesh_note
 
 
 class Backend(enum.StrEnum):
@@ -22,8 +24,12 @@ class Backend(enum.StrEnum):
 
 
 VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, defined with the config
+STRIDE_RANGE = tuple(round(x) for x in field_range(SweepConfig, "strides"))
 
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
+YesOpt = Annotated[bool, typer.Option(
+    "--yes", help=f"Go on past the size bounds ({MAX_ENTRIES} entries, {MAX_SOLVE_VARIABLES:,} variables in one "
+                  "solve): a build that large can take hours and many GB of memory.")]
 
 
 def model(
@@ -43,6 +49,7 @@ def model(
         if twin is None:
             raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
                                      param_hint="CONFIG")
+        mesh_note(config)
         console.print(escape(f"wrote {write_twin(config, twin)}"))
         return
     from skatelib.pipeline.config import load_config
@@ -61,7 +68,8 @@ OutOpt = Annotated[Path | None, typer.Option(
 def build(
     config: ConfigArg = None,
     out: OutOpt = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes (loky backend).")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")
+                    ] = 2,
     backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
                        ] = Backend.loky,
     scheduler: Annotated[str | None, typer.Option(
@@ -79,8 +87,11 @@ def build(
     check: Annotated[Path | None, typer.Option(
         "--check", help="Build into a temporary file and compare it with this library as `skatelib diff` does, "
                         "without writing or replacing anything; exit 1 when they differ.")] = None,
-    atol: Annotated[float, typer.Option("--atol", min=0.0, help="With --check: absolute tolerance.")] = 0.0,
-    rtol: Annotated[float, typer.Option("--rtol", min=0.0, help="With --check: relative tolerance.")] = 0.0,
+    atol: Annotated[float, typer.Option("--atol", min=0.0, max=MAX_ATOL, callback=finite,
+                                        help="With --check: absolute tolerance.")] = 0.0,
+    rtol: Annotated[float, typer.Option("--rtol", min=0.0, max=MAX_RTOL, callback=finite,
+                                        help="With --check: relative tolerance.")] = 0.0,
+    yes: YesOpt = False,
 ) -> None:
     """Build a motion library: sweep target speeds x stride counts through the push-off TO
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
@@ -91,7 +102,7 @@ def build(
     from skatelib.pipeline.config import load_config
 
     cfg = load_config(config)
-    opts = BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier)
+    opts = BuildOptions(jobs, backend.value, scheduler, progress, cache, frontier, yes)
     if check is not None:
         if out is not None:
             raise typer.BadParameter("--check compares with LIB and writes nothing: leave out -o", param_hint="-o")
@@ -132,28 +143,35 @@ def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[floa
 
 def frontier(
     config: ConfigArg = None,
-    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", help="Stride counts (repeatable); "
+    strides: Annotated[list[int] | None, typer.Option("--strides", "-s", min=STRIDE_RANGE[0], max=STRIDE_RANGE[1],
+                                                      help="Stride counts (repeatable); "
                                                       "default: the config's sweep (with --from or --stops: "
                                                       "its transitions').")] = None,
     from_speeds: Annotated[list[float] | None, typer.Option(
-        "--from", min=0.05, max=3.0, help="Search the fastest speed-up from this riding speed instead of the "
-                                          "start-ups (repeatable) [m/s].")] = None,
+        "--from", min=0.05, max=3.0, callback=finite,
+        help="Search the fastest speed-up from this riding speed instead of the start-ups (repeatable) [m/s].")
+                                        ] = None,
     stops: Annotated[bool, typer.Option("--stops", help="Search the fastest speed a stop stops from.")] = False,
-    start: Annotated[float, typer.Option(min=0.05, max=3.0, help="First speed tried [m/s].")] = 0.5,
-    step: Annotated[float, typer.Option(min=0.01, max=1.0, help="Climbing step [m/s].")] = 0.25,
-    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, help="Bisection resolution [m/s].")] = 0.02,
-    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, help="Highest speed tried [m/s].")] = 3.0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Worker processes.")] = 2,
+    start: Annotated[float, typer.Option(min=0.05, max=3.0, callback=finite, help="First speed tried [m/s].")] = 0.5,
+    step: Annotated[float, typer.Option(min=0.01, max=1.0, callback=finite, help="Climbing step [m/s].")] = 0.25,
+    resolution: Annotated[float, typer.Option(min=0.001, max=0.5, callback=finite,
+                                              help="Bisection resolution [m/s].")] = 0.02,
+    max_speed: Annotated[float, typer.Option(min=0.05, max=3.0, callback=finite, help="Highest speed tried [m/s].")
+                         ] = 3.0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes.")] = 2,
     out: Annotated[Path | None, typer.Option("-o", "--out", help="Also write the frontier as JSON.")] = None,
+    yes: YesOpt = False,
 ) -> None:
     """Find, per stride count, the fastest label that converges and passes the physics checks
     (climb, then bisection): of the start-ups, or of the speed-ups from riding speeds (--from) and
     the stops (--stops)."""
     from skatelib.library.atomic import write_atomic
     from skatelib.pipeline.build.preflight import check_cache_dir, check_output
+    from skatelib.pipeline.build.size import check_size
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, Lane, find_frontier, frontier_json
+    from skatelib.pipeline.quadruped.size import frontier_size, probes
 
     cfg = load_config(config, QuadrupedConfig)
     if out is not None:
@@ -164,6 +182,8 @@ def frontier(
     lanes = [Lane(v) for v in sorted(set(from_speeds or ()))] + ([Lane(stop=True)] if stops else [])
     counts = sorted(set(strides or (cfg.transitions.strides if lanes else cfg.sweep.strides)))
     searches = [(lane, n) for lane in lanes or [Lane()] for n in counts]
+    check_size(cfg.path, frontier_size(cfg, [(not lane.start_up, n) for lane, n in searches],
+                                       probes(start, step, resolution, max_speed)), yes)
     kinds = ", ".join(sorted({lane.label for lane, _ in searches}))
     console.print(f"searching {count(len(searches), 'frontier')} ({kinds}; {', '.join(map(str, counts))} strides; "
                   "each a climb and a bisection of solves on its own worker, about 10-60 s each)")
@@ -181,14 +201,17 @@ def frontier(
 
 def solve(
     velocity: Annotated[float, typer.Option("--velocity", "-V", min=VELOCITY_RANGE[0], max=VELOCITY_RANGE[1],
+                                            callback=finite,
                                             help="Target board speed, m/s (the range of sweep.velocities_mps).")],
-    strides: Annotated[int, typer.Option("--strides", "-s", min=1, max=20, help="Number of push strides.")],
+    strides: Annotated[int, typer.Option("--strides", "-s", min=STRIDE_RANGE[0], max=STRIDE_RANGE[1],
+                                         help="Number of push strides.")],
     out: Annotated[Path | None, typer.Option(
         "-o", "--out", help="One-entry library to write (.h5).",
         show_default="out/<config's meta.name>-v<velocity>_s<strides>.h5")] = None,
     config: ConfigArg = None,
     config_option: Annotated[Path | None, typer.Option("--config", help="The same, as an option.")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Print IPOPT's iteration log.")] = False,
+    yes: YesOpt = False,
 ) -> None:
     """Solve one push-off and write it as a one-entry motion library."""
     from skatelib.pipeline.build.contract import BuildOptions
@@ -201,6 +224,11 @@ def solve(
         raise typer.BadParameter(f"two configs given ({config} and --config {config_option}); give one")
     cfg = load_config(config or config_option, QuadrupedConfig)
     from skatelib.library.schema import entry_key
+    from skatelib.pipeline.build.size import check_size
+    from skatelib.pipeline.quadruped.builder import one_start_up, summary
+    from skatelib.pipeline.quadruped.size import build_size
+
+    check_size(cfg.path, build_size(one_start_up(cfg, velocity, strides)), yes)
 
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
@@ -208,8 +236,6 @@ def solve(
         from skatelib.pipeline.build.preflight import check_cache_dir
 
         check_cache_dir(entries_too=False)
-    from skatelib.pipeline.quadruped.builder import one_start_up, summary
-
     cfg = one_start_up(cfg, velocity, strides)  # that entry alone: no transitions
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
 

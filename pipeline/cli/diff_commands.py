@@ -11,10 +11,12 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 from skatelib.pipeline.cli.library_commands import LibArg
+from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_RTOL, finite
 from skatelib.pipeline.views.console import jsonable
 
-AtolOpt = Annotated[float, typer.Option("--atol", min=0.0, help="Absolute tolerance (in each channel's unit).")]
-RtolOpt = Annotated[float, typer.Option("--rtol", min=0.0, help="Relative tolerance.")]
+AtolOpt = Annotated[float, typer.Option("--atol", min=0.0, max=MAX_ATOL, callback=finite,
+                                        help="Absolute tolerance (in each channel's unit).")]
+RtolOpt = Annotated[float, typer.Option("--rtol", min=0.0, max=MAX_RTOL, callback=finite, help="Relative tolerance.")]
 
 
 def diff(

@@ -11,11 +11,14 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
+from skatelib.library.perturb import BOUNDS, bounds_text
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, perturbation
 from skatelib.pipeline.views.console import (
     console,
     count,
     jsonable,
     left_out,
+    mesh_note,
     track_table,
     twin_table,
     viewer_hint,
@@ -65,7 +68,8 @@ def info(
 PerturbOpt = Annotated[str, typer.Option(
     help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
          "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
-         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned.")]
+         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned. Ranges: "
+         f"{bounds_text(BOUNDS)}.", callback=perturbation)]
 DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 
 
@@ -73,17 +77,20 @@ def validate(
     library: LibArg,
     closed_loop: Annotated[bool, typer.Option(
         "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
-                              "verdict in the library (entry attribute closed_loop_json).")] = False,
+                              "verdict in the library (entry attribute closed_loop_json); the file must be "
+                              "writable and keeps its permissions.")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries tracked in parallel.")] = 2,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Entries tracked in parallel.")] = 2,
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
     plant: Annotated[PlantKind, typer.Option(
         help="With --closed-loop: model (the verdicts in closed_loop_json) or mujoco (the twin under the "
              "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
-    from skatelib.pipeline.validate import validate_library
+    from skatelib.pipeline.validate import closed_loop_jobs, validate_library
 
+    # the rides made (the file writable, --perturb parsed) before any check or ride
+    rides = closed_loop_jobs(library, perturb, plant.value) if closed_loop else []
     verdicts: list[dict[str, Any]] = []
 
     def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
@@ -98,16 +105,7 @@ def validate(
                       if problems
                       else "[green]all entries valid[/]" if usable
                       else "[bold red]no entry of this library was solved: nothing in it can be used[/]")
-    failed = 0
-    results: list[Any] = []
-    if closed_loop:
-        from skatelib.pipeline.validate import closed_loop_verdicts
-
-        results = closed_loop_verdicts(library, perturb, jobs, plant.value)
-        table = twin_table if plant is PlantKind.mujoco else track_table
-        failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
-        if not as_json:
-            console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    results, failed = _closed_loop(library, (perturb, rides), jobs, plant, as_json) if closed_loop else ([], 0)
     if as_json:
         doc = {"library": str(library), "valid": not problems and usable, "usable": usable, "entries": verdicts}
         if closed_loop:
@@ -116,6 +114,23 @@ def validate(
         print(json.dumps(doc, indent=1, default=jsonable))
     if problems or failed or not usable:
         raise typer.Exit(1)
+
+
+def _closed_loop(library: Path, rides: tuple[str, list[Any]], jobs: int, plant: PlantKind,
+                 as_json: bool) -> tuple[list[Any], int]:
+    """``validate --closed-loop``: ``rides`` (the plant's name and the jobs) ridden, the verdicts
+    stored and (unless ``as_json``) shown; returns them and how many failed."""
+    from skatelib.pipeline.validate import closed_loop_verdicts
+
+    perturb, calls = rides
+    if plant is PlantKind.mujoco:
+        mesh_note(library)
+    results = closed_loop_verdicts(library, perturb, calls, jobs, plant.value)
+    table = twin_table if plant is PlantKind.mujoco else track_table
+    failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
+    if not as_json:
+        console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))
+    return results, failed
 
 
 def inspect(
@@ -138,6 +153,7 @@ def inspect(
         save = library.with_suffix(".rrd")
     if save is not None:
         check_output(save, [library], force, what="recording")
+    mesh_note(library)
     roots = inspect_library(library, entry, save, spawn, overlay)
     where = escape(f" to {save}; {viewer_hint(save)}") if save else ""
     console.print(f"logged {count(len(roots), 'entry')}{where}")

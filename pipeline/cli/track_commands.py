@@ -17,10 +17,12 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.views.console import (
     console,
     count,
     err_console,
+    mesh_note,
     run_with_progress,
     steer_table,
     track_table,
@@ -39,9 +41,9 @@ def track(
                       ] = QpSolver.daqp,
     mpc_mu: Annotated[float | None, typer.Option(
         help="Friction coefficient the MPC assumes (its 8-facet pyramid is inside it); default: the library's "
-             "planning value friction_mu_plan.", min=0.05, max=2.0)] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the feedback noise.")] = 0,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, help="Entries run in parallel.")] = 2,
+             "planning value friction_mu_plan.", min=0.05, max=2.0, callback=finite)] = None,
+    seed: Annotated[int, typer.Option(min=0, max=MAX_SEED, help="Seed of the feedback noise.")] = 0,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Entries run in parallel.")] = 2,
     progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
     save: Annotated[Path | None, typer.Option(
         help="Write a Rerun recording (.rrd): each entry's reference beside its closed-loop run (either plant)."
@@ -71,7 +73,7 @@ def track(
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
     mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
-    _refuse_unsolved(library, maneuver is Maneuver.entries and not entry)
+    _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
     if ride is not None:
         alone = maneuver is Maneuver.entries and not entry
         _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), (save, video),
@@ -91,13 +93,16 @@ def track(
     _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), save)
 
 
-def _refuse_unsolved(library: Path, all_entries: bool) -> None:
-    """Exit 1 when every entry is to be tracked and none was solved."""
+def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
+    """Exit 1 when every entry is to be tracked and none was solved; on the twin, the note on the
+    URDF's mesh files (not read) when it names some."""
     from skatelib.runtime import MotionLibrary
 
     if all_entries and not any(e.success for e in MotionLibrary.open(library)):
         err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
         raise typer.Exit(1)
+    if on_twin:
+        mesh_note(library)
 
 
 def _recording(library: Path, save: Path | None) -> Any:

@@ -17,7 +17,14 @@ from skatelib.pipeline.views.console import console
 
 
 def check(cfg: HumanoidConfig, opts: BuildOptions) -> None:
-    """Refuse what a humanoid build has not: the reachable-speed frontier (a quadruped search)."""
+    """Refuse what a humanoid build has not: the reachable-speed frontier (a quadruped search); and
+    a build beyond the size bounds (or ``--yes``): one entry per velocity, each a chain of step NLPs
+    of (nodes + 1) x 9 variables (the COM's position and velocity, its acceleration)."""
+    from skatelib.pipeline.build.size import BuildSize, check_size
+
+    steps = cfg.walk.steps + 2 if cfg.sweep.motion == "walk" else 3  # start, steps, stop; push, slide, stop
+    entries, knots = len(cfg.sweep.velocities_mps), cfg.gpm.nodes + 1
+    check_size(cfg.path, BuildSize(entries, knots, 9, entries * steps * knots * 9), opts.yes)
     if opts.frontier:
         raise SkatelibError(f"{cfg.path} is a humanoid config: --frontier searches the quadruped's "
                             "reachable-speed frontier; drop it")

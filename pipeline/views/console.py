@@ -54,6 +54,20 @@ def left_out(lib: Any) -> None:
                              f"{', '.join(failed)}"))
 
 
+def mesh_note(library: Path) -> None:
+    """Say (on stderr) that a library's URDF names mesh files, which skatelib does not read: once, by
+    the command that draws or builds the robot (inspect, the twin)."""
+    from skatelib.library.urdf import mesh_files
+    from skatelib.runtime import MotionLibrary
+
+    names = mesh_files(MotionLibrary.open(library).urdf)
+    if names:
+        shown = ", ".join(repr(n) for n in names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        text = (f"the library's URDF names mesh files ({shown}); skatelib draws and builds the robot from its "
+                "primitive shapes and reads no mesh file")
+        err_console.print(f"[yellow]note:[/] {escape(text)}")
+
+
 def count(n: int, noun: str) -> str:
     """'1 entry', '18 entries'."""
     plural = noun[:-1] + "ies" if noun.endswith("y") else noun + "s"

@@ -7,14 +7,12 @@ the writer.
 from __future__ import annotations
 
 import io
-import os
 import shutil
 from pathlib import Path
 from typing import Any
 
-from skatelib.library.atomic import NO_ROOM, no_room
+from skatelib.library.atomic import atomic_folder, no_room
 from skatelib.library.errors import SkatelibError
-from skatelib.library.temporaries import temporary_folder
 from skatelib.pipeline.kinds import kind_named
 from skatelib.runtime import Entry, MotionLibrary
 
@@ -84,8 +82,8 @@ def panels(plt: Any, n: int, title: str) -> tuple[Any, list[Any]]:
 def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
                   formats: tuple[str, ...] = FORMATS) -> list[Path]:
     """Write the figures of the library at ``path`` into ``out_dir``, all or none: they are drawn
-    in memory, written into a temporary folder beside them and moved into place only when every
-    one is written.
+    in memory, written into a temporary folder and moved into place only when every one is written
+    (:func:`skatelib.library.atomic.atomic_folder`: a failure leaves no folder it made).
 
     Raises:
         SkatelibError: A frontier file that is not one, or one given for a kind without a frontier;
@@ -104,21 +102,11 @@ def write_figures(path: Path, out_dir: Path, frontier_file: Path | None = None,
             fig.savefig(buffer, format=fmt, dpi=110)
             drawn[f"{stem}.{fmt}"] = buffer.getvalue()
         plt.close(fig)
-    out_dir.mkdir(parents=True, exist_ok=True)
     needed = sum(len(b) for b in drawn.values())
-    free = shutil.disk_usage(out_dir).free
-    if free < needed:
+    nearest = next(p for p in (out_dir, *out_dir.parents) if p.exists())
+    if shutil.disk_usage(nearest).free < needed:
         raise no_room(out_dir, needed)
-    try:
-        with temporary_folder(out_dir, "figures") as staging:
-            for name, data in drawn.items():
-                (staging / name).write_bytes(data)
-            written = []
-            for name in drawn:
-                os.replace(staging / name, out_dir / name)
-                written.append(out_dir / name)
-    except OSError as e:
-        if e.errno in NO_ROOM:
-            raise no_room(out_dir, needed, e) from e
-        raise
-    return written
+    with atomic_folder(out_dir) as staging:
+        for name, data in drawn.items():
+            (staging / name).write_bytes(data)
+    return [out_dir / name for name in drawn]

@@ -9,13 +9,16 @@ import numpy as np
 import pinocchio as pin
 import rerun as rr
 from skatelib.library.channels import LEGS
+from skatelib.library.urdf import without_meshes
 from skatelib.pipeline.views.rerun_parts import time_index
 
 
 class Robot:
-    """Pinocchio model and visual shapes from the URDF stored in the library."""
+    """Pinocchio model and visual shapes from the URDF stored in the library: its primitive shapes
+    only (mesh files named in it are not read, :mod:`skatelib.library.urdf`)."""
 
     def __init__(self, urdf_text: str):
+        urdf_text = without_meshes(urdf_text)
         self.model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
         self.geoms = pin.buildGeomFromUrdfString(self.model, urdf_text, pin.GeometryType.VISUAL)
         self.data = self.model.createData()

@@ -46,6 +46,8 @@ def check_twin_judge(config: QuadrupedConfig) -> None:
         raise ConfigError(config.path, FIELD, f"judging on the twin needs MuJoCo and the controller ({e}): "
                                               "pip install 'skatelib[control,sim]', or set twin_judge = []") from e
     for text in sets:
+        if not any(item.strip() for item in text.split(",")):
+            raise ConfigError(config.path, FIELD, f"{text!r} names no model error: write 'none' for the board as it is")
         try:
             parse_twin_perturbation(_errors(text), config.robot.friction_mu)
         except ValueError as e:

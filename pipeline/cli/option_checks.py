@@ -1,0 +1,54 @@
+"""Checks of option values at the command line's edge that Typer's types do not make: click's
+ranges (``min=``, ``max=``) let NaN through (every comparison with it is false) and take infinity
+where no ``max`` is set; a ``--perturb`` that names nothing ran the plant as planned under the name
+``''``. Each is a Typer callback: a refusal is a usage error (exit 2) naming the option, the value
+and what is allowed."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import typer
+
+MAX_JOBS = 256  # worker processes of one command (--jobs)
+MAX_SEED = 2**32 - 1  # --seed: numpy's seeds are non-negative; this many are plenty
+MAX_ATOL = 1e6  # --atol, in each channel's unit: beyond it every library equals every other
+MAX_RTOL = 1.0  # --rtol: 1 lets a value differ by its own size
+
+
+def finite(param: typer.CallbackParam, value: Any) -> Any:
+    """A float option's (or a repeated one's) value when every number in it is finite.
+
+    Raises:
+        typer.BadParameter: Naming the value and the option's range.
+    """
+    for v in value if isinstance(value, (list, tuple)) else [value]:
+        if isinstance(v, float) and not math.isfinite(v):
+            raise typer.BadParameter(f"{v} is not a finite number; allowed: {allowed(param)}")
+    return value
+
+
+def allowed(param: typer.CallbackParam) -> str:
+    """The range of a numeric option, as its ``min=`` and ``max=`` set it."""
+    kind = getattr(param, "type", None)  # click's IntRange or FloatRange
+    low, high = getattr(kind, "min", None), getattr(kind, "max", None)
+    if low is None and high is None:
+        return "a finite number"
+    if high is None:
+        return f"at least {low:g}"
+    if low is None:
+        return f"at most {high:g}"
+    return f"{low:g} to {high:g}"
+
+
+def perturbation(value: str | None) -> str | None:
+    """A ``--perturb`` value that names at least one model error (or ``none``).
+
+    Raises:
+        typer.BadParameter: An empty value (or commas alone), with the spelling of no error.
+    """
+    if value is not None and not any(s.strip() for s in value.split(",")):
+        raise typer.BadParameter(f"{value!r} names no model error: give KEY=VALUE,... or 'none' for the plant "
+                                 "as planned")
+    return value
