@@ -122,12 +122,12 @@ def state_derivative(system: SkateSystem, mode: Mode, x: Any, u: Any, cr: Any) -
     # Eq. (5a) / (9a): T_vB and S_xy R_B map x^B to the world; the wheels roll along the heading and
     # do not slide, so as the board yaws its velocity turns with it: the centripetal term
     # v_fwd * yaw_rate across the heading, which the paper's Eq. (9a) leaves out.
-    yaw_rate = (euler_rate_map(rpy) @ omega)[2]
-    left = ca.vertcat(-ca.sin(yaw), ca.cos(yaw))
-    v_board_dot = heading * a_fwd + left * (v_fwd * yaw_rate)
+    rpy_rate = euler_rate_map(rpy) @ omega
+    left = ca.vertcat(-heading[1], heading[0])
+    v_board_dot = heading * a_fwd + left * (v_fwd * rpy_rate[2])
     return ca.vertcat(
         vel,
-        euler_rate_map(rpy) @ omega,
+        rpy_rate,
         acc,
         omega_dot,
         u[U_QD],
