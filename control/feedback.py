@@ -10,7 +10,7 @@ from typing import Protocol
 
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q
-from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.library.rotations import board_rotations, roll_of, rpy_matrices, yaw_of
 from skatelib.runtime import Entry
 
 # A foot's touch code in ``MultibodyState.foot_touch`` (0: touching nothing).
@@ -94,12 +94,12 @@ class RobotState:
 
     @property
     def deck_yaw(self) -> float:
-        return float(np.arctan2(self.deck_R[1, 0], self.deck_R[0, 0]))
+        return yaw_of(self.deck_R)
 
     @property
     def deck_roll(self) -> float:
         """Roll about the deck's own x axis (Z-Y-X angles)."""
-        return float(np.arctan2(self.deck_R[2, 1], self.deck_R[2, 2]))
+        return roll_of(self.deck_R)
 
 
 def planned_state(entry: Entry, k: int, com_offset_m: np.ndarray) -> RobotState:

@@ -44,3 +44,13 @@ def euler_rate_map(rpy: np.ndarray) -> np.ndarray:
 def skew(v: np.ndarray) -> np.ndarray:
     """[v]x, with skew(a) @ b = a x b."""
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def yaw_of(R: np.ndarray) -> float:
+    """The heading of a rotation R = Rz(yaw) Rx(roll) (a deck's) [rad]."""
+    return float(np.arctan2(R[1, 0], R[0, 0]))
+
+
+def roll_of(R: np.ndarray) -> float:
+    """The roll about the rotated x axis of R = Rz(yaw) Ry(pitch) Rx(roll) [rad] (Z-Y-X angles)."""
+    return float(np.arctan2(R[2, 1], R[2, 2]))

@@ -58,8 +58,7 @@ class MotionLibrary:
         Raises:
             LibraryFormatError: Not a quadruped library, or one without a required figure.
         """
-        if self.kind != "quadruped":
-            raise LibraryFormatError(self.path, f"/@{schema.A_KIND}", f"a {self.kind} library has no quadruped model")
+        self._expect_kind("quadruped")
         try:
             return read_quadruped_model(self.model, self.model_arrays)
         except KeyError as e:
@@ -72,12 +71,15 @@ class MotionLibrary:
         Raises:
             LibraryFormatError: Not a humanoid library, or one without a required figure.
         """
-        if self.kind != "humanoid":
-            raise LibraryFormatError(self.path, f"/@{schema.A_KIND}", f"a {self.kind} library has no humanoid model")
+        self._expect_kind("humanoid")
         try:
             return read_humanoid_model(self.model)
         except KeyError as e:
             raise self._missing(e) from e
+
+    def _expect_kind(self, kind: str) -> None:
+        if self.kind != kind:
+            raise LibraryFormatError(self.path, f"/@{schema.A_KIND}", f"a {self.kind} library has no {kind} model")
 
     def _missing(self, e: KeyError) -> LibraryFormatError:
         return LibraryFormatError(self.path, f"/{schema.G_MODEL}/{e.args[0]}",

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from skatelib.library.rotations import roll_of, yaw_of
 from skatelib.sim.errors import TwinErrors
 from skatelib.sim.figures import TwinFigures
 from skatelib.sim.robot import JOINTS, LEGS
@@ -67,12 +68,12 @@ class TwinState:
 
     @property
     def deck_yaw(self) -> float:
-        return float(np.arctan2(self.deck_R[1, 0], self.deck_R[0, 0]))
+        return yaw_of(self.deck_R)
 
     @property
     def deck_roll(self) -> float:
         """Roll about the deck's own x axis (Z-Y-X angles)."""
-        return float(np.arctan2(self.deck_R[2, 1], self.deck_R[2, 2]))
+        return roll_of(self.deck_R)
 
 
 def twin_spec(f: TwinFigures, errors: TwinErrors) -> Any:
