@@ -23,9 +23,11 @@ from skatelib.control.mpc import MpcConfig
 from skatelib.control.multibody import DynamicsTerms, RobotDynamics
 from skatelib.control.params import SkateParams
 from skatelib.control.reference import Reference
+from skatelib.control.steering import LineKeeper, SteeredPlan
 from skatelib.control.update import MpcUpdate
 from skatelib.control.wbc import WbcOutput, WbcSettings, WholeBodyController
 from skatelib.control.wbc_tasks import ContactTable, TaskMaker
+from skatelib.library.margins import forward_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.runtime import MotionLibrary
 
@@ -68,17 +70,21 @@ class SkateController:
         mpc: The MPC's settings.
         wbc: The whole-body QP's settings.
         rates: The ticks' and updates' periods.
+        keeper: Steers the board onto the plan's line through the deck's roll
+            (:class:`skatelib.control.steering.LineKeeper`); None: the plan's roll as it is.
     """
 
     def __init__(self, lib: MotionLibrary, ref: Reference, plan: Plan, model: SkateParams,  # noqa: PLR0913
-                 mpc: MpcConfig, wbc: WbcSettings, rates: Rates):
+                 mpc: MpcConfig, wbc: WbcSettings, rates: Rates, keeper: LineKeeper | None = None):
         self.ref, self.p, self.mpc, self.rates = ref, model, mpc, rates
+        self.keeper = keeper
         self.kin = LegKinematics.from_library(lib)
         self.dyn = RobotDynamics.from_library(lib)
         self.contacts = ContactTable(ref.contact, ref.t0, ref.t_stop, rates.tick_s)
-        self.tasks = TaskMaker(plan, self.contacts, model, wbc)
+        self.tasks = TaskMaker(plan if keeper is None else SteeredPlan(plan, keeper), self.contacts, model, wbc)
         self.wbc = WholeBodyController(self.dyn.v_index, self.kin.torque_limit_Nm, model.mu_plan, wbc)
         self.mpc_update = MpcUpdate(ref, model, mpc, rates.update_s)
+        self.mpc_update.keeper = keeper
         self.forces = np.zeros((3, 4))  # the MPC's, held over an update
         self._applied = np.zeros((3, 4))  # the whole-body QP's forces summed over this update's ticks
         self._ticks = 0
@@ -103,6 +109,8 @@ class SkateController:
         # whole-body QP applied, not the MPC's request: the board weighs 2 kg, and a newton of
         # difference would read as a disturbance of 0.5 m/s^2.
         applied = self.applied_forces()
+        if self.keeper is not None:
+            self.keeper.update(t, st.deck_pos[0:2], st.deck_yaw, float(forward_speed(x)), self.rates.update_s)
         self._applied, self._ticks = np.zeros((3, 4)), 0
         step = self.mpc_update(t, fb, st.deck_pos[0:2], None if applied is None else applied.T.reshape(-1))
         self.solve_s = step.solve_s

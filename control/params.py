@@ -40,6 +40,7 @@ class SkateParams:
         pivot_rad: The trucks' pivot axis angle from the ground (the roll torque's kinematics).
         wheel_track_m: Between the wheels' contact points; 0: no wheel-load rows.
         wheel_load_margin: The deck loads' roll moment at most (1 - margin) of what the track holds.
+        k_board_m: K_board of Eq. (14), the turning radius times the sine of the roll; 0: unknown.
     """
 
     mass_kg: float
@@ -65,6 +66,7 @@ class SkateParams:
     pivot_rad: float = math.pi / 2
     wheel_track_m: float = 0.0
     wheel_load_margin: float = 0.0
+    k_board_m: float = 0.0
 
     @property
     def upright_roll_stiffness(self) -> float:
@@ -121,5 +123,5 @@ class SkateParams:
             joint_velocity_limit_radps=m.joint_velocity_limit_radps, push_leg=m.push_leg_index, mu_plan=m.mu_plan,
             torque_limit_Nm=m.torque_limit_Nm, roll_axis_depth_m=b.planned_roll_axis_depth_m(),
             deck_mass_kg=b.planned_deck_mass_kg(), pivot_rad=b.planned_pivot_rad(),
-            wheel_track_m=b.planned_wheel_track_m(), wheel_load_margin=b.wheel_load_margin,
+            wheel_track_m=b.planned_wheel_track_m(), wheel_load_margin=b.wheel_load_margin, k_board_m=b.K_board_m,
         )

@@ -21,6 +21,7 @@ from skatelib.control.mpc_solvers import make_solver
 from skatelib.control.observers import CoastObserver, DisturbanceObserver
 from skatelib.control.params import SkateParams
 from skatelib.control.reference import Reference
+from skatelib.control.steering import LineKeeper
 from skatelib.library.margins import forward_speed, momentum_speed
 
 
@@ -49,6 +50,7 @@ class MpcUpdate:
         self.observer = DisturbanceObserver(cfg.disturbance_gain)
         self.coast = CoastObserver(cfg.coast_gain)
         self.qp: MpcProblem | None = None  # the last update's
+        self.keeper: LineKeeper | None = None  # steers the board onto the plan's line (the controller updates it)
 
     def __call__(self, t: float, fb: Feedback, board_xy: np.ndarray, applied: np.ndarray | None) -> MpcStep:
         """The update at ``t`` on the feedback ``fb`` (the board's origin at ``board_xy``), after the
@@ -67,6 +69,8 @@ class MpcUpdate:
                                      self.dt)
         coast = ref.prior_coast_mps2(t) if measured is None else measured
         horizon = ref.horizon(t, cfg.horizon, self.dt, board_xy, v_ride, coast if cfg.coast_compensation else None)
+        if self.keeper is not None:
+            horizon = self.keeper.steer(horizon)
         t0 = time.perf_counter()
         qp = build_problem(self.p, cfg, self.disc, fb, horizon, Bias(bias, self.observer.vertical_mps2))
         U = self.solver.solve(qp)

@@ -105,10 +105,15 @@ class _NoForce:
     external_N = None
 
 
-def test_the_twins_verdict_reports_the_drift_and_the_crab_angle():
-    """The board's lateral drift and crab angle are reported (not failures: docs/closed-loop.md)."""
-    m = TwinMeasures(momentum_at_end_mps=0.5, momentum_after_1s_mps=0.49, friction_loss_Ns=0.1,
-                     system_mass_kg=10.7, heading_at_end_rad=0.01, lateral_at_end_m=-0.03, max_crab_rad=0.004)
-    res = twin_result("v0.50_s2", 0.5, TwinRun(m))
-    assert res.passed, res.reasons
-    assert res.max_crab_rad == 0.004 and res.lateral_drift_m == -0.03
+def test_the_twins_verdict_fails_a_board_off_the_plans_line_and_reports_the_crab_angle():
+    """A board more than 2 cm to the side of the plan's at the end fails; within, it passes; the
+    crab angle is reported."""
+    def result(lateral_m: float):
+        m = TwinMeasures(momentum_at_end_mps=0.5, momentum_after_1s_mps=0.49, friction_loss_Ns=0.1,
+                         system_mass_kg=10.7, heading_at_end_rad=0.01, lateral_at_end_m=lateral_m, max_crab_rad=0.004)
+        return twin_result("v0.50_s2", 0.5, TwinRun(m))
+
+    assert result(-0.019).passed and result(0.019).passed
+    far = result(-0.03)
+    assert not far.passed and "to the side" in far.reasons
+    assert far.max_crab_rad == 0.004 and far.lateral_drift_m == -0.03

@@ -24,6 +24,7 @@ from skatelib.control.feedback import quat_wxyz
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.qp import QpSolveFailed
 from skatelib.control.reference import EntryReference, Reference
+from skatelib.control.steering import BoardPath, LineKeeper, SteeringGains
 from skatelib.control.wbc import WbcSettings
 from skatelib.control.wbc_tasks import ContactTable
 from skatelib.library.channels import BOARD
@@ -47,6 +48,7 @@ class TwinLoopSettings:
     ticks_per_update: int = 17  # whole-body ticks per MPC update
     sensors: Sensors = field(default_factory=Sensors)
     wbc: WbcSettings = field(default_factory=WbcSettings)
+    steering: SteeringGains | None = field(default_factory=SteeringGains)  # None: no line keeper
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,7 @@ class Ride:
     board0: np.ndarray
     board_end: np.ndarray
     speed_mps: float = 0.0
+    path: BoardPath | None = None  # the plan's board, for the line keeper (None: no steering feedback)
 
 
 def entry_ride(lib: MotionLibrary, key: str | Entry, loop: ClosedLoop, foot_radius_m: float) -> Ride:
@@ -72,7 +75,7 @@ def entry_ride(lib: MotionLibrary, key: str | Entry, loop: ClosedLoop, foot_radi
     ref = EntryReference(lib, entry, loop.model, loop.settings)
     board = np.asarray(entry.board_pos, dtype=np.float64)
     return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64), board[0], board[-1],
-                speed_mps=entry.from_velocity_mps)
+                speed_mps=entry.from_velocity_mps, path=BoardPath.from_board_pos(np.asarray(entry.t), board))
 
 
 @dataclass
@@ -106,7 +109,8 @@ class TwinLoop:
         self.ref = ride.ref
         self.tick_s = plant.timestep_s * self.cfg.steps_per_tick
         rates = Rates(self.tick_s, self.cfg.ticks_per_update)
-        self.ctrl = SkateController(lib, ride.ref, ride.plan, p, loop.mpc, self.cfg.wbc, rates)
+        keeper = None if ride.path is None or self.cfg.steering is None else LineKeeper(ride.path, p, self.cfg.steering)
+        self.ctrl = SkateController(lib, ride.ref, ride.plan, p, loop.mpc, self.cfg.wbc, rates, keeper)
         self.dt = rates.update_s
         self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
         self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, self.ref.stage_ends, plant.axle_below_deck_m)

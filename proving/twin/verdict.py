@@ -10,13 +10,12 @@
 * a floor contact the plan has no place for (a foot on the floor away from a planned stance
   there, or any other geom);
 * a wheel off the floor for 5 ticks (10 ms) or more;
-* the board's heading at the entry's end more than 0.1 rad from the plan's.
+* the board's heading at the entry's end more than 0.1 rad from the plan's;
+* the board more than 2 cm to the side of the plan's at the entry's end (the line keeper,
+  :mod:`skatelib.control.steering`, steers it back through the deck's roll).
 
-Reported besides: the board's lateral drift from the plan's at the entry's end (not a failure:
-under the default model errors the controller lets the board drift up to 6 cm to the side on the
-fastest, longest entries; docs/closed-loop.md), the largest crab angle (the velocity at the
-axles from the heading), the heading when the run stops, torque saturation, the largest deck
-roll, the controllers' times.
+Reported besides: the largest crab angle (the velocity at the axles from the heading), the
+heading when the run stops, torque saturation, the largest deck roll, the controllers' times.
 """
 
 from __future__ import annotations
@@ -29,6 +28,7 @@ from skatelib.proving.verdict import speed_verdict
 
 SLIP_LIMIT_M = 0.01
 HEADING_LIMIT_RAD = 0.1
+LATERAL_LIMIT_M = 0.02
 
 
 
@@ -83,6 +83,8 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
         reasons.append(f"a wheel left the floor for up to {m.max_wheel_lift_ms:.0f} ms")
     if not abs(m.heading_at_end_rad) <= HEADING_LIMIT_RAD:
         reasons.append(f"heading {m.heading_at_end_rad:+.3f} rad from the plan's at the entry's end")
+    if not abs(m.lateral_at_end_m) <= LATERAL_LIMIT_M:
+        reasons.append(f"board {100 * m.lateral_at_end_m:+.1f} cm to the side of the plan's at the entry's end")
     return TwinResult(
         key=key, label_mps=label, momentum_at_end_mps=m.momentum_at_end_mps, delivered_mps=delivered,
         speed_error=err, max_slip_m=slip, touchdowns=len(m.slips_m), floor_touch_ticks=m.floor_touch_ticks,
