@@ -49,12 +49,14 @@ class BoardGeometry:
 
 @dataclass(frozen=True)
 class EstimatorSettings:
-    """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m]."""
+    """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
+    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s]."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
     deck: DeckSettings = field(default_factory=DeckSettings)
     touch_m: float = 0.005
+    settle_s: float = 0.02
 
 
 @dataclass
@@ -117,17 +119,19 @@ class StateEstimator:
         self.deck = DeckEstimate(yaw=start.deck_yaw, roll=start.deck_roll, pos=top, footholds=footholds)
         self.odometry = LegOdometry(p0, start.trunk_v, float(heading @ start.deck_v), self.s.odometry)
         self.stance = on_deck.copy()
+        self.down_since = np.where(on_deck, -np.inf, np.inf)  # when each foot touched down
         self.last_t: float | None = None
+        self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
-        """The gyroscope's bias from readings taken standing still."""
-        self.attitude.calibrate([r.gyro for r in still])
+        """The gyroscope's bias and the trunk's tilt from readings taken standing still."""
+        self.attitude.calibrate([r.gyro for r in still], [r.accel for r in still])
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
         dt = 0.0 if self.last_t is None else reading.t - self.last_t
-        self.last_t = reading.t
+        self.last_t = self.now = reading.t
         R, omega = self.attitude.update(reading.gyro, reading.accel, dt)
         imu_accel = self.attitude.mount @ reading.accel
         odo = self.odometry
@@ -160,7 +164,7 @@ class StateEstimator:
         axis = deck.pos - b.axis_depth_m * deck.R[:, 2]
         out = []
         for i in range(4):
-            if plan[i] not in (BOARD, GROUND):
+            if plan[i] not in (BOARD, GROUND) or not self.now - self.down_since[i] >= self.s.settle_s:
                 continue
             offset_z = float((R @ r[:, i])[2])
             if plan[i] == BOARD:
@@ -189,7 +193,9 @@ class StateEstimator:
             hold = deck.R.T @ (centres[:, newly] - deck.pos[:, None])
             hold[2] = self.rho
             deck.footholds[:, newly] = hold
-        self.stance = touching & (plan != 0)
+        stance = touching & (plan != 0)
+        self.down_since = np.where(stance & ~self.stance, self.now, np.where(stance, self.down_since, np.inf))
+        self.stance = stance
         normals = np.where(deck_side[None, :], deck_n[:, None], UP[:, None])
         deck_v = odo.u * deck.R[:, 0] + np.cross(deck.omega, b.axis_depth_m * deck_n)
         return RobotState(trunk_pos=odo.p.copy(), trunk_R=R.copy(), trunk_v=odo.v.copy(), trunk_omega=omega.copy(),

@@ -19,7 +19,8 @@ of a rolling sphere moves with the surface under it):
 (a_B on the deck's roll axis, which rides along h: a board's wheels neither slip sideways nor
 leave the floor), and the centre's height: rho on the ground, on the deck the axis' height plus
 the foothold's height about it, R_B (f_i + d e_z) . e_z. A foot whose velocity disagrees with its
-surface's by more than ``gate_mps`` (it has not landed yet, or it slips) is left out of the tick.
+surface's beyond the innovation's spread (``gate``: it has not landed yet, or it slips) is left out
+of the tick.
 The classical filter (``moving_deck=False``: every stance foot stays put) is the negative control.
 """
 
@@ -37,6 +38,7 @@ class OdometrySettings:
     """Noise densities and gates of the filter.
 
     Attributes:
+        position_walk: The position's random walk [m/sqrt(s)] (what the heights correct).
         accel_noise: The specific force's white noise as the filter sees it (sensor noise and the
             trunk's vibrations) [m/s^2/sqrt(Hz)].
         board_accel: The board speed's random walk [m/s^2/sqrt(Hz)] (pushes, braking).
@@ -44,16 +46,18 @@ class OdometrySettings:
         foot_velocity: A stance foot's kinematic velocity's noise [m/s] (joint velocities, the
             foot's rolling).
         foot_height: Its height's noise [m].
-        gate_mps: A stance foot further than this from its surface's velocity is left out [m/s].
+        gate: A stance foot whose velocity innovation has a squared Mahalanobis distance beyond
+            this is left out (16: 0.1 % of consistent 3-vectors).
         moving_deck: A foot on the deck moves with it (False: every stance foot stays put).
     """
 
-    accel_noise: float = 0.2
+    position_walk: float = 0.003
+    accel_noise: float = 0.03
     board_accel: float = 1.0
     bias_walk: float = 1e-3
-    foot_velocity: float = 0.03
+    foot_velocity: float = 0.05
     foot_height: float = 0.003
-    gate_mps: float = 0.3
+    gate: float = 16.0
     moving_deck: bool = True
 
 
@@ -104,7 +108,8 @@ class LegOdometry:
         F[0:3, 3:6] = dt * np.eye(3)
         F[0:3, 7:10] = -0.5 * dt * dt * R
         F[3:6, 7:10] = -dt * R
-        q = np.r_[[1e-10] * 3, [s.accel_noise**2 * dt] * 3, s.board_accel**2 * dt, [s.bias_walk**2 * dt] * 3]
+        q = np.r_[[s.position_walk**2 * dt] * 3, [s.accel_noise**2 * dt] * 3, s.board_accel**2 * dt,
+                  [s.bias_walk**2 * dt] * 3]
         self.P = F @ self.P @ F.T + np.diag(q)
 
     def correct(self, feet: list[FootMeasure]) -> np.ndarray:
@@ -118,7 +123,9 @@ class LegOdometry:
             target = f.surface_v - f.relative_v
             if f.on_deck and s.moving_deck:
                 H[:, 6] = -f.heading
-            if np.max(np.abs(target - H @ x)) > s.gate_mps:
+            nu = target - H @ x
+            S = H @ self.P @ H.T + s.foot_velocity**2 * np.eye(3)
+            if float(nu @ np.linalg.solve(S, nu)) > s.gate:
                 continue
             used[k] = True
             rows.append(H)
