@@ -9,7 +9,8 @@ R_B = Rz(psi) Rx(phi) (its wheels keep it from pitching), so n = Rz(psi) (0, -si
     phi = atan2(-n . (Rz(psi) e_y), n_z)
 
 The heading psi and the deck's position from where the feet stand on it (their footholds f_i in
-the deck frame, taken at touchdown): psi by the 2-D Procrustes fit of f_i's x, y to c_i's, the
+the deck frame, taken at touchdown): psi by the 2-D Procrustes fit of Rx(phi) f_i's x, y to c_i's
+(roll and heading refined in turn, twice), the
 top centre p_B = mean(c_i) - R_B mean(f_i). With fewer than three deck feet the roll is carried
 on by the roll rate (and with fewer than two the heading by the yaw rate).
 
@@ -97,12 +98,14 @@ def update_deck(deck: DeckEstimate, on_deck: np.ndarray, centres: np.ndarray, ve
     rates = np.array([deck.yaw_rate, deck.roll_rate])
     if len(idx) >= 2:
         rates = deck_rates(c, velocities[:, idx], deck.R[:, 0], rates, settings.prior)
-    yaw = heading_fit(f, c) if len(idx) >= 2 else deck.yaw + rates[0] * dt
     roll = deck.roll + rates[1] * dt
+    yaw = heading_fit(board_rotations(0.0, roll) @ f, c) if len(idx) >= 2 else deck.yaw + rates[0] * dt
     if len(idx) >= 3:
         n = plane_normal(c)
-        y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-        roll = math.atan2(-float(n @ y_axis), float(n[2]))
+        for _ in range(2):  # the roll from the normal at the heading, the heading of the rolled footholds
+            y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+            roll = math.atan2(-float(n @ y_axis), float(n[2]))
+            yaw = heading_fit(board_rotations(0.0, roll) @ f, c)
     out = DeckEstimate(yaw=yaw, roll=roll, pos=deck.pos, footholds=deck.footholds, yaw_rate=float(rates[0]),
                        roll_rate=float(rates[1]))
     if len(idx):

@@ -31,11 +31,20 @@ UP = np.array([0.0, 0.0, 1.0])
 class Reading(Protocol):
     """One tick's sensor readings (IMU frame; joints in channel order)."""
 
-    t: float
-    gyro: np.ndarray
-    accel: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
+    @property
+    def t(self) -> float: ...
+
+    @property
+    def gyro(self) -> np.ndarray: ...
+
+    @property
+    def accel(self) -> np.ndarray: ...
+
+    @property
+    def q(self) -> np.ndarray: ...
+
+    @property
+    def qd(self) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
