@@ -3,6 +3,7 @@ plant or, with ``--plant mujoco``, on the physical twin under the whole-body con
 
 from __future__ import annotations
 
+import enum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -29,6 +30,14 @@ from skatelib.pipeline.views.console import (
     twin_table,
     viewer_hint,
 )
+
+STATE_HELP = ("With --plant mujoco: what the controller is fed: true (the twin's state) or estimate (the robot's "
+              "estimator on the twin's IMU and joint encoders; the verdict adds its error).")
+
+
+class StateKind(enum.StrEnum):
+    true = "true"
+    estimate = "estimate"
 
 
 def track(
@@ -60,6 +69,7 @@ def track(
     ride: Annotated[str | None, typer.Option(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
+    state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.true,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
@@ -72,25 +82,24 @@ def track(
     except ImportError as e:
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     plant_error = "" if perturb == "none" else perturb
-    mpc = MpcConfig(solver=solver.value, mu=mpc_mu)
+    mpc, settings = MpcConfig(solver=solver.value, mu=mpc_mu), TrackSettings(seed=seed, state=state.value)
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
     if ride is not None:
         alone = maneuver is Maneuver.entries and not entry
-        _track_ride(library, ride, (plant_error, perturb), (mpc, TrackSettings(seed=seed)), (save, video),
+        _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
                     (alone, plant is PlantKind.mujoco))
         return
     if plant is PlantKind.mujoco:
-        _track_twin(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), maneuver,
-                    (save, video))
+        _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver, (save, video))
         return
     if video is not None:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     if maneuver is Maneuver.steer:
-        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, TrackSettings(seed=seed))
+        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings)
         if steer_table(run_calls(steer, jobs), perturb):
             raise typer.Exit(1)
         return
-    _track_model(library, entry, plant_error, perturb, mpc, TrackSettings(seed=seed), (jobs, progress), save)
+    _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), save)
 
 
 def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:

@@ -14,6 +14,7 @@ the horizon, one QP; then the tasks on the measured board, one whole-body QP), t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,10 +31,12 @@ from skatelib.control.wbc_tasks import ContactTable
 from skatelib.library.channels import BOARD
 from skatelib.library.rotations import rpy_matrices
 from skatelib.proving.setup import ClosedLoop
+from skatelib.proving.twin.estimate import EstimatedFeedback, EstimatorErrors, start_state
 from skatelib.proving.twin.metrics import Meter, TwinMeasures, planned_floor_near
 from skatelib.proving.twin.record import TwinRecord
 from skatelib.proving.twin.sensors import MultibodyPlant, SensedState, Sensors
 from skatelib.runtime import Entry, MotionLibrary
+from skatelib.sim.sensors import SensorErrors
 
 PRELOAD_M = 2e-4  # the deck feet start this far into the deck (a foot above it would start in the air)
 FALL_HEIGHT_M = 0.10  # trunk this close above the deck's top: fallen
@@ -49,6 +52,8 @@ class TwinLoopSettings:
     sensors: Sensors = field(default_factory=Sensors)
     wbc: WbcSettings = field(default_factory=WbcSettings)
     steering: SteeringGains | None = field(default_factory=SteeringGains)  # None: no line keeper
+    state: str = "true"  # the controller's feedback: "estimate" (the robot's sensors and estimator) or "true"
+    sensor_errors: SensorErrors = field(default_factory=SensorErrors)
 
 
 @dataclass(frozen=True)
@@ -92,6 +97,7 @@ class TwinRun:
     # Per tick: t, deck roll, the trunk's offset from the deck's centre line, feet touching, the
     # smallest foot normal force.
     ticks: list[tuple[float, float, float, int, float]] = field(default_factory=list)
+    estimator: EstimatorErrors | None = None  # the estimator's errors against the truth (fed the estimate)
 
 
 class TwinLoop:
@@ -117,6 +123,16 @@ class TwinLoop:
         self.run = TwinRun(self.meter.m)
         self.board_end = ride.board_end
         self._start(ride)
+        self.feedback: Callable[[Any], Any] = self.sensed
+        if self.cfg.state == "estimate":
+            on_deck = self.ref.contact(self.ref.t0) == BOARD
+            start = start_state(ride.x0, ride.board0, ride.speed_mps, on_deck, p.com_offset_m)
+            estimated = EstimatedFeedback(plant, lib, p, self.contacts.at, start, self.tick_s, self.cfg.sensor_errors,
+                                          loop.settings.seed)
+            self.run.estimator = estimated.errors
+            self.feedback = estimated
+        elif self.cfg.state != "true":
+            raise ValueError(f"state {self.cfg.state!r}: give 'estimate' or 'true'")
 
     @property
     def contacts(self) -> ContactTable:
@@ -155,7 +171,7 @@ class TwinLoop:
     def tick(self, update: bool = False) -> None:
         """One whole-body tick of the controller on the sensed plant (after the MPC's update on its
         first), its plant steps and the measures."""
-        st = self.sensed(self._true)
+        st = self.feedback(self._true)
         applied = self.ctrl.applied_forces() if update and self.keep else None
         tick = self.ctrl.tick(self.t, st, update)
         if tick.x is not None:

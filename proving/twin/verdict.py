@@ -15,7 +15,9 @@
   :mod:`skatelib.control.steering`, steers it back through the deck's roll).
 
 Reported besides: the largest crab angle (the velocity at the axles from the heading), the
-heading when the run stops, torque saturation, the largest deck roll, the controllers' times.
+heading when the run stops, torque saturation, the largest deck roll, the controllers' times, and
+with the estimator in the loop its error against the twin's truth (trunk velocity, board speed,
+board roll: RMS and worst; not a failure).
 """
 
 from __future__ import annotations
@@ -58,6 +60,13 @@ class TwinResult:
     fall: str
     passed: bool
     reasons: str
+    # The estimator's error against the twin's truth (NaN when the controller was fed the truth).
+    est_trunk_v_rms: float = float("nan")
+    est_trunk_v_worst: float = float("nan")
+    est_board_speed_rms: float = float("nan")
+    est_board_speed_worst: float = float("nan")
+    est_board_roll_rms: float = float("nan")
+    est_board_roll_worst: float = float("nan")
 
     def as_dict(self) -> dict[str, float | str | bool | int]:
         return asdict(self)
@@ -93,4 +102,5 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
         heading_at_stop_rad=m.heading_at_stop_rad, max_crab_rad=m.max_crab_rad, max_deck_roll_rad=m.max_deck_roll_rad,
         max_torque_Nm=m.max_torque_Nm, saturated_share=m.saturated_ticks / max(m.ticks, 1),
         wbc_median_ms=_ms(run.wbc_times_s), mpc_median_ms=_ms(run.mpc_times_s), fall=run.fall,
-        passed=not reasons, reasons="; ".join(reasons))
+        passed=not reasons, reasons="; ".join(reasons),
+        **({f"est_{k}": v for k, v in run.estimator.summary().items()} if run.estimator else {}))

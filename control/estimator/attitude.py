@@ -1,0 +1,78 @@
+"""The trunk's attitude from the IMU: the gyroscope integrated on SO(3), its bias from the robot
+standing still before it rides, the tilt held to the accelerometer's gravity by a slow
+nonlinear complementary filter (Mahony et al. 2008, "Nonlinear complementary filters on the
+special orthogonal group", Eq. 13 without the bias integrator):
+
+    R_{k+1} = R_k Exp((omega_m - b_g + k_P e) dt),   e = (a_m / |a_m|) x (R_k^T e_z)
+
+The accelerometer reads gravity plus the trunk's acceleration: a board coasting down at 0.2 m/s^2
+tilts its gravity 0.02 rad, so the gain is low (a time constant of ``1 / k_P`` = 50 s) and
+readings more than 10 % from g (a push, a touchdown) are left out. The gyroscope carries the
+attitude between; after the standstill calibration its bias is the calibration's residual.
+
+The calibration (the robot standing still before it rides) also levels the filter: its roll and
+pitch are those that put the mean accelerometer reading on gravity (its heading is kept). The
+accelerometer's bias then tilts the attitude by b / g, and the two cancel in the horizontal
+acceleration the position filter integrates, as long as the trunk's attitude stays near the
+calibration's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def exp_so3(w: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula: the rotation of rotation vector ``w``."""
+    a = math.sqrt(float(w @ w))
+    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    if a < 1e-9:
+        return np.eye(3) + K
+    return np.eye(3) + (math.sin(a) / a) * K + ((1.0 - math.cos(a)) / (a * a)) * (K @ K)
+
+
+@dataclass(frozen=True)
+class AttitudeSettings:
+    """Gain [1/s] and acceleration gate of the tilt correction; gravity [m/s^2]."""
+
+    k_tilt: float = 0.02
+    gate: float = 0.1
+    gravity_mps2: float = 9.81
+
+
+class AttitudeFilter:
+    """The trunk's rotation (trunk to world) and angular velocity (trunk frame)."""
+
+    def __init__(self, R0: np.ndarray, settings: AttitudeSettings | None = None, mount: np.ndarray | None = None):
+        self.R = np.array(R0, dtype=float)
+        self.s = settings or AttitudeSettings()
+        self.gyro_bias = np.zeros(3)
+        self.mount = np.eye(3) if mount is None else mount  # the IMU's axes in the trunk frame
+        self.omega = np.zeros(3)
+
+    def calibrate(self, gyro: Sequence[np.ndarray], accel: Sequence[np.ndarray]) -> None:
+        """The gyroscope's bias and the tilt from readings taken standing still (module docstring)."""
+        self.gyro_bias = np.mean(np.asarray(gyro), axis=0)
+        up = self.mount @ np.mean(np.asarray(accel), axis=0)
+        up /= np.linalg.norm(up)
+        # The smallest rotation that turns the filter's up (R^T e_z) onto the measured one.
+        w = np.cross(self.R[2], up)
+        angle = math.atan2(float(np.linalg.norm(w)), float(self.R[2] @ up))
+        if angle > 1e-12:
+            self.R = self.R @ exp_so3(-w / np.linalg.norm(w) * angle)
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """One reading (IMU frame) over ``dt`` [s]: the rotation and the angular velocity."""
+        omega = self.mount @ (gyro - self.gyro_bias)
+        a = self.mount @ accel
+        norm = math.sqrt(float(a @ a))
+        w = omega
+        if abs(norm - self.s.gravity_mps2) < self.s.gate * self.s.gravity_mps2:
+            w = omega + self.s.k_tilt * np.cross(a / norm, self.R[2])  # R^T e_z is R's third row
+        self.R = self.R @ exp_so3(w * dt)
+        self.omega = omega
+        return self.R, omega

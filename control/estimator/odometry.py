@@ -1,0 +1,145 @@
+"""The trunk's position and velocity, the board's speed and the accelerometer's bias: a linear
+Kalman filter in the world frame on the attitude of :mod:`.attitude` (the Cheetah-style filter of
+Bledt et al. 2018, "MIT Cheetah 3", Sec. IV, with Bloesch et al. 2013's leg-kinematics
+measurement, "State estimation for legged robots: consistent fusion of leg kinematics and IMU"),
+its stance-foot model changed for a rolling deck.
+
+State s = (p, v, u, b_a): the trunk's position and velocity, the board's speed u along its
+heading h, the accelerometer's bias. Prediction over dt with the IMU's specific force a_m:
+
+    a = R (a_m - b_a) - g e_z,   p += v dt + a dt^2 / 2,   v += a dt,   u, b_a: random walks.
+
+Measurements, per stance foot i (r_i, J_i its centre and linear Jacobian in the trunk frame,
+omega_f its angular velocity, n the normal of its surface, rho the foot's radius; the contact point
+of a rolling sphere moves with the surface under it):
+
+    v + R (omega x r_i + J_i qd) - omega_f x (rho n) = 0                         (ground)
+    ... = u h + omega_B x (c_i - a_B)                                            (deck)
+
+(a_B on the deck's roll axis, which rides along h: a board's wheels neither slip sideways nor
+leave the floor), and the centre's height: rho on the ground, on the deck the axis' height plus
+the foothold's height about it, R_B (f_i + d e_z) . e_z. A foot whose velocity disagrees with its
+surface's beyond the innovation's spread (``gate``: it has not landed yet, or it slips) is left out
+of the tick.
+The classical filter (``moving_deck=False``: every stance foot stays put) is the negative control.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class OdometrySettings:
+    """Noise densities and gates of the filter.
+
+    Attributes:
+        position_walk: The position's random walk [m/sqrt(s)] (what the heights correct).
+        accel_noise: The specific force's white noise as the filter sees it (sensor noise and the
+            trunk's vibrations) [m/s^2/sqrt(Hz)].
+        board_accel: The board speed's random walk [m/s^2/sqrt(Hz)] (pushes, braking).
+        bias_walk: The accelerometer bias' random walk [m/s^2/sqrt(s)].
+        foot_velocity: A stance foot's kinematic velocity's noise [m/s] (joint velocities, the
+            foot's rolling).
+        foot_height: Its height's noise [m].
+        gate: A stance foot whose velocity innovation has a squared Mahalanobis distance beyond
+            this is left out (16: 0.1 % of consistent 3-vectors).
+        moving_deck: A foot on the deck moves with it (False: every stance foot stays put).
+    """
+
+    position_walk: float = 0.003
+    accel_noise: float = 0.03
+    board_accel: float = 1.0
+    bias_walk: float = 1e-3
+    foot_velocity: float = 0.05
+    foot_height: float = 0.003
+    gate: float = 16.0
+    moving_deck: bool = True
+
+
+@dataclass
+class FootMeasure:
+    """One stance foot's rows: its velocity relation (``on_deck``: with the board's speed along
+    ``heading``), the world velocity its surface has besides (``surface_v``), its kinematic velocity
+    relative to the trunk's (``relative_v``: the contact point's, world), and its centre's height
+    relation (``height_target``: what p_z + (R r_i)_z should be)."""
+
+    on_deck: bool
+    relative_v: np.ndarray
+    surface_v: np.ndarray
+    heading: np.ndarray
+    centre_offset_z: float
+    height_target: float
+
+
+class LegOdometry:
+    """The filter of the module docstring (10 states)."""
+
+    N = 10
+
+    def __init__(self, p0: np.ndarray, v0: np.ndarray, u0: float, settings: OdometrySettings | None = None,
+                 bias_sd: float = 0.02):
+        self.s = settings or OdometrySettings()
+        self.x = np.concatenate([p0, v0, [u0], np.zeros(3)])
+        self.P = np.diag([1e-6] * 3 + [1e-4] * 3 + [1e-4] + [bias_sd**2] * 3)
+
+    @property
+    def p(self) -> np.ndarray:
+        return self.x[0:3]
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.x[3:6]
+
+    @property
+    def u(self) -> float:
+        return float(self.x[6])
+
+    def predict(self, R: np.ndarray, accel: np.ndarray, dt: float, gravity: float) -> None:
+        s, x = self.s, self.x
+        a = R @ (accel - x[7:10]) - gravity * UP
+        x[0:3] += x[3:6] * dt + 0.5 * a * dt * dt
+        x[3:6] += a * dt
+        F = np.eye(self.N)
+        F[0:3, 3:6] = dt * np.eye(3)
+        F[0:3, 7:10] = -0.5 * dt * dt * R
+        F[3:6, 7:10] = -dt * R
+        q = np.r_[[s.position_walk**2 * dt] * 3, [s.accel_noise**2 * dt] * 3, s.board_accel**2 * dt,
+                  [s.bias_walk**2 * dt] * 3]
+        self.P = F @ self.P @ F.T + np.diag(q)
+
+    def correct(self, feet: list[FootMeasure]) -> np.ndarray:
+        """The stance feet's rows (those within the gate); returns which were used (bool, per item)."""
+        s, x = self.s, self.x
+        rows, z, r = [], [], []
+        used = np.zeros(len(feet), dtype=bool)
+        for k, f in enumerate(feet):
+            H = np.zeros((3, self.N))
+            H[:, 3:6] = np.eye(3)
+            target = f.surface_v - f.relative_v
+            if f.on_deck and s.moving_deck:
+                H[:, 6] = -f.heading
+            nu = target - H @ x
+            S = H @ self.P @ H.T + s.foot_velocity**2 * np.eye(3)
+            if float(nu @ np.linalg.solve(S, nu)) > s.gate:
+                continue
+            used[k] = True
+            rows.append(H)
+            z.append(target)
+            r += [s.foot_velocity**2] * 3
+            h = np.zeros((1, self.N))
+            h[0, 2] = 1.0
+            rows.append(h)
+            z.append(np.array([f.height_target - f.centre_offset_z]))
+            r.append(s.foot_height**2)
+        if rows:
+            H, zz = np.vstack(rows), np.concatenate(z)
+            S = H @ self.P @ H.T + np.diag(r)
+            K = np.linalg.solve(S, H @ self.P).T
+            self.x = x + K @ (zz - H @ x)
+            self.P = (np.eye(self.N) - K @ H) @ self.P
+        return used
