@@ -70,7 +70,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     ref = HumanoidReference(lib[key], lib.humanoid_model)
     dt = STEPS_PER_TICK * plant.timestep_s
     stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), dt, gains)
-    n = int(round((ref.duration_s + hold_s) / dt))
+    n = round((ref.duration_s + hold_s) / dt)
     rows: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref",
                                                          "margin", "support", "sole_pos", "sole_yaw", "torque")}
     fell_at, reason = None, ""

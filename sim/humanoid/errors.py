@@ -100,7 +100,12 @@ def parse_humanoid_perturbation(text: str) -> HumanoidErrors:
         elif key == "mu":
             e = replace(e, floor_mu=value)
         elif key == "noise":
-            e = replace(e, **{k: value * v for k, v in SENSOR_NOISE.items()})
+            n = SENSOR_NOISE
+            e = replace(e, force_noise_N=value * n["force_noise_N"], torque_noise_Nm=value * n["torque_noise_Nm"],
+                        imu_noise_rad=value * n["imu_noise_rad"], gyro_noise_radps=value * n["gyro_noise_radps"],
+                        encoder_noise_rad=value * n["encoder_noise_rad"])
+        elif key == "shove":
+            e = replace(e, shove_N=value)
         else:
-            e = replace(e, **{"shove_N" if key == "shove" else "shove_t_s": value})
+            e = replace(e, shove_t_s=value)
     return replace(e, com_offset_m=(com[0], com[1]))

@@ -6,6 +6,7 @@ controller (the COM, the soles' contacts and slip, the links touching the floor)
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 from skatelib.sim.humanoid.errors import HumanoidErrors
 from skatelib.sim.humanoid.figures import FEET, HumanoidFigures
