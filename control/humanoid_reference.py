@@ -71,7 +71,7 @@ class ReferenceSample:
             if self.support[s]:
                 c, sn = np.cos(self.sole_yaw[s]), np.sin(self.sole_yaw[s])
                 for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)):
-                    corners.append((*self.soles[s][0:2], c * dx - sn * dy, sn * dx + c * dy))
+                    corners.append(self.soles[s][0:2] + np.array([c * dx - sn * dy, sn * dx + c * dy]))
         return _hull(np.array(corners))
 
     def clamp(self, p: np.ndarray, margin: float) -> np.ndarray:
