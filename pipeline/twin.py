@@ -43,7 +43,26 @@ def write_twin(source: Path | Any, out: Path) -> Path:
     from skatelib.pipeline.build.preflight import check_output
 
     check_output(out, [source] if isinstance(source, Path) else [source.path], what="twin")
-    xml = twin_xml(twin_figures(source))
+    xml = _humanoid_xml(source) if isinstance(source, Path) and _is_humanoid(source) else twin_xml(twin_figures(source))
     with atomic_path(out) as tmp:
         tmp.write_text(xml)
     return out
+
+
+def _is_humanoid(path: Path) -> bool:
+    from skatelib.runtime import MotionLibrary
+
+    return MotionLibrary.open(path).kind == "humanoid"
+
+
+def _humanoid_xml(path: Path) -> str:
+    """The humanoid twin standing in the first successful entry's first posture."""
+    from skatelib.proving.humanoid.loop import figures_for
+    from skatelib.runtime import MotionLibrary
+    from skatelib.sim.humanoid.robot import humanoid_xml
+
+    lib = MotionLibrary.open(path)
+    key = next((e.key for e in lib if e.success), None)
+    if key is None:
+        raise SkatelibError(f"{path}: no entry of this library was solved: no posture to stand the twin in")
+    return humanoid_xml(figures_for(lib, key))

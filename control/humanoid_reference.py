@@ -1,0 +1,135 @@
+"""A humanoid library entry as the stabilizer's reference: at any time, the planned joints and
+waist, both soles, which soles support the robot, the COM (the dynamics filter's, with its
+velocity and acceleration) and the plan's ZMP, and the support polygon (the convex hull of the
+support soles' rectangles) that holds the desired ZMP."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.library import schema
+from skatelib.library.model import HumanoidModel
+from skatelib.runtime.entry import Entry
+
+GROUND_M = 0.002  # a planned sole this close to the ground supports
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """Counter-clockwise convex hull (monotone chain) of (N, 2) points."""
+    pts = sorted({(float(x), float(y)) for x, y in np.round(points, 12)})
+
+    def cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple[float, float]] = []
+    upper: list[tuple[float, float]] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def polygon_margin(poly: np.ndarray, p: np.ndarray) -> float:
+    """The distance of ``p`` inside the counter-clockwise polygon (negative: outside) [m]."""
+    out = np.inf
+    for i in range(len(poly)):
+        a, b = poly[i], poly[(i + 1) % len(poly)]
+        e = b - a
+        out = min(out, float((e[0] * (p[1] - a[1]) - e[1] * (p[0] - a[0])) / np.linalg.norm(e)))
+    return out
+
+
+@dataclass(frozen=True)
+class ReferenceSample:
+    """The reference at one instant (world frame)."""
+
+    q: np.ndarray
+    base_pos: np.ndarray
+    base_quat_xyzw: np.ndarray
+    soles: np.ndarray  # (2, 3) right, left sole centres
+    sole_yaw: np.ndarray  # (2,)
+    support: np.ndarray  # (2,) bool
+    com: np.ndarray
+    com_vel: np.ndarray
+    com_acc: np.ndarray
+    zmp: np.ndarray
+    gravity: float
+    sole_size: tuple[float, float]
+    ground_z: float = 0.0
+
+    def polygon(self, margin: float = 0.0) -> np.ndarray:
+        """The support soles' convex hull, each sole shrunk by ``margin``."""
+        hx, hy = self.sole_size[0] / 2 - margin, self.sole_size[1] / 2 - margin
+        corners = []
+        for s in (0, 1):
+            if self.support[s]:
+                c, sn = np.cos(self.sole_yaw[s]), np.sin(self.sole_yaw[s])
+                for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)):
+                    corners.append(self.soles[s][0:2] + np.array([c * dx - sn * dy, sn * dx + c * dy]))
+        return _hull(np.array(corners))
+
+    def clamp(self, p: np.ndarray, margin: float) -> np.ndarray:
+        """``p`` held inside the support polygon less ``margin`` (the nearest point of it)."""
+        poly = self.polygon(margin)
+        if polygon_margin(poly, p) >= 0.0:
+            return p
+        best, dist = p, np.inf
+        for i in range(len(poly)):
+            a, b = poly[i], poly[(i + 1) % len(poly)]
+            t = float(np.clip(np.dot(p - a, b - a) / max(float(np.dot(b - a, b - a)), 1e-12), 0.0, 1.0))
+            x = a + t * (b - a)
+            if np.linalg.norm(p - x) < dist:
+                best, dist = x, float(np.linalg.norm(p - x))
+        return np.asarray(best)
+
+    def foot_cop(self, s: int, p_d: np.ndarray) -> np.ndarray:
+        """The desired centre of pressure on sole ``s`` (its frame: x, y): in single support the
+        desired ZMP; in double support the desired ZMP's offset from the segment between the two
+        soles' centres, on each sole."""
+        if self.support.all():
+            a, b = self.soles[0][0:2], self.soles[1][0:2]
+            t = float(np.clip(np.dot(p_d - a, b - a) / max(float(np.dot(b - a, b - a)), 1e-12), 0.0, 1.0))
+            d = p_d - (a + t * (b - a))
+        else:
+            d = p_d - self.soles[s][0:2]
+        c, sn = np.cos(self.sole_yaw[s]), np.sin(self.sole_yaw[s])
+        local = np.array([c * d[0] + sn * d[1], -sn * d[0] + c * d[1]])
+        return np.clip(local, [-self.sole_size[0] / 2, -self.sole_size[1] / 2],
+                       [self.sole_size[0] / 2, self.sole_size[1] / 2])
+
+
+class HumanoidReference:
+    """An entry's whole body sampled at any time (linear between knots, clamped at the ends)."""
+
+    def __init__(self, entry: Entry, model: HumanoidModel):
+        a = entry.arrays
+        self.t = np.asarray(entry.t, dtype=float)
+        self.q = np.asarray(a[schema.D_JOINTS])
+        self.base = np.asarray(a[schema.D_BASE_POSE])
+        self.feet = np.asarray(a[schema.D_FEET]).reshape(len(self.t), 2, -1)
+        self.com = np.asarray(a[schema.D_COM_REFERENCE])
+        self.com_vel = np.gradient(self.com, self.t, axis=0)
+        self.com_acc = np.gradient(self.com_vel, self.t, axis=0)
+        self.zmp = np.asarray(a[schema.D_ZMP])
+        self.model = model
+        self.duration_s = float(self.t[-1])
+
+    def _at(self, x: np.ndarray, t: float) -> np.ndarray:
+        k = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2))
+        w = float(np.clip((t - self.t[k]) / (self.t[k + 1] - self.t[k]), 0.0, 1.0))
+        return np.asarray((1 - w) * x[k] + w * x[k + 1])
+
+    def sample(self, t: float) -> ReferenceSample:
+        feet = self._at(self.feet, t)
+        base = self._at(self.base, t)
+        m = self.model
+        return ReferenceSample(q=self._at(self.q, t), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
+            base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=feet[:, 2] < GROUND_M,
+            com=self._at(self.com, t), com_vel=self._at(self.com_vel, t), com_acc=self._at(self.com_acc, t),
+            zmp=self._at(self.zmp, t), gravity=m.gravity_mps2, sole_size=(m.foot_length_m, m.foot_width_m))

@@ -1,0 +1,147 @@
+"""The humanoid's balance stabilizer (the last box of Takasugi et al.'s Fig. 5): Kajita et al.
+2010's linear-inverted-pendulum tracking, for a robot whose joints are position servoed (HRP-2),
+in its DCM form:
+
+* estimate: the COM by kinematics from the joint encoders and the waist IMU's attitude, anchored
+  on the plan's support soles (the robot does not know where it is otherwise), its velocity by
+  a filtered difference; the ZMP measured by the ankles' force/torque sensors; and the COM's
+  offset that kinematics cannot see (a link heavier, a payload) from the two by the
+  pendulum: the measured ZMP against the one the estimated COM's motion implies;
+* DCM feedback: the desired ZMP p_d = p_ref + (1 + k / omega) (xi - xi_ref), held inside the
+  plan's support polygon (less a margin);
+* the COM command: a shift dc of the planned COM at the velocity dc' = -k_c (xi - xi_ref)
+  (``com_mode`` "velocity", the default). The pendulum-shaped command of Kajita's LIP tracking,
+  dc'' = omega^2 ((c - c_ref) - (p_d - p_ref)) (``com_mode`` "lip"), decays the DCM error at k
+  on a robot that follows its command exactly; on the twin the servoed robot follows it 0.1-0.2 s
+  late, the loop rocked from the first double support and the walk fell (docs/humanoid-twin.md);
+* ankle damping control: each support sole tilts by dtheta' = (tau_measured - tau_desired) / D
+  - dtheta / T, so that its ankle torque follows the share of the desired ZMP it carries;
+* joint targets: the plan's angles plus the linearised whole-body correction that moves the COM
+  by dc and tilts the soles, soles held in place (:mod:`.humanoid_kinematics`).
+
+With ``enabled`` False it passes the plan's joint angles through (the estimate still runs).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.control.humanoid_kinematics import HumanoidKinematics
+from skatelib.control.humanoid_reference import ReferenceSample
+
+MIN_LOAD_N = 30.0  # a sole carrying less is not in the measured ZMP
+
+
+@dataclass(frozen=True)
+class StabilizerGains:
+    """The stabilizer's figures (chosen; docs/humanoid-twin.md says how they were found)."""
+
+    dcm_gain_per_s: float = 3.0  # k: the desired ZMP's DCM feedback
+    velocity_cutoff_hz: float = 15.0  # the COM velocity's low-pass filter
+    offset_rate_per_s: float = 1.0  # the COM offset observer's rate
+    polygon_margin_m: float = 0.01  # the desired ZMP this far inside the support polygon
+    ankle_damping_Nms_per_rad: float = 400.0  # D
+    ankle_return_s: float = 0.5  # T
+    ankle_tilt_max_rad: float = 0.1
+    com_shift_max_m: float = 0.08
+    com_mode: str = "velocity"  # or "lip"
+    com_velocity_gain_per_s: float = 2.0  # k_c
+    enabled: bool = True
+
+
+@dataclass(frozen=True)
+class StabilizerOutput:
+    q_target: np.ndarray  # (n,) joint angle targets [rad]
+    com: np.ndarray  # (3,) estimated COM [m]
+    dcm: np.ndarray  # (2,) estimated DCM [m]
+    zmp_measured: np.ndarray  # (2,) from the force/torque sensors (NaN with no sole loaded) [m]
+    zmp_desired: np.ndarray  # (2,) [m]
+    com_shift: np.ndarray  # (2,) dc [m]
+
+
+class LipStabilizer:
+    """One robot's stabilizer state, ticked at a fixed rate."""
+
+    def __init__(self, kin: HumanoidKinematics, dt: float, gains: StabilizerGains | None = None):
+        self.kin, self.dt, self.g = kin, dt, gains or StabilizerGains()
+        self.dc, self.dv, self.acc = np.zeros(2), np.zeros(2), np.zeros(2)
+        self.offset = np.zeros(2)
+        self.tilt = np.zeros((2, 2))
+        self.rel_prev: np.ndarray | None = None
+        self.support_prev: tuple[bool, bool] = (True, True)
+        self.v = np.zeros(3)
+
+    def _estimate(self, r: ReferenceSample, qfull: np.ndarray, force: np.ndarray, torque: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The COM (world, anchored on the support soles), the measured ZMP and each sole's load and
+        CoP relative to its centre (foot frame: x, y)."""
+        c, soles, pts, rots = self.kin.measure(qfull)
+        sup = r.support
+        anchor = np.mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]], axis=0)
+        rel = c - np.mean([soles[s] for s in (0, 1) if sup[s]], axis=0)
+        if self.rel_prev is not None and tuple(sup) == self.support_prev:
+            a = 1.0 - math.exp(-2 * math.pi * self.g.velocity_cutoff_hz * self.dt)
+            self.v += a * ((rel - self.rel_prev) / self.dt - self.v)
+        self.rel_prev, self.support_prev = rel, (bool(sup[0]), bool(sup[1]))
+        fz, num = 0.0, np.zeros(2)
+        loads, cops = np.zeros(2), np.zeros((2, 2))
+        for s in (0, 1):
+            fw, nw = rots[s] @ force[s], rots[s] @ torque[s]
+            if fw[2] < MIN_LOAD_N:
+                continue
+            p = pts[s] + anchor
+            h = p[2] - r.soles[s][2]  # the sensor over its sole
+            zmp = np.array([p[0] - (nw[1] + h * fw[0]) / fw[2], p[1] - (h * fw[1] - nw[0]) / fw[2]])
+            fz, num = fz + fw[2], num + fw[2] * zmp
+            loads[s] = fw[2]
+            cops[s] = (rots[s].T @ np.append(zmp - r.soles[s][0:2], 0.0))[0:2]
+        zmp_meas = num / fz if fz > 0 else np.full(2, np.nan)
+        return c + anchor, zmp_meas, loads, cops
+
+    def tick(self, r: ReferenceSample, q: np.ndarray, quat_xyzw: np.ndarray, force: np.ndarray,
+             torque: np.ndarray) -> StabilizerOutput:
+        """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
+        each foot at its ankle sensor, foot frame) and the reference at this instant."""
+        g, dt = self.g, self.dt
+        qfull = self.kin.configuration(quat_xyzw, q)
+        com, zmp_meas, loads, cops = self._estimate(r, qfull, force, torque)
+        omega = math.sqrt(r.gravity / max(r.com[2] - r.ground_z, 0.2))
+        c = com[0:2] + self.offset
+        if not np.isnan(zmp_meas).any():  # the ZMP the COM's deviation implies against the measured one's
+            implied = (c - r.com[0:2]) - self.acc / omega**2  # the plan's ZMP is its multibody one
+            self.offset += g.offset_rate_per_s * dt * ((zmp_meas - r.zmp) - implied)
+        xi = c + self.v[0:2] / omega
+        xi_ref = r.com[0:2] + r.com_vel[0:2] / omega
+        p_d = r.zmp + (1 + g.dcm_gain_per_s / omega) * (xi - xi_ref)
+        p_d = r.clamp(p_d, g.polygon_margin_m)
+        if g.enabled:
+            if g.com_mode == "lip":
+                self.acc = omega**2 * ((c - r.com[0:2]) - (p_d - r.zmp))
+                self.dv += self.acc * dt
+            else:
+                v_new = -g.com_velocity_gain_per_s * (xi - xi_ref)
+                self.acc, self.dv = (v_new - self.dv) / dt, v_new
+            self.dc += self.dv * dt
+            n = float(np.linalg.norm(self.dc))
+            if n > g.com_shift_max_m:
+                self.dc *= g.com_shift_max_m / n
+                self.dv[:] = 0.0
+            self._ankles(r, p_d, loads, cops)
+        base = self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)
+        dq = self.kin.correction(base, np.append(self.dc, 0.0), self.tilt) if g.enabled else np.zeros(len(r.q))
+        return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy())
+
+    def _ankles(self, r: ReferenceSample, p_d: np.ndarray, loads: np.ndarray, cops: np.ndarray) -> None:
+        """Damping control of each loaded support sole's tilt towards its share of the desired ZMP."""
+        g, dt = self.g, self.dt
+        for s in (0, 1):
+            if not r.support[s] or loads[s] <= 0.0:
+                self.tilt[s] *= 1.0 - dt / g.ankle_return_s
+                continue
+            want = r.foot_cop(s, p_d)  # the desired CoP on this sole, foot frame
+            # torque about the sole's x (roll) and y (pitch) axes: tau_x = f y, tau_y = -f x
+            err = loads[s] * np.array([cops[s, 1] - want[1], -(cops[s, 0] - want[0])])
+            rate = err / g.ankle_damping_Nms_per_rad - self.tilt[s] / g.ankle_return_s
+            self.tilt[s] = np.clip(self.tilt[s] + rate * dt, -g.ankle_tilt_max_rad, g.ankle_tilt_max_rad)

@@ -1,0 +1,95 @@
+"""A humanoid entry executed on the twin: the stabilizer (500 Hz) reads the twin's sensors and
+sends joint angle targets to its servos (1 kHz physics), through the entry and a hold at its end;
+what the twin did and what was planned, sampled at every tick."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.control.humanoid_kinematics import HumanoidKinematics
+from skatelib.control.humanoid_reference import HumanoidReference, polygon_margin
+from skatelib.control.humanoid_stabilizer import LipStabilizer, StabilizerGains
+from skatelib.library import schema
+from skatelib.runtime import MotionLibrary
+from skatelib.sim.humanoid.errors import HumanoidErrors
+from skatelib.sim.humanoid.figures import HumanoidFigures
+from skatelib.sim.humanoid.plant import HumanoidPlant
+
+STEPS_PER_TICK = 2  # 1 ms physics, a 500 Hz stabilizer
+HOLD_S = 1.0  # after the entry, the reference holds its end
+FALLEN_HEIGHT_M = 0.4  # the waist lower than this: fallen
+FALLEN_TILT_RAD = 0.5
+
+
+@dataclass(frozen=True)
+class HumanoidRun:
+    """A run's samples (one row per stabilizer tick; world frame)."""
+
+    key: str
+    t: np.ndarray
+    com: np.ndarray  # (N, 3) the twin's COM
+    com_ref: np.ndarray  # (N, 3)
+    zmp: np.ndarray  # (N, 2) from the soles' contact forces (NaN when airborne)
+    zmp_measured: np.ndarray  # (N, 2) the stabilizer's, from the ankle sensors
+    zmp_ref: np.ndarray  # (N, 2) the plan's
+    zmp_margin: np.ndarray  # (N,) the contact ZMP inside the plan's support polygon [m]
+    support: np.ndarray  # (N, 2) the plan's support soles
+    sole_pos: np.ndarray  # (N, 2, 3)
+    sole_yaw: np.ndarray  # (N, 2)
+    torque: np.ndarray  # (N, n)
+    torque_limit: np.ndarray  # (n,)
+    fell_at: float | None  # the first time the twin had fallen (None: it did not)
+    fall_reason: str
+
+
+def figures_for(lib: MotionLibrary, key: str) -> HumanoidFigures:
+    e = lib[key]
+    return HumanoidFigures.from_record(lib.humanoid_model, lib.urdf, tuple(e.columns[schema.D_JOINTS]),
+                                       np.asarray(e.arrays[schema.D_JOINTS])[0],
+                                       np.asarray(e.arrays[schema.D_BASE_POSE])[0])
+
+
+def _fallen(plant: HumanoidPlant) -> str:
+    tr = plant.truth()
+    if tr.base_pos[2] < FALLEN_HEIGHT_M:
+        return f"waist at {tr.base_pos[2]:.2f} m"
+    tilt = float(np.arccos(np.clip(tr.base_R[2, 2], -1.0, 1.0)))
+    if tilt > FALLEN_TILT_RAD:
+        return f"waist tilted {tilt:.2f} rad"
+    if tr.floor_touches:
+        return f"{', '.join(tr.floor_touches)} on the floor"
+    return ""
+
+
+def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None,
+              gains: StabilizerGains | None = None, seed: int = 0, hold_s: float = HOLD_S) -> HumanoidRun:
+    """Execute entry ``key`` on the twin with ``errors`` under the stabilizer (``gains``)."""
+    f = figures_for(lib, key)
+    plant = HumanoidPlant(f, errors, seed)
+    ref = HumanoidReference(lib[key], lib.humanoid_model)
+    dt = STEPS_PER_TICK * plant.timestep_s
+    stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), dt, gains)
+    n = round((ref.duration_s + hold_s) / dt)
+    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref",
+                                                         "margin", "support", "sole_pos", "sole_yaw", "torque")}
+    fell_at, reason = None, ""
+    for _ in range(n):
+        r = plant.readings()
+        s = ref.sample(r.t)
+        out = stab.tick(s, r.q, np.roll(r.imu_quat_wxyz, -1), r.ft_force, r.ft_torque)
+        plant.step(out.q_target, STEPS_PER_TICK)
+        tr = plant.truth()
+        for k, v in (("t", tr.t), ("com", tr.com), ("com_ref", s.com), ("zmp", tr.zmp), ("zmp_measured",
+                     out.zmp_measured), ("zmp_ref", s.zmp), ("support", s.support), ("sole_pos", tr.sole_pos),
+                     ("sole_yaw", tr.sole_yaw), ("torque", tr.torque)):
+            rows[k].append(np.asarray(v))
+        rows["margin"].append(np.asarray(polygon_margin(s.polygon(), tr.zmp) if not np.isnan(tr.zmp).any()
+                                         else -np.inf))
+        reason = _fallen(plant)
+        if reason:
+            fell_at = tr.t
+            break
+    a = {k: np.array(v) for k, v in rows.items()}
+    return HumanoidRun(key, a["t"], a["com"], a["com_ref"], a["zmp"], a["zmp_measured"], a["zmp_ref"], a["margin"],
+                       a["support"], a["sole_pos"], a["sole_yaw"], a["torque"], f.torque_limit_Nm, fell_at, reason)

@@ -1,0 +1,151 @@
+"""The humanoid twin as a plant: joint angle targets in (the motor drivers' servos track them),
+the robot's sensors out as it has them (joint encoders, the waist IMU, the ankles' 6-axis
+force/torque sensors, each with noise), and what a verdict needs that no sensor tells the
+controller (the COM, the soles' contacts and slip, the links touching the floor)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from skatelib.sim.humanoid.errors import HumanoidErrors
+from skatelib.sim.humanoid.figures import FEET, HumanoidFigures
+from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
+
+
+@dataclass(frozen=True)
+class Readings:
+    """The robot's sensors at one instant (noise included).
+
+    Attributes:
+        imu_quat_wxyz / imu_gyro: The waist's orientation and its rate in the waist frame.
+        ft_force / ft_torque: (2, 3) right then left: the wrench the ground side exerts on the foot
+            below each ankle sensor, in the foot frame, about the sensor's point.
+    """
+
+    t: float
+    q: np.ndarray
+    qd: np.ndarray
+    imu_quat_wxyz: np.ndarray
+    imu_gyro: np.ndarray
+    ft_force: np.ndarray
+    ft_torque: np.ndarray
+
+
+@dataclass(frozen=True)
+class Truth:
+    """What happened (world frame): the COM, each sole's contact and the other links on the floor.
+
+    Attributes:
+        sole_force: (2, 3) the floor's force on each sole box; sole_zmp (2, 2) its centre of
+            pressure (NaN without contact); zmp (2,) both soles' together.
+        sole_pos / sole_yaw: (2, 3) / (2,) the soles' frames; sole_v / sole_wz their velocity and
+            yaw rate.
+    """
+
+    t: float
+    com: np.ndarray
+    com_v: np.ndarray
+    base_pos: np.ndarray
+    base_R: np.ndarray
+    sole_force: np.ndarray
+    sole_zmp: np.ndarray
+    zmp: np.ndarray
+    sole_pos: np.ndarray
+    sole_yaw: np.ndarray
+    sole_v: np.ndarray
+    sole_wz: np.ndarray
+    torque: np.ndarray
+    floor_touches: tuple[str, ...]
+
+
+class HumanoidPlant:
+    """The twin's ``MjModel`` and ``MjData``, stepped with joint angle targets."""
+
+    def __init__(self, f: HumanoidFigures, errors: HumanoidErrors | None = None, seed: int = 0):
+        import mujoco
+
+        self.f, self.errors = f, errors or HumanoidErrors()
+        self.m = self.errors.apply(humanoid_spec(f)).compile()
+        self.d = mujoco.MjData(self.m)
+        m = self.m
+        self.rng = np.random.default_rng(seed)
+        self.qadr = np.array([m.joint(n).qposadr[0] for n in f.joint_names])
+        self.dadr = np.array([m.joint(n).dofadr[0] for n in f.joint_names])
+        self.act = np.array([m.actuator(n).id for n in f.joint_names])
+        self.soles = [m.geom(sole_geom(s)).id for s in (0, 1)]
+        self.floor = m.geom("floor").id
+        self.root = m.body(ROOT).id
+        self.sensor = {n: (m.sensor(n).adr[0], m.sensor(n).dim[0]) for n in
+                       ("imu_quat", "imu_gyro", *(f"{foot}_{w}" for foot in FEET for w in ("force", "torque")))}
+        mujoco.mj_resetDataKeyframe(m, self.d, m.key("initial").id)
+        self.d.ctrl[self.act] = f.q0_rad
+        mujoco.mj_forward(m, self.d)
+
+    @property
+    def timestep_s(self) -> float:
+        return float(self.m.opt.timestep)
+
+    def step(self, q_target: np.ndarray, n: int = 1) -> None:
+        import mujoco
+
+        self.d.ctrl[self.act] = q_target
+        for _ in range(n):
+            self.errors.push(self.d, self.root)
+            mujoco.mj_step(self.m, self.d)
+
+    def _s(self, name: str) -> np.ndarray:
+        a, n = self.sensor[name]
+        return np.array(self.d.sensordata[a:a + n])
+
+    def readings(self) -> Readings:
+        """The sensors, with the errors' noise (angles, rates, forces and torques; docs/twin.md)."""
+        e, r, d = self.errors, self.rng, self.d
+        n = len(self.qadr)
+        quat = self._s("imu_quat") + r.normal(0, e.imu_noise_rad / 2, 4)
+        force = np.array([-self._s(f"{foot}_force") for foot in FEET]) + r.normal(0, e.force_noise_N, (2, 3))
+        torque = np.array([-self._s(f"{foot}_torque") for foot in FEET]) + r.normal(0, e.torque_noise_Nm, (2, 3))
+        return Readings(float(d.time), d.qpos[self.qadr] + r.normal(0, e.encoder_noise_rad, n),
+                        d.qvel[self.dadr] + r.normal(0, 20 * e.encoder_noise_rad, n), quat / np.linalg.norm(quat),
+                        self._s("imu_gyro") + r.normal(0, e.gyro_noise_radps, 3), force, torque)
+
+    def truth(self) -> Truth:
+        import mujoco
+
+        m, d = self.m, self.d
+        force, moment = np.zeros((2, 3)), np.zeros((2, 3))  # moment about the world origin
+        others: set[str] = set()
+        frame, w = np.zeros(6), np.zeros(6)
+        for k in range(d.ncon):
+            c = d.contact[k]
+            pair = (int(c.geom1), int(c.geom2))
+            if self.floor not in pair:
+                continue
+            other = pair[1] if pair[0] == self.floor else pair[0]
+            if other not in self.soles:
+                others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
+                continue
+            mujoco.mj_contactForce(m, d, k, frame)
+            fw = c.frame.reshape(3, 3).T @ frame[0:3]  # on geom2 (the sole when the floor is geom1)
+            fw = fw if pair[0] == self.floor else -fw
+            s = self.soles.index(other)
+            force[s] += fw
+            moment[s] += np.cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == self.floor
+                                                                                          else -1))
+        zmp = np.full((2, 2), np.nan)
+        for s in (0, 1):
+            if force[s, 2] > 1.0:
+                zmp[s] = -moment[s, 1] / force[s, 2], moment[s, 0] / force[s, 2]
+        total_f, total_m = force.sum(axis=0), moment.sum(axis=0)
+        both = (np.array([-total_m[1], total_m[0]]) / total_f[2]) if total_f[2] > 1.0 else np.full(2, np.nan)
+        pos, yaw, v, wz = np.zeros((2, 3)), np.zeros(2), np.zeros((2, 3)), np.zeros(2)
+        for s, g in enumerate(self.soles):
+            R = d.geom_xmat[g].reshape(3, 3)
+            pos[s], yaw[s] = d.geom_xpos[g], np.arctan2(R[1, 0], R[0, 0])
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, w, 0)
+            v[s], wz[s] = w[3:6], w[2]
+        mujoco.mj_subtreeVel(m, d)
+        return Truth(float(d.time), d.subtree_com[self.root].copy(), d.subtree_linvel[self.root].copy(),
+                     d.xpos[self.root].copy(), d.xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw,
+                     v, wz, d.actuator_force[self.act].copy(), tuple(sorted(others)))
+
