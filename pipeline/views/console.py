@@ -142,16 +142,6 @@ def track_table(results: list[Any], perturb: str) -> int:
                          "fric margin: the smallest mu f_n - |f_t| of a commanded foot force in the plant's cone "
                          "(< 0: clipped, a slip); tau max: the largest stance-joint torque at the "
                          "inverse-kinematics angles [N m]"))
-    estimated = [r for r in results if r.est_trunk_v_rms == r.est_trunk_v_rms]  # not NaN: fed the estimate
-    if estimated:
-        e = Table(title="the estimator against the twin's truth (RMS / worst)")
-        for col in ("entry", "trunk v [m/s]", "board speed [m/s]", "board roll [rad]"):
-            e.add_column(escape(col), justify="right")
-        for r in estimated:
-            e.add_row(r.key, f"{r.est_trunk_v_rms:.4f} / {r.est_trunk_v_worst:.3f}",
-                      f"{r.est_board_speed_rms:.4f} / {r.est_board_speed_worst:.3f}",
-                      f"{r.est_board_roll_rms:.4f} / {r.est_board_roll_worst:.3f}")
-        console.print(e)
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))
@@ -177,6 +167,21 @@ def ride_table(result: Any, perturb: str) -> bool:
     return bool(result.passed)
 
 
+def _estimator_table(results: list[Any]) -> None:
+    """The estimator's error against the twin's truth, for the runs fed the estimate."""
+    estimated = [r for r in results if r.est_trunk_v_rms == r.est_trunk_v_rms]  # not NaN: fed the estimate
+    if not estimated:
+        return
+    e = Table(title="the estimator against the twin's truth (RMS / worst)")
+    for col in ("entry", "trunk v [m/s]", "board speed [m/s]", "board roll [rad]"):
+        e.add_column(escape(col), justify="right")
+    for r in estimated:
+        e.add_row(r.key, f"{r.est_trunk_v_rms:.4f} / {r.est_trunk_v_worst:.3f}",
+                  f"{r.est_board_speed_rms:.4f} / {r.est_board_speed_worst:.3f}",
+                  f"{r.est_board_roll_rms:.4f} / {r.est_board_roll_worst:.3f}")
+    console.print(e)
+
+
 def twin_table(results: list[Any], perturb: str) -> int:
     """Print the verdicts of the runs on the twin; returns how many failed."""
     t = Table(title=escape(f"full physics (MuJoCo twin, MPC 30 Hz + whole-body 510 Hz), errors: {perturb}"))
@@ -197,16 +202,7 @@ def twin_table(results: list[Any], perturb: str) -> int:
                          "contact and with a wheel off the floor; heading err, lateral: the board against the "
                          "plan when the entry ends; crab max: the deck's velocity from its heading [rad]; sat: the "
                          "share of ticks with a joint at its torque limit"))
-    estimated = [r for r in results if r.est_trunk_v_rms == r.est_trunk_v_rms]  # not NaN: fed the estimate
-    if estimated:
-        e = Table(title="the estimator against the twin's truth (RMS / worst)")
-        for col in ("entry", "trunk v [m/s]", "board speed [m/s]", "board roll [rad]"):
-            e.add_column(escape(col), justify="right")
-        for r in estimated:
-            e.add_row(r.key, f"{r.est_trunk_v_rms:.4f} / {r.est_trunk_v_worst:.3f}",
-                      f"{r.est_board_speed_rms:.4f} / {r.est_board_speed_worst:.3f}",
-                      f"{r.est_board_roll_rms:.4f} / {r.est_board_roll_worst:.3f}")
-        console.print(e)
+    _estimator_table(results)
     for r in results:
         if not r.passed:
             console.print(escape(f"{r.key}: {r.reasons}"))
