@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import os
 import subprocess
 from pathlib import Path
@@ -164,6 +165,7 @@ def test_every_help_shows_defaults_choices_and_units():
 
     runner = CliRunner()
     seen = set()
+    choice_options = set()
     for name, cmd, p in _options():
         if name not in seen:
             seen.add(name)
@@ -174,9 +176,11 @@ def test_every_help_shows_defaults_choices_and_units():
         names, text = record
         if (p.default not in (None, False) and not p.is_flag) or (p.opts[0] == "-o" and name in ("build", "solve")):
             assert "[default: " in text, (name, p.opts, text)
-        if "|" in names:  # a choice: all of them listed
-            assert any(c in names for c in ("daqp|proxqp|osqp", "loky|dask", "entries|steer", "png|svg",
-                                            "model|mujoco", "npz|csv|mcap")), names
+        kind = p.type_descriptor.annotation
+        choices = [m.value for m in kind] if isinstance(kind, type) and issubclass(kind, enum.Enum) else None
+        if choices:  # a choice: all of them listed, in the order the option declares them
+            choice_options.add(p.name)
+            assert "<" + "|".join(str(c) for c in choices) + ">" in names, (name, p.opts, names)
         if p.name in ("atol", "rtol"):  # a comparison's tolerance: in each channel's own unit, or relative
             assert "tolerance" in text, (name, p.opts, text)
         elif "<float" in names and p.name != "mpc_mu":  # a physical number: its unit
@@ -184,5 +188,6 @@ def test_every_help_shows_defaults_choices_and_units():
     assert "<daqp|proxqp|osqp>" in " ".join(p.get_help_record(Context(c))[0] for _, c, p in _options()
                                              if p.name == "solver")
     assert set(QpSolver) == set(SOLVERS)
+    assert {"solver", "plant", "state", "backend"} <= choice_options, choice_options
     assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model", "diff",
                     "export"}

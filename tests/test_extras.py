@@ -23,9 +23,11 @@ IMPORT_NAMES = {"pin": ("pinocchio",), "rerun-sdk": ("rerun",), "dask": ("distri
 GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("control/**/*.py", ("control",)),
     ("proving/twin/*.py", ("control", "sim")),  # track --plant mujoco, its rides and maneuvers
+    ("proving/humanoid/*.py", ("control", "sim")),  # the humanoid's rides on its twin
     ("proving/*.py", ("control",)),  # track on the model plant, rides, the steering experiment
     ("sim/video.py", ("sim", "video")),
     ("sim/*.py", ("sim",)),
+    ("sim/humanoid/*.py", ("sim",)),
     ("pipeline/views/rerun_*.py", ("build", "viz")),
     ("pipeline/*/rerun.py", ("build", "viz")),
     ("pipeline/views/figures.py", ("build", "plot")),
@@ -70,8 +72,10 @@ def _imports(path: Path) -> set[str]:
 
 
 def _group(rel: str) -> tuple[str, ...]:
-    return next(extras for pattern, extras in GROUPS
-                if rel in {p.relative_to(ROOT).as_posix() for p in ROOT.glob(pattern)})
+    extras = next((extras for pattern, extras in GROUPS
+                   if rel in {p.relative_to(ROOT).as_posix() for p in ROOT.glob(pattern)}), None)
+    assert extras is not None, f"{rel} is in no group of GROUPS: add the extras a user of it has"
+    return extras
 
 
 def _modules() -> list[str]:

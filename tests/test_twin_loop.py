@@ -16,6 +16,7 @@ pytest.importorskip("mujoco")
 pytest.importorskip("daqp")
 
 from skatelib.control.params import SkateParams
+from skatelib.control.steering import SteeringGains
 from skatelib.control.wbc import WbcSettings
 from skatelib.library import schema
 from skatelib.proving.setup import ClosedLoop
@@ -54,12 +55,14 @@ def libs(tmp_path_factory):
     }
 
 
-def _ride(path: Path, perturb: str = "", wbc: WbcSettings | None = None, figures: TwinFigures | None = None):
+def _ride(path: Path, perturb: str = "", wbc: WbcSettings | None = None, figures: TwinFigures | None = None,
+          keeper: bool = True):
     lib = MotionLibrary.open(path)
     key = lib.keys()[0]
     p = SkateParams.from_library(lib)
     plant = TwinPlant(figures or TwinFigures.from_library(lib), parse_twin_perturbation(perturb, p.mu))
-    run = TwinLoop(lib, key, ClosedLoop(p, p), plant, TwinLoopSettings(wbc=wbc or WbcSettings())).ride()
+    settings = TwinLoopSettings(wbc=wbc or WbcSettings(), steering=SteeringGains() if keeper else None)
+    run = TwinLoop(lib, key, ClosedLoop(p, p), plant, settings).ride()
     return twin_result(key, float(lib[key].attrs[schema.A_TARGET_VELOCITY]), run)
 
 
@@ -107,14 +110,17 @@ def test_a_plan_balanced_on_an_edge_tips_over(libs):
 
 def test_a_plan_with_the_old_steering_model_drifts(libs):
     """Planned with the old reading of the truck's pivot (steering 6 times softer than the truck
-    does), the board's heading leaves the plan's by more than 0.1 rad in physics; on trucks as
-    planned it stays within 0.03 rad."""
+    does) and ridden without the line keeper, the board's heading leaves the plan's by more than
+    0.1 rad in physics; the line keeper halves that but cannot make the wrong plan ridable (the
+    twin still refuses it); on trucks as planned the heading stays within 0.03 rad."""
     lib = MotionLibrary.open(libs["old_steering"])
     f = TwinFigures.from_library(lib)
     public_truck = dataclasses.replace(f, board=dataclasses.replace(f.board, pivot_from_horizontal_rad=1.1904))
-    drift = _ride(libs["old_steering"], figures=public_truck)
+    drift = _ride(libs["old_steering"], figures=public_truck, keeper=False)
     assert abs(drift.heading_error_rad) > HEADING_LIMIT_RAD and not drift.passed
     assert "heading" in drift.reasons
+    kept = _ride(libs["old_steering"], figures=public_truck)
+    assert abs(kept.heading_error_rad) < abs(drift.heading_error_rad) and not kept.passed, kept
     planned = _ride(libs["old_steering"])
     assert abs(planned.heading_error_rad) < 0.03, planned
 
