@@ -191,3 +191,15 @@ def test_every_help_shows_defaults_choices_and_units():
     assert {"solver", "plant", "state", "backend"} <= choice_options, choice_options
     assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model", "diff",
                     "export"}
+
+
+def test_h_is_help_for_every_command():
+    """``-h`` prints the same help as ``--help``, for the program and every command."""
+    from skatelib.pipeline.cli.app import app
+    from typer.testing import CliRunner
+
+    runner = CliRunner()
+    names = sorted({name for name, _, _ in _options()})
+    for args in ([], *([n] for n in names)):
+        short, long = (runner.invoke(app, [*args, flag], env={"COLUMNS": "200"}) for flag in ("-h", "--help"))
+        assert short.exit_code == 0 and short.output == long.output and "Usage:" in short.output, (args, short.output)

@@ -15,6 +15,7 @@ from skatelib.pipeline.cli import build_commands, diff_commands, library_command
 from skatelib.pipeline.views.console import console, err_console
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
+                  context_settings={"help_option_names": ["-h", "--help"]},
                   help="Offline motion-library pipeline for legged robots on skateboards.")
 for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *diff_commands.COMMANDS,
                  *track_commands.COMMANDS):
