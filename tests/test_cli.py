@@ -156,7 +156,8 @@ def _options() -> list[tuple[str, Any, Any]]:
 def test_every_help_shows_defaults_choices_and_units():
     """Every command's --help, as printed: each option with a default shows it (``-o`` included,
     whose default is a rule), each choice option its choices, each speed or other physical number
-    its unit; and every command is reachable with --help (exit 0)."""
+    its unit; no value named by a Python type (``<float range>``, ``<list[str]>``); and every
+    command is reachable with --help (exit 0)."""
     from skatelib.control.qp import SOLVERS
     from skatelib.pipeline.cli.app import app
     from skatelib.pipeline.cli.library_commands import QpSolver
@@ -174,6 +175,7 @@ def test_every_help_shows_defaults_choices_and_units():
         record = p.get_help_record(Context(cmd))
         assert record is not None, (name, p.opts)
         names, text = record
+        assert " range>" not in names and "list[" not in names, (name, names)  # a user's words, not Python's types
         if (p.default not in (None, False) and not p.is_flag) or (p.opts[0] == "-o" and name in ("build", "solve")):
             assert "[default: " in text, (name, p.opts, text)
         kind = p.type_descriptor.annotation

@@ -13,13 +13,36 @@ from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.cli import build_commands, diff_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
+from typer.core import TyperCommand, TyperOption
+
+
+def _plain_metavar(option: TyperOption, command: TyperCommand) -> str | None:
+    """What an option's help shows for its value, without Python's type names: ``<float>`` for a
+    number in a range (the range is printed beside it), ``<str>`` for a repeatable option (its help
+    says it repeats), ``<a|b>`` for choices; None keeps typer's."""
+    shown = option.display_type(typer.Context(command))
+    plain = shown.replace(" range>", ">")
+    if plain.startswith("<list[") and plain.endswith("]>"):
+        plain = "<" + plain[len("<list["):-len("]>")] + ">"
+    return plain if plain != shown else None
+
+
+class _Command(TyperCommand):
+    """A command whose help names values as a user reads them (see :func:`_plain_metavar`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        for param in self.params:
+            if isinstance(param, TyperOption) and param.metavar is None:
+                param.metavar = _plain_metavar(param, self)
+
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Offline motion-library pipeline for legged robots on skateboards.")
 for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *diff_commands.COMMANDS,
                  *track_commands.COMMANDS):
-    app.command()(_command)
+    app.command(cls=_Command)(_command)
 
 __all__ = ["app", "main"]
 
