@@ -17,7 +17,7 @@ pytest.importorskip("daqp")
 
 from skatelib.control.params import SkateParams
 from skatelib.control.steering import SteeringGains
-from skatelib.control.wbc import WbcSettings
+from skatelib.control.wbc_settings import WbcSettings
 from skatelib.library import schema
 from skatelib.proving.setup import ClosedLoop
 from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings

@@ -1,6 +1,6 @@
 """The full-physics closed loop: the MPC at 30 Hz (fed from ``MotionLibrary.window()`` through the
 entry's reference, with the model loop's observers) and the whole-body controller at 510 Hz
-(:mod:`skatelib.control.wbc`, its tasks from :mod:`skatelib.control.wbc_tasks`) drive a
+(:mod:`skatelib.control.wbc`, its targets from :mod:`skatelib.control.wbc_targets`) drive a
 multibody plant (the MuJoCo twin) stepping at its own timestep: 2 plant steps per whole-body tick
 and 17 ticks per MPC update (1/30 s) at the twin's 1/1020 s.
 
@@ -26,8 +26,8 @@ from skatelib.control.kinematics import LegKinematics
 from skatelib.control.qp import QpSolveFailed
 from skatelib.control.reference import EntryReference, Reference
 from skatelib.control.steering import BoardPath, LineKeeper, SteeringGains
-from skatelib.control.wbc import WbcSettings
-from skatelib.control.wbc_tasks import ContactTable
+from skatelib.control.wbc_settings import WbcSettings
+from skatelib.control.wbc_targets import ContactTable
 from skatelib.library.channels import BOARD
 from skatelib.library.rotations import rpy_matrices
 from skatelib.proving.setup import ClosedLoop
