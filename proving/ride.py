@@ -130,11 +130,11 @@ def plan_ride(lib: MotionLibrary, stages: list[tuple[float, float]]) -> RidePlan
 class StageResult:
     """One stage of a ride: its entries, its target and the momentum speed at its end."""
 
-    v_from: float
-    v_to: float
+    from_velocity_mps: float
+    target_velocity_mps: float
     keys: tuple[str, ...]
     t_end_s: float
-    speed_mps: float
+    momentum_at_end_mps: float
     passed: bool
 
 
