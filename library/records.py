@@ -40,6 +40,6 @@ def jsonable(v: Any) -> Any:
     return v
 
 
-def text(v: Any) -> str:
+def text(v: object) -> str:
     """An attribute's string (h5py hands out bytes or str)."""
     return v.decode() if isinstance(v, bytes) else str(v)

@@ -14,15 +14,18 @@ its target: within 5 %, a stop below 0.05 m/s; the whole ride by the entry verdi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.control.reference import STAGE_ENDS
 from skatelib.library import schema
 from skatelib.proving.closed_loop import run_entry
 from skatelib.proving.setup import ClosedLoop
-from skatelib.proving.verdict import speed_verdict
+from skatelib.proving.verdict import TrackResult, speed_verdict
 from skatelib.runtime import Entry, MotionLibrary
+
+if TYPE_CHECKING:  # the twin's verdict (a ride on the twin: proving.twin.ride); no import at run time
+    from skatelib.proving.twin.verdict import TwinResult
 
 
 def parse_ride(text: str) -> list[tuple[float, float]]:
@@ -145,7 +148,7 @@ class RideResult:
     reference."""
 
     stages: tuple[StageResult, ...]
-    run: Any
+    run: TrackResult | TwinResult
     entry: Entry | None = None
     reference: Entry | None = None
 
