@@ -52,8 +52,8 @@ class _Layout:
         dense = [t for t in tasks if t.columns(stance) is None]
         sizes = [t.size(stance) for t in dense]
         ends = np.cumsum([0, *sizes])
-        self.dense = [(t, slice(a, z)) for t, a, z in zip(dense, ends[:-1], ends[1:], strict=True)]
         self.A, self.b = np.zeros((ends[-1], NV)), np.zeros(ends[-1])  # the dense tasks' rows over qdd
+        self.dense = [(t, self.A[a:z], self.b[a:z]) for t, a, z in zip(dense, ends[:-1], ends[1:], strict=True)]
         self.w = np.sqrt(np.concatenate([np.full(k, t.weight) for t, k in zip(dense, sizes, strict=True)]))
         diagonal = np.full(n, s.regularization)
         self.selecting: list[tuple[Task, slice | np.ndarray, np.ndarray]] = []  # (task, its columns, its b)
@@ -135,8 +135,8 @@ class WholeBodyController:
         # Cost: the dense tasks' weighted rows A x = b over qdd stacked, A'A formed once; the
         # selecting tasks on the diagonal (fixed) and the gradient.
         A, b, w = L.A, L.b, L.w
-        for task, r in L.dense:
-            task.fill(A[r], b[r], T, tg, stance)
+        for task, task_A, task_b in L.dense:
+            task.fill(task_A, task_b, T, tg, stance)
         A *= w[:, None]
         Hq = A.T @ A
         Hq.flat[::NV + 1] += L.q_diag

@@ -55,6 +55,7 @@ class _GeneralizedForces:
 
     def __init__(self, part: slice, band: np.ndarray, equality: bool):
         self.part, self.band, self.equality = part, band, equality
+        self.neg_band = -band
 
     def size(self, stance: StanceSet) -> int:
         return self.part.stop - self.part.start
@@ -63,11 +64,11 @@ class _GeneralizedForces:
         block.equality[:] = self.equality
 
     def fill(self, block: RowBlock, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet, Jc: np.ndarray) -> None:
-        part, rows = self.part, block.rows
+        part, rows, h = self.part, block.rows, T.h[self.part]
         rows[:, :NV] = T.M[part]
-        rows[:, NV:] = -Jc.T[part]
-        np.subtract(self.band, T.h[part], out=block.up)
-        np.subtract(-self.band, T.h[part], out=block.lo)
+        np.negative(Jc.T[part], out=rows[:, NV:])
+        np.subtract(self.band, h, out=block.up)
+        np.subtract(self.neg_band, h, out=block.lo)
 
 
 class BaseDynamics(_GeneralizedForces):
@@ -87,6 +88,7 @@ class TorqueLimits(_GeneralizedForces):
     def set_limit(self, limit_Nm: float) -> None:
         """Hold the torques within +-``limit_Nm`` from the next tick on."""
         self.limit_Nm, self.band = limit_Nm, np.full(NV - 6, limit_Nm)
+        self.neg_band = -self.band
 
 
 class StanceFeet:
