@@ -56,12 +56,12 @@ class _Layout:
         self.dense = [(t, self.A[a:z], self.b[a:z]) for t, a, z in zip(dense, ends[:-1], ends[1:], strict=True)]
         self.w = np.sqrt(np.concatenate([np.full(k, t.weight) for t, k in zip(dense, sizes, strict=True)]))
         diagonal = np.full(n, s.regularization)
-        self.selecting: list[tuple[Task, slice | np.ndarray, np.ndarray]] = []  # (task, its columns, its b)
+        self.selecting: list[tuple[Task, slice | np.ndarray]] = []  # (task, its columns)
         for t in tasks:
             columns = t.columns(stance)
             if columns is not None:
                 diagonal[columns] += t.weight
-                self.selecting.append((t, columns, np.zeros(t.size(stance))))
+                self.selecting.append((t, columns))
         self.q_diag = diagonal[:NV]
         self.H = np.diag(diagonal)
         self.g = np.zeros(n)
@@ -136,7 +136,8 @@ class WholeBodyController:
         # selecting tasks on the diagonal (fixed) and the gradient.
         A, b, w = L.A, L.b, L.w
         for task, task_A, task_b in L.dense:
-            task.fill(task_A, task_b, T, tg, stance)
+            task_A[:] = task.jacobian(T, stance)
+            task_b[:] = task.target(T, tg, stance)
         A *= w[:, None]
         Hq = A.T @ A
         Hq.flat[::NV + 1] += L.q_diag
@@ -144,9 +145,8 @@ class WholeBodyController:
         g = L.g
         g[:NV] = -(A.T @ (w * b))
         g[NV:] = -0.0  # -0.0 - x is -x to the bit, signed zeros too: the force task's -w f as written alone
-        for task, columns, target in L.selecting:
-            task.fill(None, target, T, tg, stance)
-            g[columns] -= task.weight * target
+        for task, columns in L.selecting:
+            g[columns] -= task.weight * task.target(T, tg, stance)
         Jc = T.J_feet[stance.legs].reshape(-1, NV)  # stacked stance Jacobians
         for c, block in L.blocks:
             c.fill(block, T, tg, stance, Jc)

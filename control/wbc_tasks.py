@@ -1,6 +1,7 @@
 """The whole-body QP's tasks: each a weighted least-squares term w |A x - b|^2 of the decision
 vector x = (qdd, f) (the joint accelerations, then the stance feet's forces), summed by the QP's
-assembly (:mod:`skatelib.control.wbc`) as pink and mink sum theirs.
+assembly (:mod:`skatelib.control.wbc`) as pink and mink sum theirs: a task gives its Jacobian A and
+its target b, the assembly the rest.
 
 A task either has dense rows over qdd (the centre of mass, the swinging feet: the assembly stacks
 every dense task's rows into one matrix and forms A'A once) or selects some entries of x (its A
@@ -34,10 +35,25 @@ class Task(Protocol):
         """Its rows for this stance set."""
         ...
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        """This tick's rows into ``A`` (a dense task's (size, NV) block; None for a selecting task)
-        and its targets into ``b`` (size,)."""
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        """A: (size, NV) over qdd for a dense task; a selecting task's identity (size, size)."""
         ...
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        """b: (size,) this tick's target."""
+        ...
+
+
+class _Selecting:
+    """A task whose A is the identity on its columns of x."""
+
+    weight: float
+
+    def size(self, stance: StanceSet) -> int:
+        raise NotImplementedError
+
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return np.eye(self.size(stance))
 
 
 class ComTask:
@@ -52,10 +68,11 @@ class ComTask:
     def size(self, stance: StanceSet) -> int:
         return 3
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        assert A is not None  # a dense task
-        A[:] = T.J_com
-        b[:] = tg.com_acc - T.dJv_com
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return T.J_com
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.com_acc - T.dJv_com
 
 
 class SwingFeetTask:
@@ -70,14 +87,15 @@ class SwingFeetTask:
     def size(self, stance: StanceSet) -> int:
         return 3 * len(stance.swing)
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        assert A is not None  # a dense task
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return T.J_feet[stance.swing].reshape(-1, NV)
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
         swing = stance.swing
-        A[:] = T.J_feet[swing].reshape(-1, NV)
-        b[:] = (tg.swing_acc[:, swing] - T.dJv_feet[swing].T).T.ravel()
+        return (tg.swing_acc[:, swing] - T.dJv_feet[swing].T).T.ravel()
 
 
-class AttitudeTask:
+class AttitudeTask(_Selecting):
     """The trunk's angular acceleration (the base's angular coordinates of qdd, trunk frame)."""
 
     def __init__(self, s: WbcSettings):
@@ -89,11 +107,11 @@ class AttitudeTask:
     def size(self, stance: StanceSet) -> int:
         return 3
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        b[:] = tg.angular_acc
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.angular_acc
 
 
-class PostureTask:
+class PostureTask(_Selecting):
     """The joints' accelerations toward the posture (``joints``: their columns of qdd, channel order)."""
 
     def __init__(self, s: WbcSettings, joints: slice | np.ndarray):
@@ -105,11 +123,11 @@ class PostureTask:
     def size(self, stance: StanceSet) -> int:
         return 12
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        b[:] = tg.posture_acc
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.posture_acc
 
 
-class ForceTask:
+class ForceTask(_Selecting):
     """The stance feet's contact forces toward the MPC's [N]."""
 
     def __init__(self, s: WbcSettings):
@@ -121,8 +139,8 @@ class ForceTask:
     def size(self, stance: StanceSet) -> int:
         return stance.n_forces
 
-    def fill(self, A: np.ndarray | None, b: np.ndarray, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> None:
-        b[:] = tg.forces[:, stance.legs].T.ravel()
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.forces[:, stance.legs].T.ravel()
 
 
 def default_tasks(s: WbcSettings, joints: slice | np.ndarray) -> list[Task]:
