@@ -9,7 +9,7 @@ following from them:
 The tasks (:mod:`skatelib.control.wbc_tasks`): the model COM point's acceleration, the trunk's
 angular acceleration, each swinging foot's acceleration, the contact forces toward the MPC's, and a
 posture term; the constraints (:mod:`skatelib.control.wbc_constraints`): the floating base's
-dynamics, the torque limits, the stance feet's accelerations, the normal bounds and friction
+dynamics with the torque limits, the stance feet's accelerations, the normal bounds and friction
 pyramids. Their targets come from :mod:`skatelib.control.wbc_targets`. This module sums the tasks
 and stacks the constraints into one solver-neutral :class:`~skatelib.control.qp.QpProblem`, solved
 by DAQP (dense dual active set) by default, chosen in ``make bench`` against the other backends.
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.qp import QpProblem, QpSolveFailed, solve_qp
-from skatelib.control.wbc_constraints import NONE, Constraint, RowBlock, TorqueLimits, default_constraints
+from skatelib.control.wbc_constraints import NONE, Constraint, FloatingBaseDynamics, RowBlock, default_constraints
 from skatelib.control.wbc_settings import NV, WbcSettings
 from skatelib.control.wbc_targets import StanceSet, WbcTargets
 from skatelib.control.wbc_tasks import Task, default_tasks
@@ -92,18 +92,18 @@ class WholeBodyController:
         self.mu = mu
         self.tasks = default_tasks(self.s, self._j) if tasks is None else tasks
         self.constraints = default_constraints(torque_limit_Nm, mu, self.s) if constraints is None else constraints
-        self._torque = next((c for c in self.constraints if isinstance(c, TorqueLimits)), None)
+        self._torque = next((c for c in self.constraints if isinstance(c, FloatingBaseDynamics)), None)
         self._layouts: dict[bytes, _Layout] = {}
 
     @property
     def tau_max(self) -> float:
-        """The joints' torque limit [N m] (infinite without a :class:`TorqueLimits` constraint)."""
+        """The joints' torque limit [N m] (infinite without a :class:`FloatingBaseDynamics` constraint)."""
         return np.inf if self._torque is None else self._torque.limit_Nm
 
     @tau_max.setter
     def tau_max(self, limit_Nm: float) -> None:
         if self._torque is None:
-            raise ValueError("this whole-body QP has no TorqueLimits constraint to set")
+            raise ValueError("this whole-body QP has no FloatingBaseDynamics constraint to set")
         self._torque.set_limit(limit_Nm)
 
     def problem(self, T: DynamicsTerms, tg: WbcTargets) -> QpProblem:

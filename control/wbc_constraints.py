@@ -1,9 +1,9 @@
 """The whole-body QP's constraints, each a block of rows lo <= C x <= up over x = (qdd, f) that the
 QP's assembly (:mod:`skatelib.control.wbc`) stacks in order:
 
-* :class:`BaseDynamics`: (M qdd + h - J_c^T f)_base = 0, the floating base's Newton-Euler (6 rows);
-* :class:`TorqueLimits`: |(M qdd + h - J_c^T f)_joints| <= tau_max (12 rows); these two lead the
-  matrix, so that its first 18 rows times x, plus h, are the generalized forces;
+* :class:`FloatingBaseDynamics`: (M qdd + h - J_c^T f)_base = 0, the floating base's Newton-Euler
+  (6 rows), and the torque limits |(M qdd + h - J_c^T f)_joints| <= tau_max (12 rows); it leads the
+  matrix, so that its 18 rows times x, plus h, are the generalized forces;
 * :class:`StanceFeet`: J_i qdd + Jdot_i v = a_i, each stance foot moving with its deck point or
   the ground (3 rows each);
 * :class:`SurfaceForces`: each stance foot's normal force within its bounds and (with
@@ -50,45 +50,33 @@ class Constraint(Protocol):
         ...
 
 
-class _GeneralizedForces:
-    """Rows of M qdd + h - J_c^T f over ``part`` of the velocity coordinates, between -band and band."""
-
-    def __init__(self, part: slice, band: np.ndarray, equality: bool):
-        self.part, self.band, self.equality = part, band, equality
-        self.neg_band = -band
-
-    def size(self, stance: StanceSet) -> int:
-        return self.part.stop - self.part.start
-
-    def fixed(self, block: RowBlock, stance: StanceSet) -> None:
-        block.equality[:] = self.equality
-
-    def fill(self, block: RowBlock, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet, Jc: np.ndarray) -> None:
-        part, rows, h = self.part, block.rows, T.h[self.part]
-        rows[:, :NV] = T.M[part]
-        np.negative(Jc.T[part], out=rows[:, NV:])
-        np.subtract(self.band, h, out=block.up)
-        np.subtract(self.neg_band, h, out=block.lo)
-
-
-class BaseDynamics(_GeneralizedForces):
-    """The floating base's Newton-Euler: (M qdd + h - J_c^T f)_base = 0 (no actuator on the base)."""
-
-    def __init__(self) -> None:
-        super().__init__(slice(0, 6), np.zeros(6), equality=True)
-
-
-class TorqueLimits(_GeneralizedForces):
-    """The joints' torques, (M qdd + h - J_c^T f)_joints, within +-``limit_Nm``."""
+class FloatingBaseDynamics:
+    """The generalized forces M qdd + h - J_c^T f of the floating-base model (18 rows, leading the
+    matrix): zero on the base (its Newton-Euler: no actuator there, 6 rows held at equality), the
+    joints' torques within +-``limit_Nm`` (12 rows). One block, as one product of M and J_c fills
+    both and the torques are read off it."""
 
     def __init__(self, limit_Nm: float):
-        super().__init__(slice(6, NV), np.full(NV - 6, limit_Nm), equality=False)
-        self.limit_Nm = limit_Nm
+        self.set_limit(limit_Nm)
 
     def set_limit(self, limit_Nm: float) -> None:
-        """Hold the torques within +-``limit_Nm`` from the next tick on."""
-        self.limit_Nm, self.band = limit_Nm, np.full(NV - 6, limit_Nm)
+        """Hold the joints' torques within +-``limit_Nm`` [N m] from the next tick on."""
+        self.limit_Nm = limit_Nm
+        self.band = np.r_[np.zeros(6), np.full(NV - 6, limit_Nm)]  # the rows' bounds, less h
         self.neg_band = -self.band
+
+    def size(self, stance: StanceSet) -> int:
+        return NV
+
+    def fixed(self, block: RowBlock, stance: StanceSet) -> None:
+        block.equality[:6] = True
+
+    def fill(self, block: RowBlock, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet, Jc: np.ndarray) -> None:
+        rows = block.rows
+        rows[:, :NV] = T.M
+        np.negative(Jc.T, out=rows[:, NV:])
+        np.subtract(self.band, T.h, out=block.up)
+        np.subtract(self.neg_band, T.h, out=block.lo)
 
 
 class StanceFeet:
@@ -160,4 +148,4 @@ def _block_index(k: int, per_leg: int) -> np.ndarray:
 
 def default_constraints(torque_limit_Nm: float, mu: float, s: WbcSettings) -> list[Constraint]:
     """The paper's constraints, in the order the QP stacks them (the generalized forces' rows first)."""
-    return [BaseDynamics(), TorqueLimits(torque_limit_Nm), StanceFeet(), SurfaceForces(mu, s)]
+    return [FloatingBaseDynamics(torque_limit_Nm), StanceFeet(), SurfaceForces(mu, s)]
