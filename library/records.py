@@ -29,7 +29,7 @@ class EntryRecord:
     units: Mapping[str, Sequence[str]] = field(default_factory=dict)
 
 
-def jsonable(v: Any) -> Any:
+def jsonable(v: object) -> Any:
     """Plain JSON value of an attribute (numpy scalars and arrays converted)."""
     if isinstance(v, np.generic):
         return v.item()
