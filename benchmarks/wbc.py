@@ -73,8 +73,8 @@ def measure(path: Path) -> list[Measured]:
         wall = time.perf_counter() - t0
         recorded = TwinLoop(lib, key, ClosedLoop(p, p), TwinPlant(TwinFigures.from_library(lib)))
         ticks: list[tuple[float, Any, Any]] = []
-        tasks = recorded.ctrl.tasks
-        recorded.ctrl.tasks = _Capture(tasks, ticks)  # type: ignore[assignment]
+        tasks = recorded.ctrl.targets
+        recorded.ctrl.targets = _Capture(tasks, ticks)  # type: ignore[assignment]
         recorded.ride()
         replay = _replay(recorded.ctrl, dataclasses.replace(tasks), ticks)
     wbc, mpc = statistics.median(run.wbc_times_s) * 1e3, statistics.median(run.mpc_times_s) * 1e3

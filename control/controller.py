@@ -25,8 +25,9 @@ from skatelib.control.params import SkateParams
 from skatelib.control.reference import Reference
 from skatelib.control.steering import LineKeeper, SteeredPlan
 from skatelib.control.update import MpcUpdate
-from skatelib.control.wbc import WbcOutput, WbcSettings, WholeBodyController
-from skatelib.control.wbc_tasks import ContactTable, TaskMaker
+from skatelib.control.wbc import WbcOutput, WholeBodyController
+from skatelib.control.wbc_settings import WbcSettings
+from skatelib.control.wbc_targets import ContactTable, TargetMaker
 from skatelib.library.margins import forward_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
 from skatelib.runtime import MotionLibrary
@@ -81,7 +82,7 @@ class SkateController:
         self.kin = LegKinematics.from_library(lib)
         self.dyn = RobotDynamics.from_library(lib)
         self.contacts = ContactTable(ref.contact, ref.t0, ref.t_stop, rates.tick_s)
-        self.tasks = TaskMaker(plan if keeper is None else SteeredPlan(plan, keeper), self.contacts, model, wbc)
+        self.targets = TargetMaker(plan if keeper is None else SteeredPlan(plan, keeper), self.contacts, model, wbc)
         self.wbc = WholeBodyController(self.dyn.v_index, self.kin.torque_limit_Nm, model.mu_plan, wbc)
         self.mpc_update = MpcUpdate(ref, model, mpc, rates.update_s)
         self.mpc_update.keeper = keeper
@@ -134,7 +135,7 @@ class SkateController:
             mpc_s = self.solve_s
         t1 = time.perf_counter()
         feet_v = (T.J_feet @ vp).T
-        out = self.wbc.solve(T, self.tasks(t, st, T, feet_v, self.forces))
+        out = self.wbc.solve(T, self.targets(t, st, T, feet_v, self.forces))
         wbc_s = t_terms + time.perf_counter() - t1
         self._applied += out.forces
         self._ticks += 1

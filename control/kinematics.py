@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -30,8 +29,8 @@ class LegKinematics:
         lower_rad / upper_rad: (12,) joint limits.
     """
 
-    model: Any
-    data: Any
+    model: pin.Model
+    data: pin.Data
     q_index: np.ndarray
     v_index: np.ndarray
     feet: tuple[int, ...]

@@ -1,125 +1,148 @@
-"""One whole-body tick's tasks (:class:`skatelib.control.wbc.WbcTargets`) from the body plan and
-the measured state, and the stance set they hold.
+"""The whole-body QP's tasks: each a weighted least-squares term w |A x - b|^2 of the decision
+vector x = (qdd, f) (the joint accelerations, then the stance feet's forces), summed by the QP's
+assembly (:mod:`skatelib.control.wbc`) as pink and mink sum theirs: a task gives its Jacobian A and
+its target b, the assembly the rest.
 
-* The centre of mass: the MPC's force sum over the mass plus PD to the plan, placed on the board's
-  frame that does not roll (its top centre as it would be with the deck level: a frame that rolls
-  with the deck would move the body sideways as the deck rolls, and the deck roll further).
-* The trunk's attitude: PD to the plan's, its yaw from the board's.
-* A swinging foot bound for the deck follows the deck (rolled with it); one bound for the floor is
-  placed in the level board frame but moves at the plan's speed over the floor, so that it lands
-  at rest on it whatever speed the board has (at the board's speed it would land sliding, and
-  brake). A foot planned down but not yet touching aims a little into its surface.
-* A stance foot accelerates with its deck point (or stays on the floor), with velocity feedback.
-* The stance set: planned and touching; a foot that lands shortly before its planned stance stays
-  down; one planned up leaves its surface.
+A task either has dense rows over qdd (the centre of mass, the swinging feet: the assembly stacks
+every dense task's rows into one matrix and forms A'A once) or selects some entries of x (its A
+the identity on them: the attitude, the posture, the forces; its Hessian a fixed diagonal, filled
+once per stance set, its gradient -w b on those entries).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
-import pinocchio as pin
-from skatelib.control.body_plan import BodyTargets, Plan, yaw_matrix
-from skatelib.control.feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.multibody import DynamicsTerms
-from skatelib.control.params import SkateParams
-from skatelib.control.wbc import WbcSettings, WbcTargets
-from skatelib.library.channels import BOARD, SWING
-
-TOUCHDOWN_REACH_M = 0.005  # a foot planned down but not touching aims this far into its surface
-EARLY_CONTACT_S = 0.1  # a swinging foot that lands this close before its planned stance stays down
-UP = np.array([0.0, 0.0, 1.0])
+from skatelib.control.wbc_settings import NV, WbcSettings
+from skatelib.control.wbc_targets import StanceSet, WbcTargets
 
 
-class ContactTable:
-    """The planned contact codes on a grid of ``step_s`` from ``t0`` to ``t_stop`` (and
-    ``LOOKAHEAD_S`` beyond), whether each foot is planned down, and whether it is on the deck now or
-    (swinging) bound for it next: what a tick asks of the schedule several times, looked up instead
-    of sampled."""
+class Task(Protocol):
+    """One weighted least-squares term w |A x - b|^2 of the whole-body QP."""
 
-    LOOKAHEAD_S = 0.6
+    @property
+    def weight(self) -> float:
+        """w (a dense task's rows are scaled by its square root)."""
+        ...
 
-    def __init__(self, contact_at: Callable[[float], np.ndarray], t0: float, t_stop: float, step_s: float):
-        self.t0, self.step = t0, step_s
-        n = math.ceil((t_stop + self.LOOKAHEAD_S - t0) / step_s) + 2
-        self.codes = np.array([contact_at(t0 + k * step_s) for k in range(n)], dtype=np.int8)
-        upcoming = self.codes.copy()  # each foot's code now, or for a swinging one its next stance's
-        for k in range(n - 2, -1, -1):
-            later = upcoming[k + 1]
-            fill = (self.codes[k] == SWING) & (later != SWING)
-            upcoming[k, fill] = later[fill]
-        self.planned = self.codes != SWING  # (n, 4) planned down
-        self.deck_next = upcoming == BOARD  # (n, 4) now or next on the deck
+    def columns(self, stance: StanceSet) -> slice | np.ndarray | None:
+        """The entries of x the task selects (A their identity), or None: dense rows over qdd."""
+        ...
 
-    def index(self, t: float) -> int:
-        """The grid row of ``t`` (clamped)."""
-        return min(max(round((t - self.t0) / self.step), 0), len(self.codes) - 1)
+    def size(self, stance: StanceSet) -> int:
+        """Its rows for this stance set."""
+        ...
 
-    def at(self, t: float) -> np.ndarray:
-        return self.codes[self.index(t)]
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        """A: (size, NV) over qdd for a dense task; a selecting task's identity (size, size)."""
+        ...
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        """b: (size,) this tick's target."""
+        ...
 
 
-@dataclass
-class TaskMaker:
-    """The tasks of each tick; keeps the stance set between ticks."""
+class _Selecting:
+    """A task whose A is the identity on its columns of x."""
 
-    plan: Plan
-    contacts: ContactTable  # the planned contact codes
-    p: SkateParams
-    g: WbcSettings
+    weight: float
 
-    def __post_init__(self) -> None:
-        self.stance = np.zeros(4, dtype=bool)
-        self._gravity = self.p.gravity_mps2 * UP
+    def size(self, stance: StanceSet) -> int:
+        raise NotImplementedError
 
-    def __call__(self, t: float, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray,
-                 forces: np.ndarray) -> WbcTargets:
-        g, table, bt = self.g, self.contacts, self.plan.at(t)  # (a plan may adapt while it runs)
-        k = table.index(t)
-        yaw = st.deck_yaw
-        Ry = yaw_matrix(yaw)
-        deck_R = st.deck_R
-        level = st.deck_pos + self.p.roll_axis_depth_m * (UP - deck_R[:, 2])
-        planned = table.planned[k]
-        touching = st.foot_touch > 0
-        early = touching & table.planned[table.index(t + EARLY_CONTACT_S)]  # landed before its time
-        self.stance = (planned | early) & (touching | self.stance)
-        v_ref = Ry @ bt.com_v
-        v_ref[0:2] += st.deck_v[0:2]
-        com_acc = (forces @ planned / self.p.mass_kg - self._gravity
-                   + g.kp_com * (level + Ry @ bt.com - T.com) + g.kd_com * (v_ref - T.com_v))
-        R = st.trunk_R
-        roll, pitch, yaw_plan = bt.rpy.tolist()
-        ang_acc = (g.kp_attitude * (R.T @ pin.log3(pin.rpy.rpyToMatrix(roll, pitch, yaw_plan + yaw) @ R.T))
-                   + g.kd_attitude * (bt.omega - st.trunk_omega))
-        swing_acc, on_deck = self._feet(k, st, T.feet, feet_v, bt, (level, Ry))
-        W = pin.skew(st.deck_omega)
-        spin = W @ (T.feet - st.deck_pos[:, None])  # the deck points' velocities from its rotation
-        stance_acc = np.where(st.foot_touch == ON_FLOOR, -g.stance_gain * feet_v,
-                              W @ spin + g.stance_gain * (st.deck_v[:, None] + spin - feet_v))
-        posture = g.kp_posture * (bt.q - st.q) - g.kd_posture * st.qd
-        return WbcTargets(stance=self.stance.copy(), on_deck=on_deck, deck_R=deck_R, stance_acc=stance_acc,
-                          com_acc=com_acc, angular_acc=ang_acc, swing_acc=swing_acc, forces=forces,
-                          posture_acc=posture)
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return np.eye(self.size(stance))
 
-    def _feet(self, k: int, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
-              frame: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Swinging feet's accelerations and which feet are on (or bound for) the deck (module
-        docstring), at the contact table's index ``k``; ``frame``: the level board frame's origin and
-        yaw rotation."""
-        g, table = self.g, self.contacts
-        level, Ry = frame
-        deck = table.deck_next[k]
-        deck_n = st.deck_R[:, 2:3]
-        target = np.where(deck, st.deck_pos[:, None] + st.deck_R @ bt.feet, level[:, None] + Ry @ bt.feet)
-        v_target = Ry @ (bt.feet_v + np.where(deck, 0.0, bt.board_v[:, None])) + st.deck_v[:, None] * deck
-        touch = st.foot_touch
-        on_deck = (touch == ON_DECK) | ((touch == 0) & deck)  # touching the deck, or bound for it
-        normals = np.where(on_deck, deck_n, UP[:, None])
-        reach = table.planned[k] & ~self.stance
-        target -= TOUCHDOWN_REACH_M * (normals * reach)
-        acc = Ry @ bt.feet_a + g.kp_swing * (target - feet) + g.kd_swing * (v_target - feet_v)
-        return acc, on_deck
+
+class ComTask:
+    """The model COM point's acceleration: J_com qdd = com_acc - Jdot_com v."""
+
+    def __init__(self, s: WbcSettings):
+        self.weight = s.w_com
+
+    def columns(self, stance: StanceSet) -> None:
+        return None
+
+    def size(self, stance: StanceSet) -> int:
+        return 3
+
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return T.J_com
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.com_acc - T.dJv_com
+
+
+class SwingFeetTask:
+    """Each swinging foot's acceleration along its path: J_i qdd = swing_acc_i - Jdot_i v."""
+
+    def __init__(self, s: WbcSettings):
+        self.weight = s.w_swing
+
+    def columns(self, stance: StanceSet) -> None:
+        return None
+
+    def size(self, stance: StanceSet) -> int:
+        return 3 * len(stance.swing)
+
+    def jacobian(self, T: DynamicsTerms, stance: StanceSet) -> np.ndarray:
+        return T.J_feet[stance.swing].reshape(-1, NV)
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        swing = stance.swing
+        return (tg.swing_acc[:, swing] - T.dJv_feet[swing].T).T.ravel()
+
+
+class AttitudeTask(_Selecting):
+    """The trunk's angular acceleration (the base's angular coordinates of qdd, trunk frame)."""
+
+    def __init__(self, s: WbcSettings):
+        self.weight = s.w_attitude
+
+    def columns(self, stance: StanceSet) -> slice:
+        return slice(3, 6)
+
+    def size(self, stance: StanceSet) -> int:
+        return 3
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.angular_acc
+
+
+class PostureTask(_Selecting):
+    """The joints' accelerations toward the posture (``joints``: their columns of qdd, channel order)."""
+
+    def __init__(self, s: WbcSettings, joints: slice | np.ndarray):
+        self.weight, self.joints = s.w_posture, joints
+
+    def columns(self, stance: StanceSet) -> slice | np.ndarray:
+        return self.joints
+
+    def size(self, stance: StanceSet) -> int:
+        return 12
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.posture_acc
+
+
+class ForceTask(_Selecting):
+    """The stance feet's contact forces toward the MPC's [N]."""
+
+    def __init__(self, s: WbcSettings):
+        self.weight = s.w_force
+
+    def columns(self, stance: StanceSet) -> slice:
+        return slice(NV, NV + stance.n_forces)
+
+    def size(self, stance: StanceSet) -> int:
+        return stance.n_forces
+
+    def target(self, T: DynamicsTerms, tg: WbcTargets, stance: StanceSet) -> np.ndarray:
+        return tg.forces[:, stance.legs].T.ravel()
+
+
+def default_tasks(s: WbcSettings, joints: slice | np.ndarray) -> list[Task]:
+    """The paper's tasks, in the order the QP stacks them (dense rows: the COM's, then the swinging feet's)."""
+    return [ComTask(s), SwingFeetTask(s), AttitudeTask(s), PostureTask(s, joints), ForceTask(s)]

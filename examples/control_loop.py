@@ -23,12 +23,12 @@ MPC_EVERY = 17  # ticks per MPC update: 500 / 17 = 29.4 Hz, the nearest to the p
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("library", nargs="?", type=Path, default=Path("out/cyberdog2-default.h5"))
-    ap.add_argument("--speed", type=float, default=0.5, help="target speed [m/s]")
+    ap.add_argument("--speed", dest="target_velocity_mps", type=float, default=0.5, help="target speed [m/s]")
     ap.add_argument("--strides", type=int, default=None, help="stride count (default: any)")
     args = ap.parse_args()
 
     lib = MotionLibrary.open(args.library)
-    entry = lib.select(args.speed, strides=args.strides, clamp=True)
+    entry = lib.select(args.target_velocity_mps, strides=args.strides, clamp=True)
     print(f"{args.library}: riding {entry.key} ({entry.duration_s:.2f} s, then its end state)")
     ticks = int((entry.duration_s + 0.5) / WBC_DT_S)
     busy = np.empty(ticks)

@@ -19,7 +19,7 @@ from skatelib.control.mpc import MpcConfig
 from skatelib.control.params import SkateParams
 from skatelib.control.reference import EntryReference
 from skatelib.control.settings import TrackSettings
-from skatelib.control.wbc import WbcSettings
+from skatelib.control.wbc_settings import WbcSettings
 from skatelib.runtime import MotionLibrary
 
 

@@ -58,8 +58,8 @@ class ValueChange:
     """A scalar that differs: an attribute, a figure of a JSON attribute, a config key."""
 
     name: str
-    a: Any
-    b: Any
+    a: object  # None: absent on that side
+    b: object
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ class EntryRecord:
     units: Mapping[str, Sequence[str]] = field(default_factory=dict)
 
 
-def jsonable(v: Any) -> Any:
+def jsonable(v: object) -> Any:
     """Plain JSON value of an attribute (numpy scalars and arrays converted)."""
     if isinstance(v, np.generic):
         return v.item()
@@ -40,6 +40,6 @@ def jsonable(v: Any) -> Any:
     return v
 
 
-def text(v: Any) -> str:
+def text(v: object) -> str:
     """An attribute's string (h5py hands out bytes or str)."""
     return v.decode() if isinstance(v, bytes) else str(v)

@@ -17,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.reference import EntryReference
-from skatelib.library import schema
 from skatelib.library.channels import NX
 from skatelib.proving.loop import simulate
 from skatelib.proving.plant import NB
@@ -45,5 +44,4 @@ def run_entry(lib: MotionLibrary, entry: Entry, loop: ClosedLoop, keep_trace: bo
     x_init[NX:NX + 3] = ref.board_pos[0, 0:3]
     kin = LegKinematics.from_library(lib)
     run = simulate(ref, x_init, loop, keep_trace, kin)
-    label = float(entry.attrs[schema.A_TARGET_VELOCITY])
-    return track_result(key, label, run, loop.plant, kin.torque_limit_Nm), run
+    return track_result(key, entry.target_velocity_mps, run, loop.plant, kin.torque_limit_Nm), run

@@ -14,15 +14,18 @@ its target: within 5 %, a stop below 0.05 m/s; the whole ride by the entry verdi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.control.reference import STAGE_ENDS
 from skatelib.library import schema
 from skatelib.proving.closed_loop import run_entry
 from skatelib.proving.setup import ClosedLoop
-from skatelib.proving.verdict import speed_verdict
+from skatelib.proving.verdict import TrackResult, speed_verdict
 from skatelib.runtime import Entry, MotionLibrary
+
+if TYPE_CHECKING:  # the twin's verdict (a ride on the twin: proving.twin.ride); no import at run time
+    from skatelib.proving.twin.verdict import TwinResult
 
 
 def parse_ride(text: str) -> list[tuple[float, float]]:
@@ -130,11 +133,11 @@ def plan_ride(lib: MotionLibrary, stages: list[tuple[float, float]]) -> RidePlan
 class StageResult:
     """One stage of a ride: its entries, its target and the momentum speed at its end."""
 
-    v_from: float
-    v_to: float
+    from_velocity_mps: float
+    target_velocity_mps: float
     keys: tuple[str, ...]
     t_end_s: float
-    speed_mps: float
+    momentum_at_end_mps: float
     passed: bool
 
 
@@ -145,7 +148,7 @@ class RideResult:
     reference."""
 
     stages: tuple[StageResult, ...]
-    run: Any
+    run: TrackResult | TwinResult
     entry: Entry | None = None
     reference: Entry | None = None
 

@@ -32,14 +32,14 @@ class SteerResult:
     """One steering run.
 
     Attributes:
-        speed_mps: Riding speed (0: at rest).
+        target_velocity_mps: The riding speed the maneuver holds [m/s] (0: at rest).
         roll_rms_error_rad: RMS of deck roll minus its reference over the run (after the first second).
         max_lateral_shift_m: Largest torso (COM) shift from the deck's centre line after the first second.
         min_normal_N: Lowest normal force of a foot on the deck.
         unloaded_steps: Plant steps in which a deck foot carried no load (it would lift off).
     """
 
-    speed_mps: float
+    target_velocity_mps: float
     duration_s: float
     roll_rms_error_rad: float
     max_roll_rad: float
@@ -67,13 +67,13 @@ class RollWave:
 class SteerReference:
     """Four legs on the deck, deck roll following ``amplitude sin(2 pi t / period)``."""
 
-    def __init__(self, lib: MotionLibrary, p: SkateParams, speed_mps: float, duration_s: float,
+    def __init__(self, lib: MotionLibrary, p: SkateParams, target_velocity_mps: float, duration_s: float,
                  adapt_stiffness: bool = True, wave: RollWave | None = None):
-        last = np.asarray(lib.select(speed_mps, clamp=True).state[-1], dtype=np.float64)
+        last = np.asarray(lib.select(target_velocity_mps, clamp=True).state[-1], dtype=np.float64)
         self.p = p
         self.t0, self.t_end, self.t_stop = 0.0, 0.0, duration_s
         self.stage_ends: tuple[float, ...] = ()
-        self.speed = speed_mps
+        self.speed = target_velocity_mps
         wave = wave or RollWave()
         self.amplitude, self.period = wave.amplitude_rad, wave.period_s
         self.deck_z = lib.quadruped_model.board.deck_height_m  # the board origin is on the deck's top
@@ -163,12 +163,12 @@ class SteerReference:
         return HorizonRef(x_ref, u_ref, np.full((n, 4), BOARD, dtype=np.int8), np.ones(n, dtype=bool))
 
 
-def steer(lib: MotionLibrary, loop: ClosedLoop, speed_mps: float, duration_s: float = 9.0,
+def steer(lib: MotionLibrary, loop: ClosedLoop, target_velocity_mps: float, duration_s: float = 9.0,
           adapt_stiffness: bool = True) -> SteerResult:
     """Run the steering experiment and judge it: deck-roll error below 0.03 rad RMS, no foot
     unloading from the deck, no fall, no slip. ``adapt_stiffness``: the torso shift follows the
     trucks' stiffness as measured while rolling (False: the model's K_B throughout)."""
-    ref = SteerReference(lib, loop.model, speed_mps, duration_s, adapt_stiffness=adapt_stiffness)
+    ref = SteerReference(lib, loop.model, target_velocity_mps, duration_s, adapt_stiffness=adapt_stiffness)
     run = simulate(ref, ref.initial_state(), loop)
     t = np.array([u[0] for u in run.updates])
     states = np.array([u[1] for u in run.updates]).reshape(-1, NB)
@@ -189,7 +189,8 @@ def steer(lib: MotionLibrary, loop: ClosedLoop, speed_mps: float, duration_s: fl
     if run.plant.log.slips:
         reasons.append(slip_reason(run.plant))
     return SteerResult(
-        speed_mps=speed_mps, duration_s=duration_s, roll_rms_error_rad=rms, max_roll_rad=run.max_roll_rad,
+        target_velocity_mps=target_velocity_mps, duration_s=duration_s, roll_rms_error_rad=rms,
+        max_roll_rad=run.max_roll_rad,
         max_lateral_shift_m=shift, min_normal_N=float(run.plant.log.min_normal_N), unloaded_steps=unloaded,
         slips=run.plant.log.slips, mpc_median_ms=float(np.median(run.times_s) * 1e3) if run.times_s else float("nan"),
         fall=run.fall, passed=not reasons, reasons="; ".join(reasons),

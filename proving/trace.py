@@ -26,7 +26,7 @@ class Trace:
     contact: np.ndarray
     feet: np.ndarray
 
-    def as_entry(self, key: str, label_mps: float, stride: int = 1) -> Entry:
+    def as_entry(self, key: str, target_velocity_mps: float, stride: int = 1) -> Entry:
         """The run as a library entry (every ``stride``-th plant step; control k acts on
         [t_k, t_k+1), so one row fewer), for the same views as the library's entries."""
         sl = slice(None, None, stride)
@@ -41,7 +41,7 @@ class Trace:
         }
         columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
                    schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: ("board_x", "board_y", "board_z", "board_yaw")}
-        attrs = {schema.A_TARGET_VELOCITY: label_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
+        attrs = {schema.A_TARGET_VELOCITY: target_velocity_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
                  schema.A_STATUS: "closed loop"}
         return Entry(key, attrs, arrays, columns)
 

@@ -50,7 +50,7 @@ class TrackJob:
         lib = MotionLibrary.open(self.spec.path)
         result, trace = track_entry(lib, self.key, self.spec.loop(lib), keep_trace=self.keep_run)
         stride = self.spec.settings.plant_substeps
-        return result, trace.as_entry(self.key, result.label_mps, stride) if trace is not None else None
+        return result, trace.as_entry(self.key, result.target_velocity_mps, stride) if trace is not None else None
 
 
 @dataclass(frozen=True)
@@ -58,11 +58,11 @@ class SteerJob:
     """The steering experiment at one speed, with the library's model and stance."""
 
     spec: JobSpec
-    speed_mps: float
+    target_velocity_mps: float
 
     def __call__(self) -> SteerResult:
         lib = MotionLibrary.open(self.spec.path)
-        return steer(lib, self.spec.loop(lib), self.speed_mps)
+        return steer(lib, self.spec.loop(lib), self.target_velocity_mps)
 
 
 def _quadruped(path: Path, perturb: str, what: str) -> MotionLibrary:

@@ -24,7 +24,7 @@ from skatelib.proving.plant import Plant
 from skatelib.proving.trace import Run
 
 SPEED_TOLERANCE = 0.05
-STOP_TOLERANCE_MPS = 0.05  # a stop (label 0) delivers at most this speed
+STOP_TOLERANCE_MPS = 0.05  # a stop (target speed 0) delivers at most this speed
 HEIGHT_LIMIT_M = 0.05  # body height over the deck may leave its reference by this much
 TILT_LIMIT_RAD = 0.35
 REACH_MARGIN_M = 0.05
@@ -36,7 +36,7 @@ class TrackResult:
     """One entry's closed-loop run (JSON-able numbers; ``trace`` holds the time series)."""
 
     key: str
-    label_mps: float
+    target_velocity_mps: float
     speed_after_1s_mps: float
     momentum_after_1s_mps: float
     momentum_at_end_mps: float
@@ -86,21 +86,24 @@ def slip_reason(plant: Plant) -> str:
             f"{plant.p.mu:.2f})") if log.slips else ""
 
 
-def speed_verdict(label: float, delivered: float) -> tuple[float, list[str]]:
-    """A delivered speed against its label: the error (relative; for a stop, the speed left in m/s)
-    and the reason it fails (more than 5 % off, a stop above 0.05 m/s, no speed at all), if any."""
-    err = (delivered - label) / label if label else delivered
-    if label and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
-        return err, [f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {label:.2f}"]
-    if not label and not abs(delivered) <= STOP_TOLERANCE_MPS:
+def speed_verdict(target_velocity_mps: float, delivered: float) -> tuple[float, list[str]]:
+    """A delivered speed against the entry's target speed (its label) [m/s]: the error (relative;
+    for a stop, the speed left in m/s) and the reason it fails (more than 5 % off, a stop above
+    0.05 m/s, no speed at all), if any."""
+    v = target_velocity_mps
+    err = (delivered - v) / v if v else delivered
+    if v and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
+        return err, [f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {v:.2f}"]
+    if not v and not abs(delivered) <= STOP_TOLERANCE_MPS:
         return err, [f"a stop still rides at {delivered:.3f} m/s (at most {STOP_TOLERANCE_MPS})"]
     return err, []
 
 
-def track_result(key: str, label: float, run: Run, plant_params: SkateParams, torque_limit_Nm: float) -> TrackResult:
+def track_result(key: str, target_velocity_mps: float, run: Run, plant_params: SkateParams,
+                 torque_limit_Nm: float) -> TrackResult:
     """The verdict on one entry's run (see the module docstring)."""
     delivered = run.momentum_after_1s_mps + run.friction_loss_Ns / (plant_params.mass_kg + plant_params.board_mass_kg)
-    err, reasons = speed_verdict(label, delivered)
+    err, reasons = speed_verdict(target_velocity_mps, delivered)
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     if run.plant.log.slips:
@@ -113,7 +116,7 @@ def track_result(key: str, label: float, run: Run, plant_params: SkateParams, to
         reasons.append(f"a stance joint {run.max_joint_limit_excess_rad:.3f} rad beyond its limit")
     ms = np.array(run.times_s) * 1e3
     return TrackResult(
-        key=key, label_mps=label, speed_after_1s_mps=run.speed_after_1s_mps,
+        key=key, target_velocity_mps=target_velocity_mps, speed_after_1s_mps=run.speed_after_1s_mps,
         momentum_after_1s_mps=run.momentum_after_1s_mps, momentum_at_end_mps=run.momentum_at_end_mps,
         delivered_mps=delivered, speed_error=err, max_deck_roll_rad=run.max_roll_rad,
         max_position_error_m=run.max_position_error_m, max_attitude_error_rad=run.max_attitude_error_rad,

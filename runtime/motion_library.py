@@ -19,6 +19,7 @@ from skatelib.library.model_io import read_humanoid_model, read_quadruped_model
 from skatelib.library.reader import EntryRecord, LibraryData, read_library
 from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck
 from skatelib.runtime.entry import Entry, EntryNotFound
+from skatelib.runtime.renamed import renamed
 from skatelib.runtime.routes import route, speed_key
 
 
@@ -26,14 +27,13 @@ class MotionLibrary:
     """A motion library loaded into memory (``MotionLibrary.open(path)``).
 
     ``key in lib``, ``lib[key]``, ``lib.keys()`` and ``len(lib)`` work on entry keys; iterating
-    yields the :class:`Entry` objects in file order (strides, then speed).
+    yields the :class:`Entry` objects in file order (strides, then speed). Speeds go by one name
+    each (``target_velocity_mps``, ``from_velocity_mps``); the old keywords raise a TypeError naming them.
     """
 
     def __init__(self, data: LibraryData):
-        self.path = data.path
-        self.attrs = data.attrs
-        self.model = data.model_attrs
-        self.model_arrays = data.model_arrays
+        self.path, self.attrs = data.path, data.attrs
+        self.model, self.model_arrays = data.model_attrs, data.model_arrays
         self.urdf = data.model_text.get(schema.D_ROBOT_URDF, "")
         self.content_sha256 = data.content_sha256  # the file's verified SHA-256 (format doc, Integrity)
         self._entries = {k: _entry(r) for k, r in data.entries.items()}
@@ -113,64 +113,72 @@ class MotionLibrary:
         return (f"MotionLibrary({str(self.path)!r}, kind={self.kind!r}, {len(self)} entries, {ok} successful, "
                 f"speeds {self.speeds()} m/s)")
 
-    def speeds(self, strides: int | None = None, v_from: float = 0.0) -> list[float]:
-        """Target speeds of the successful entries from ``v_from`` (0: the start-ups; with ``strides``
-        strides, when given) [m/s]."""
+    @renamed(v_from="from_velocity_mps")
+    def speeds(self, strides: int | None = None, from_velocity_mps: float = 0.0) -> list[float]:
+        """Target speeds of the successful entries from ``from_velocity_mps`` (0: the start-ups; with
+        ``strides`` strides, when given) [m/s]."""
         return sorted({e.target_velocity_mps for e in self if e.success and speed_key(e.from_velocity_mps) ==
-                       speed_key(v_from) and (strides is None or e.n_strides == strides)})
+                       speed_key(from_velocity_mps) and (strides is None or e.n_strides == strides)})
 
     def start_speeds(self) -> list[float]:
         """The speeds successful entries start at: 0 (the start-ups) and the transitions' [m/s]."""
         return sorted({speed_key(e.from_velocity_mps) for e in self if e.success})
 
-    def _candidates(self, strides: int | None, v_from: float = 0.0) -> list[Entry]:
-        start = [e for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(v_from)]
+    def _candidates(self, strides: int | None, from_velocity_mps: float = 0.0) -> list[Entry]:
+        v0 = from_velocity_mps
+        start = [e for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(v0)]
         if not start:
-            raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v_from} m/s; entries start at "
+            raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v0} m/s; entries start at "
                                 f"{self.start_speeds()} m/s (0: from rest)")
         c = [e for e in start if strides is None or e.n_strides == strides]
         if not c:
             have = sorted({e.n_strides for e in start})
-            raise EntryNotFound(f"{self.path}: no successful entry from {v_from} m/s with strides={strides}; "
+            raise EntryNotFound(f"{self.path}: no successful entry from {v0} m/s with strides={strides}; "
                                 f"strides available: {have}")
         return c
 
-    def select(self, velocity: float, strides: int | None = None, clamp: bool = False, v_from: float = 0.0) -> Entry:
-        """The successful entry from ``v_from`` (0: a start-up from rest) whose target speed is nearest
-        ``velocity`` [m/s] (fewest strides on ties).
+    @renamed(velocity="target_velocity_mps", v_from="from_velocity_mps", v_to="target_velocity_mps")
+    def select(self, target_velocity_mps: float, strides: int | None = None, clamp: bool = False,
+               from_velocity_mps: float = 0.0) -> Entry:
+        """The successful entry from ``from_velocity_mps`` (0: a start-up from rest) nearest
+        ``target_velocity_mps`` [m/s] (fewest strides on ties).
 
         Raises:
             ValueError: When a speed is NaN or infinite.
-            EntryNotFound: When no successful entry starts at ``v_from`` or has ``strides`` strides, or
-                ``velocity`` lies outside the stored speeds and ``clamp`` is false (the message lists
-                the speeds; :meth:`route` chains entries where no single one gets there).
+            EntryNotFound: When no successful entry starts at ``from_velocity_mps`` or has ``strides``
+                strides, or ``target_velocity_mps`` lies outside the stored speeds and ``clamp`` is
+                false (the message lists the speeds; :meth:`route` chains entries where no single one
+                gets there).
         """
-        if not (isfinite(velocity) and isfinite(v_from)):
-            raise ValueError(f"select(velocity, v_from): finite speeds in m/s, got {velocity!r}, {v_from!r}")
-        c = self._candidates(strides, v_from)
+        v, v0 = target_velocity_mps, from_velocity_mps
+        if not (isfinite(v) and isfinite(v0)):
+            raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
+        c = self._candidates(strides, v0)
         speeds = sorted({e.target_velocity_mps for e in c})
-        if not clamp and not speeds[0] - 1e-9 <= velocity <= speeds[-1] + 1e-9:
+        if not clamp and not speeds[0] - 1e-9 <= v <= speeds[-1] + 1e-9:
             which = "" if strides is None else f" for {strides} strides"
-            start = "" if not v_from else f" from {v_from} m/s"
-            raise EntryNotFound(f"{self.path}: {velocity} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
+            start = "" if not v0 else f" from {v0} m/s"
+            raise EntryNotFound(f"{self.path}: {v} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
                                 "pass clamp=True for the nearest, or route() for a chain")
-        return min(c, key=lambda e: (abs(e.target_velocity_mps - velocity), e.n_strides))
+        return min(c, key=lambda e: (abs(e.target_velocity_mps - v), e.n_strides))
 
-    def route(self, v_from: float, v_to: float) -> list[Entry]:
-        """The chain of successful entries that rides from ``v_from`` to ``v_to`` [m/s] in the least
-        time (0: at rest), one entry when one gets there (:func:`skatelib.runtime.routes.route`).
+    @renamed(v_from="from_velocity_mps", v_to="target_velocity_mps")
+    def route(self, from_velocity_mps: float, target_velocity_mps: float) -> list[Entry]:
+        """The chain of successful entries that rides from ``from_velocity_mps`` to
+        ``target_velocity_mps`` [m/s] in the least time (0: at rest), one entry when one gets there
+        (:func:`skatelib.runtime.routes.route`).
 
         Raises:
             ValueError: When the speeds are equal or negative.
             EntryNotFound: When no chain gets there (the message lists what can be reached).
         """
-        return route(self, v_from, v_to, f"{self.path}: ")
+        return route(self, from_velocity_mps, target_velocity_mps, f"{self.path}: ")
 
-    def blend(self, velocity: float, strides: int | None = None, strict: bool = True,
+    @renamed(velocity="target_velocity_mps")
+    def blend(self, target_velocity_mps: float, strides: int | None = None, strict: bool = True,
               margin: BlendMargin = DEFAULT_MARGIN) -> Entry:
-        """Linear blend of the two successful start-ups (from rest) around ``velocity`` [m/s] with the
-        same strides (the fewest strides whose start-ups bracket it when ``strides`` is None; the
-        transitions' stride counts play no part).
+        """Linear blend of the two successful start-ups (from rest) around ``target_velocity_mps``
+        [m/s] with the same strides (the fewest whose start-ups bracket it when ``strides`` is None).
 
         Both entries share the contact schedule (same period and duty), so phases align knot by
         knot. The blend is checked against Coulomb cones and joint limits with ``margin``
@@ -178,44 +186,48 @@ class MotionLibrary:
         ``blend_weights``, and ``success`` only when both sources succeeded and the check passes.
 
         Raises:
-            ValueError: When ``velocity`` is NaN or infinite.
-            EntryNotFound: When no stride count's entries bracket ``velocity``.
+            ValueError: When ``target_velocity_mps`` is NaN or infinite.
+            EntryNotFound: When no stride count's entries bracket ``target_velocity_mps``.
             SkatelibError: When ``strict`` and the blend misses the margins.
         """
-        if not isfinite(velocity):
-            raise ValueError(f"blend(velocity): velocity must be a finite speed in m/s, got {velocity!r}")
-        a, b = self._bracket(velocity, strides)
-        e = blend_pair(a, b, velocity, self._margin_check(margin))
+        v = target_velocity_mps
+        if not isfinite(v):
+            raise ValueError(f"blend(target_velocity_mps): a finite speed in m/s, got {v!r}")
+        a, b = self._bracket(v, strides)
+        e = blend_pair(a, b, v, self._margin_check(margin))
         if strict and e.check is not None and not e.check.ok:
-            raise SkatelibError(f"blend at {velocity} m/s misses its margins: {e.check}")
+            raise SkatelibError(f"blend at {v} m/s misses its margins: {e.check}")
         return e
 
-    def _bracket(self, velocity: float, strides: int | None) -> tuple[Entry, Entry]:
+    def _bracket(self, target_velocity_mps: float, strides: int | None) -> tuple[Entry, Entry]:
         # The start-ups' stride counts only: a transition's count may be one no start-up has.
         counts = [strides] if strides is not None else sorted(
             {e.n_strides for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(0.0)})
         for s in counts:
             c = sorted(self._candidates(s), key=lambda e: e.target_velocity_mps)
-            lo = [e for e in c if e.target_velocity_mps <= velocity]
-            hi = [e for e in c if e.target_velocity_mps >= velocity]
+            lo = [e for e in c if e.target_velocity_mps <= target_velocity_mps]
+            hi = [e for e in c if e.target_velocity_mps >= target_velocity_mps]
             if lo and hi:
                 return lo[-1], hi[0]
         ranges = {s: self.speeds(s) for s in counts}
-        raise EntryNotFound(f"{self.path}: {velocity} m/s is outside the stored speeds {ranges} (per stride count)")
+        raise EntryNotFound(f"{self.path}: {target_velocity_mps} m/s is outside the stored speeds {ranges} "
+                            "(per stride count)")
 
     def _margin_check(self, margin: BlendMargin) -> MarginCheck:
         return MarginCheck(float(self.model[schema.A_FRICTION_MU]), self.model_arrays.get(schema.D_JOINT_LOWER),
                            self.model_arrays.get(schema.D_JOINT_UPPER), margin)
 
 
-def blend_pair(a: Entry, b: Entry, velocity: float, check: MarginCheck) -> Entry:
-    """``(1 - w) a + w b`` knot by knot, ``w`` placing ``velocity`` between their labels; the entry
+def blend_pair(a: Entry, b: Entry, target_velocity_mps: float, check: MarginCheck) -> Entry:
+    """``(1 - w) a + w b`` knot by knot, ``w`` placing ``target_velocity_mps`` [m/s] between their
+    target speeds; the entry
     carries its check and its own attributes (``success`` only when both succeeded and it passes).
 
     Raises:
         SkatelibError: When the two entries' contact schedules differ.
     """
-    w = 0.0 if b is a else (velocity - a.target_velocity_mps) / (b.target_velocity_mps - a.target_velocity_mps)
+    v = target_velocity_mps
+    w = 0.0 if b is a else (v - a.target_velocity_mps) / (b.target_velocity_mps - a.target_velocity_mps)
     if a.contact is not None and b.contact is not None and not np.array_equal(a.contact, b.contact):
         raise SkatelibError(f"entries {a.key} and {b.key} have different contact schedules; cannot blend")
     arrays = {schema.D_T: a.t}
@@ -226,11 +238,11 @@ def blend_pair(a: Entry, b: Entry, velocity: float, check: MarginCheck) -> Entry
     if a.contact is not None:
         arrays[schema.D_CONTACT] = a.contact
     result = check(arrays)
-    attrs = {schema.A_TARGET_VELOCITY: float(velocity), schema.A_N_STRIDES: a.n_strides,
+    attrs = {schema.A_TARGET_VELOCITY: float(v), schema.A_N_STRIDES: a.n_strides,
              "success": bool(a.success and b.success and result.ok),
              "status": f"blend of {a.key} and {b.key} (weights {1 - w:.3f}, {w:.3f})",
              "blend_sources": (a.key, b.key), "blend_weights": (1.0 - w, w)}
-    return Entry(f"blend_v{velocity:.4f}_s{a.n_strides}", attrs, arrays, a.columns, a.units, result)
+    return Entry(f"blend_v{v:.4f}_s{a.n_strides}", attrs, arrays, a.columns, a.units, result)
 
 
 def _entry(r: EntryRecord) -> Entry:

@@ -17,17 +17,20 @@ def speed_key(v: float) -> float:
     return round(float(v), 2)
 
 
-def route(entries: Iterable[Entry], v_from: float, v_to: float, where: str = "") -> list[Entry]:
-    """The chain of entries (in riding order) from ``v_from`` to ``v_to`` that takes the least time.
+def route(entries: Iterable[Entry], from_velocity_mps: float, target_velocity_mps: float,
+          where: str = "") -> list[Entry]:
+    """The chain of entries (in riding order) from ``from_velocity_mps`` to ``target_velocity_mps``
+    [m/s] that takes the least time.
 
     Raises:
         ValueError: When the speeds are equal, negative or not finite.
         EntryNotFound: When no chain of successful entries leads there (the message lists the speeds
-            that can be reached from ``v_from``).
+            that can be reached from ``from_velocity_mps``).
     """
-    a, b = speed_key(v_from), speed_key(v_to)
+    a, b = speed_key(from_velocity_mps), speed_key(target_velocity_mps)
     if not (a >= 0 and b >= 0) or a == b:
-        raise ValueError(f"route({v_from!r}, {v_to!r}): two different speeds of at least 0 m/s")
+        raise ValueError(f"route({from_velocity_mps!r}, {target_velocity_mps!r}): two different speeds of at least "
+                         "0 m/s")
     edges: dict[float, list[Entry]] = {}
     for e in entries:
         if e.success:

@@ -9,7 +9,7 @@ The controller's side does not import this module: it reads a :class:`TwinState`
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.library.rotations import roll_of, yaw_of
@@ -18,6 +18,9 @@ from skatelib.sim.figures import TwinFigures
 from skatelib.sim.robot import JOINTS, LEGS
 from skatelib.sim.rolling import WHEELS, RollingResistance, step
 from skatelib.sim.scene import scene_spec
+
+if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
+    import mujoco
 
 TIMESTEP_S = 1.0 / 1020.0  # two steps per 510 Hz whole-body tick, 34 per 30 Hz MPC update
 NO_CONTACT, ON_DECK, ON_FLOOR = 0, 1, 2
@@ -76,7 +79,7 @@ class TwinState:
         return roll_of(self.deck_R)
 
 
-def twin_spec(f: TwinFigures, errors: TwinErrors) -> Any:
+def twin_spec(f: TwinFigures, errors: TwinErrors) -> mujoco.MjSpec:
     """The scene with ``errors`` applied (links, floor, trucks, wheels, rotors, a payload)."""
     import mujoco
 

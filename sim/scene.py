@@ -4,15 +4,18 @@ with the simulation options that hold contact well (elliptic cones, implicit-fas
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.sim.board import FLOOR_BIT, add_board
 from skatelib.sim.figures import TIMESTEP_S, TwinFigures
 from skatelib.sim.robot import JOINTS, robot_spec
 
+if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
+    import mujoco
 
-def scene_spec(f: TwinFigures, with_robot: bool = True) -> Any:
+
+def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     """Floor, board and (``with_robot``) the robot, as an ``MjSpec``."""
     import mujoco
 
@@ -39,7 +42,7 @@ def scene_spec(f: TwinFigures, with_robot: bool = True) -> Any:
     return spec
 
 
-def _place_robot(spec: Any, f: TwinFigures) -> None:
+def _place_robot(spec: mujoco.MjSpec, f: TwinFigures) -> None:
     """The trunk over the deck at the height where the stance's feet touch it."""
     import mujoco
 
@@ -62,7 +65,7 @@ def _place_robot(spec: Any, f: TwinFigures) -> None:
     key.qpos = qpos.tolist()
 
 
-def twin_model(f: TwinFigures, with_robot: bool = True) -> Any:
+def twin_model(f: TwinFigures, with_robot: bool = True) -> mujoco.MjModel:
     """The compiled ``MjModel``."""
     return scene_spec(f, with_robot).compile()
 

@@ -23,9 +23,12 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # the plant the sensors read (sim.plant builds the twin with mujoco)
+    from skatelib.sim.plant import TwinPlant
 
 GRAVITY_MPS2 = 9.81
 DEG = math.pi / 180.0
@@ -113,7 +116,7 @@ class TwinSensors:
     """The IMU and encoders of a :class:`skatelib.sim.plant.TwinPlant`, read once per tick of
     ``tick_s``; ``seed`` draws the run's biases and noise."""
 
-    def __init__(self, plant: Any, tick_s: float, errors: SensorErrors, seed: int):
+    def __init__(self, plant: TwinPlant, tick_s: float, errors: SensorErrors, seed: int):
         self.plant, self.dt, self.e = plant, tick_s, errors
         self.rng = np.random.default_rng(seed)
         f, s = errors.imu, errors.noise_scale

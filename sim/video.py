@@ -14,16 +14,20 @@ import tempfile
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import IO, Any, cast
+from typing import IO, TYPE_CHECKING, cast
 
 import numpy as np
 from skatelib.library.errors import OutputError
+
+if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
+    import mujoco
 
 FORMATS = (".mp4", ".gif")
 CRF = 25  # x264's quality, as imageio-ffmpeg's default quality 5 sets it (0 lossless .. 51 worst)
 
 
-def render_frames(m: Any, qpos: Sequence[np.ndarray], size: tuple[int, int] = (640, 360)) -> list[np.ndarray]:
+def render_frames(m: mujoco.MjModel, qpos: Sequence[np.ndarray], size: tuple[int, int] = (640, 360)
+                  ) -> list[np.ndarray]:
     """One RGB frame per configuration, the camera 1.2 m from the deck, looking at it."""
     import mujoco
 
@@ -128,7 +132,7 @@ def _settled(path: Path, named: Path) -> None:
         raise OutputError(named, "the video encoder wrote an empty file; nothing was written")
 
 
-def write_run(m: Any, qpos: Sequence[np.ndarray], out: Path, fps: float) -> Path:
+def write_run(m: mujoco.MjModel, qpos: Sequence[np.ndarray], out: Path, fps: float) -> Path:
     """A run's configurations (at ``fps``) as ``out``: an MP4 at 640 x 360 and every frame, a GIF
     (for a README) at 320 x 180 and every second frame."""
     if out.suffix.lower() == ".gif":

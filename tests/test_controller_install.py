@@ -30,7 +30,7 @@ def test_a_tick_on_the_plan_carries_the_robot_within_the_torque_limit():
     from skatelib.control.params import SkateParams
     from skatelib.control.reference import EntryReference
     from skatelib.control.settings import TrackSettings
-    from skatelib.control.wbc import WbcSettings
+    from skatelib.control.wbc_settings import WbcSettings
     from skatelib.runtime import MotionLibrary
 
     lib = MotionLibrary.open(LIBRARY)

@@ -185,6 +185,20 @@ def test_select_outside_the_range_raises_unless_clamped(lib):
         lib.select(float("nan"))
 
 
+@pytest.mark.parametrize(("call", "old", "new"), [
+    ("select", "velocity", "target_velocity_mps"), ("select", "v_from", "from_velocity_mps"),
+    ("select", "v_to", "target_velocity_mps"), ("route", "v_to", "target_velocity_mps"),
+    ("route", "v_from", "from_velocity_mps"), ("blend", "velocity", "target_velocity_mps"),
+    ("speeds", "v_from", "from_velocity_mps")])
+def test_an_old_speed_keyword_is_refused_naming_the_new_one(lib, call, old, new):
+    """Each speed keyword the runtime renamed (one name per quantity) raises a TypeError that names
+    its new keyword; the new keyword is accepted."""
+    with pytest.raises(TypeError, match=f"the keyword '{old}' is now '{new}'"):
+        getattr(lib, call)(**{old: 0.3})
+    assert lib.select(target_velocity_mps=0.36, from_velocity_mps=0.0).key == "v0.30_s1"
+    assert lib.speeds(from_velocity_mps=0.0) == [0.3, 0.5]
+
+
 def test_channels_by_name_with_units(lib):
     """Samples and windows read channels by name, with the units stored in the file."""
     e = lib["v0.50_s1"]

@@ -174,10 +174,10 @@ def test_chain_check_refuses_an_end_off_the_riding_stance(ride_path, tmp_path):
 
 def test_select_and_route(ride_lib):
     """select by start speed; route chains entries where no single one gets there, in the least time."""
-    assert ride_lib.select(0.3, v_from=0.4).key == "v0.40-0.30_s1"
+    assert ride_lib.select(0.3, from_velocity_mps=0.4).key == "v0.40-0.30_s1"
     assert ride_lib.select(0.35).key in {"v0.30_s1", "v0.40_s1"}
     with pytest.raises(EntryNotFound, match="entries start at"):
-        ride_lib.select(0.3, v_from=0.7)
+        ride_lib.select(0.3, from_velocity_mps=0.7)
     assert [e.key for e in ride_lib.route(0.4, 0.0)] == ["v0.40-0.00_s1"]
     assert [e.key for e in ride_lib.route(0.0, 0.3)] == ["v0.30_s1"]
     with pytest.raises(ValueError):

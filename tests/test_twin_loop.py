@@ -17,7 +17,7 @@ pytest.importorskip("daqp")
 
 from skatelib.control.params import SkateParams
 from skatelib.control.steering import SteeringGains
-from skatelib.control.wbc import WbcSettings
+from skatelib.control.wbc_settings import WbcSettings
 from skatelib.library import schema
 from skatelib.proving.setup import ClosedLoop
 from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
@@ -219,4 +219,4 @@ def test_the_terminal_shove_fails_in_physics(shove_lib):
     assert not lib[lib.keys()[0]].success  # refused by the independent checks
     res = _ride(shove_lib)
     assert not res.passed and "delivered speed" in res.reasons, res
-    assert res.momentum_at_end_mps < 0.95 * res.label_mps, res
+    assert res.momentum_at_end_mps < 0.95 * res.target_velocity_mps, res

@@ -13,7 +13,10 @@ mujoco = pytest.importorskip("mujoco")
 pytest.importorskip("daqp")
 
 from skatelib.control.multibody import RobotDynamics  # noqa: E402
-from skatelib.control.wbc import WbcSettings, WbcTargets, WholeBodyController, pyramid  # noqa: E402
+from skatelib.control.wbc import WholeBodyController  # noqa: E402
+from skatelib.control.wbc_constraints import pyramid  # noqa: E402
+from skatelib.control.wbc_settings import WbcSettings  # noqa: E402
+from skatelib.control.wbc_targets import WbcTargets  # noqa: E402
 from skatelib.pipeline.config import load_config  # noqa: E402
 from skatelib.pipeline.quadruped.config import QuadrupedConfig  # noqa: E402
 from skatelib.pipeline.twin import twin_figures  # noqa: E402
@@ -155,6 +158,40 @@ def test_wbc_holds_the_torque_limit(pair):
     ctl.tau_max = 1000.0
     free = ctl.solve(T, _targets([0.0, 0.0, 6 * 9.81]))
     assert np.max(np.abs(free.tau)) > 12.0
+
+
+def test_the_qp_is_the_sum_of_its_tasks_and_the_stack_of_its_constraints(pair):
+    """On two stance feet and two swinging ones, with random targets: the assembled Hessian and
+    gradient equal the tasks' sum w A'A, -w A'b written out term by term (COM and swinging feet as
+    Jacobian rows, attitude, posture and forces as selections, the regularization), and the
+    constraint rows are the generalized forces, the stance feet's Jacobians and one normal and
+    four facets per stance foot; a second tick with other targets rewrites the arrays, not adds."""
+    T, ctl, dyn = _standing(pair)
+    s, rng = ctl.s, np.random.default_rng(7)
+    stance = np.array([True, False, False, True])
+    legs, swing = [0, 3], [1, 2]
+    for _ in range(2):
+        tg = WbcTargets(stance=stance, on_deck=np.zeros(4, dtype=bool), deck_R=np.eye(3),
+                        stance_acc=rng.normal(size=(3, 4)), com_acc=rng.normal(size=3),
+                        angular_acc=rng.normal(size=3), swing_acc=rng.normal(size=(3, 4)),
+                        forces=rng.normal(size=(3, 4)), posture_acc=rng.normal(size=12))
+        qp = ctl.problem(T, tg)
+        n = 18 + 6
+        H, g = s.regularization * np.eye(n), np.zeros(n)
+        rows = [(s.w_com, T.J_com, tg.com_acc - T.dJv_com)]
+        rows += [(s.w_swing, T.J_feet[i], tg.swing_acc[:, i] - T.dJv_feet[i]) for i in swing]
+        for w, J, b in rows:
+            H[:18, :18] += w * J.T @ J
+            g[:18] -= w * J.T @ b
+        for w, cols, b in [(s.w_attitude, np.arange(3, 6), tg.angular_acc), (s.w_posture, dyn.v_index, tg.posture_acc),
+                           (s.w_force, np.arange(18, n), tg.forces[:, legs].T.ravel())]:
+            H[cols, cols] += w
+            g[cols] -= w * b
+        assert np.allclose(qp.H, H, rtol=1e-12, atol=1e-12) and np.allclose(qp.g, g, rtol=1e-12, atol=1e-12)
+        Jc = T.J_feet[legs].reshape(6, 18)
+        assert np.array_equal(qp.A[:18], np.hstack([T.M, -Jc.T])) and np.array_equal(qp.A[18:24, :18], Jc)
+        assert qp.A.shape == (18 + 6 + 5 * 2, n) and qp.equality is not None
+        assert qp.equality[:6].all() and not qp.equality[6:18].any() and qp.equality[18:24].all()
 
 
 @pytest.mark.parametrize("backend", ["proxqp", "osqp"])

@@ -13,9 +13,12 @@ import functools
 import importlib
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # OSQP's problems come sparse; scipy is imported by the backends that use it
+    from scipy.sparse import sparray, spmatrix
 
 SOLVERS: dict[str, str] = {
     "daqp": "skatelib.control.qp.daqp_",
@@ -42,9 +45,9 @@ class QpProblem:
         equality: (m,) rows held at ``upper`` (== ``lower``), or None: none.
     """
 
-    H: Any
+    H: np.ndarray | spmatrix | sparray
     g: np.ndarray
-    A: Any
+    A: np.ndarray | spmatrix | sparray
     lower: np.ndarray
     upper: np.ndarray
     lb: np.ndarray | None = None

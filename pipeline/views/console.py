@@ -130,8 +130,9 @@ def track_table(results: list[Any], perturb: str) -> int:
                 "min f_n", "fric margin", "slips", "tau max", "MPC ms med/max", "verdict"):
         t.add_column(escape(col), justify="right")
     for r in results:
-        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
-                  f"{r.delivered_mps:.3f}", label_error(r.label_mps, r.delivered_mps), f"{r.max_deck_roll_rad:.3f}",
+        v = r.target_velocity_mps
+        t.add_row(r.key, f"{v:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
+                  f"{r.delivered_mps:.3f}", label_error(v, r.delivered_mps), f"{r.max_deck_roll_rad:.3f}",
                   f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
                   f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
                   f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
@@ -154,11 +155,11 @@ def ride_table(result: Any, perturb: str) -> bool:
     for col in ("stage", "entries", "ends at [s]", "momentum speed [m/s]", "verdict"):
         t.add_column(escape(col), justify="right")
     for s in result.stages:
-        t.add_row(f"{s.v_from:g} -> {s.v_to:g}", escape(", ".join(s.keys)), f"{s.t_end_s:.2f}", f"{s.speed_mps:.3f}",
-                  "[green]pass[/]" if s.passed else "[red]FAIL[/]")
+        t.add_row(f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}", escape(", ".join(s.keys)),
+                  f"{s.t_end_s:.2f}", f"{s.momentum_at_end_mps:.3f}", "[green]pass[/]" if s.passed else "[red]FAIL[/]")
     console.print(t)
     r = result.run
-    late = [f"{s.v_from:g} -> {s.v_to:g}" for s in result.stages if not s.passed]
+    late = [f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}" for s in result.stages if not s.passed]
     verdict = "pass" if result.passed else "FAIL: " + "; ".join(
         ([f"stage {', '.join(late)} off its target"] if late else []) + ([r.reasons] if r.reasons else []))
     console.print(escape(f"{r.key}: {verdict} (each stage within 5 % of its target at its end, a stop below "
@@ -189,8 +190,9 @@ def twin_table(results: list[Any], perturb: str) -> int:
                 "heading err", "lateral", "crab max", "roll max", "tau max", "sat", "WBC/MPC ms", "verdict"):
         t.add_column(escape(col), justify="right")
     for r in results:
-        t.add_row(r.key, f"{r.label_mps:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
-                  label_error(r.label_mps, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
+        v = r.target_velocity_mps
+        t.add_row(r.key, f"{v:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
+                  label_error(v, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
                   str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
                   f"{r.max_crab_rad:.3f}", f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}",
                   f"{100 * r.saturated_share:.1f}%", f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}",
@@ -216,13 +218,13 @@ def steer_table(results: list[Any], perturb: str) -> int:
                 "unloaded", "slips", "MPC ms", "verdict"):
         t.add_column(escape(col), justify="right")
     for r in results:
-        t.add_row(f"{r.speed_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
+        t.add_row(f"{r.target_velocity_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
                   f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
                   f"{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
     console.print(t)
     failed = [r for r in results if not r.passed]
     for r in failed:
-        console.print(escape(f"{r.speed_mps:.2f} m/s: {r.reasons}"))
+        console.print(escape(f"{r.target_velocity_mps:.2f} m/s: {r.reasons}"))
     return len(failed)
 
 

@@ -93,8 +93,9 @@ def _closed_loop_summary(lib: Any) -> None:
         t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
                         ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
         for key, v in stored.items():
-            error = label_error(v.get("label_mps", 0.0), v.get("delivered_mps"))
-            t.add_row(key, fmt(v, "label_mps", "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
+            target = schema.A_TARGET_VELOCITY if schema.A_TARGET_VELOCITY in v else "label_mps"  # (older files)
+            error = label_error(v.get(target, 0.0), v.get("delivered_mps"))
+            t.add_row(key, fmt(v, target, "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
                       error, "pass" if v.get("passed") else "FAIL",
                       escape(str(v.get("reasons") or "")))
         console.print(t)

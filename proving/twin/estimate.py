@@ -54,13 +54,13 @@ class EstimatorErrors:
                 for k in ("trunk_v", "board_speed", "board_roll") for w in ("rms", "worst")}
 
 
-def start_state(x0: np.ndarray, board0: np.ndarray, speed_mps: float, on_deck: np.ndarray,
+def start_state(x0: np.ndarray, board0: np.ndarray, from_velocity_mps: float, on_deck: np.ndarray,
                 com_offset_m: np.ndarray) -> RobotState:
     """The state the robot starts a ride in, as it knows it: the plan's first pose, the deck level
-    at the plan's place and heading, rolling at ``speed_mps``."""
+    at the plan's place and heading, rolling at ``from_velocity_mps``."""
     R = rpy_matrices(x0[3:6])
     deck_R = board_rotations(float(board0[3]), 0.0)
-    v = speed_mps * deck_R[:, 0]
+    v = from_velocity_mps * deck_R[:, 0]
     return RobotState(trunk_pos=x0[0:3] - R @ com_offset_m, trunk_R=R, trunk_v=v, trunk_omega=np.zeros(3),
                       q=x0[12:24].copy(), qd=np.zeros(12), deck_pos=np.array([board0[0], board0[1], 0.0]),
                       deck_R=deck_R, deck_v=v, deck_omega=np.zeros(3),

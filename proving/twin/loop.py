@@ -1,6 +1,6 @@
 """The full-physics closed loop: the MPC at 30 Hz (fed from ``MotionLibrary.window()`` through the
 entry's reference, with the model loop's observers) and the whole-body controller at 510 Hz
-(:mod:`skatelib.control.wbc`, its tasks from :mod:`skatelib.control.wbc_tasks`) drive a
+(:mod:`skatelib.control.wbc`, its targets from :mod:`skatelib.control.wbc_targets`) drive a
 multibody plant (the MuJoCo twin) stepping at its own timestep: 2 plant steps per whole-body tick
 and 17 ticks per MPC update (1/30 s) at the twin's 1/1020 s.
 
@@ -26,8 +26,8 @@ from skatelib.control.kinematics import LegKinematics
 from skatelib.control.qp import QpSolveFailed
 from skatelib.control.reference import EntryReference, Reference
 from skatelib.control.steering import BoardPath, LineKeeper, SteeringGains
-from skatelib.control.wbc import WbcSettings
-from skatelib.control.wbc_tasks import ContactTable
+from skatelib.control.wbc_settings import WbcSettings
+from skatelib.control.wbc_targets import ContactTable
 from skatelib.library.channels import BOARD
 from skatelib.library.rotations import rpy_matrices
 from skatelib.proving.setup import ClosedLoop
@@ -59,7 +59,7 @@ class TwinLoopSettings:
 @dataclass(frozen=True)
 class Ride:
     """What a run follows: the MPC's reference, the whole-body controller's body plan, where the
-    plant starts (the model state, the board's x, y, z, yaw; ``speed_mps`` forward) and the plan's
+    plant starts (the model state, the board's x, y, z, yaw; ``from_velocity_mps`` forward) and the plan's
     board at the end (for the drift)."""
 
     ref: Reference
@@ -67,7 +67,7 @@ class Ride:
     x0: np.ndarray
     board0: np.ndarray
     board_end: np.ndarray
-    speed_mps: float = 0.0
+    from_velocity_mps: float = 0.0
     path: BoardPath | None = None  # the plan's board, for the line keeper (None: no steering feedback)
 
 
@@ -80,7 +80,7 @@ def entry_ride(lib: MotionLibrary, key: str | Entry, loop: ClosedLoop, foot_radi
     ref = EntryReference(lib, entry, loop.model, loop.settings)
     board = np.asarray(entry.board_pos, dtype=np.float64)
     return Ride(ref, BodyPlan(ref, foot_radius_m), np.asarray(entry.state[0], dtype=np.float64), board[0], board[-1],
-                speed_mps=entry.from_velocity_mps, path=BoardPath.from_board_pos(np.asarray(entry.t), board))
+                from_velocity_mps=entry.from_velocity_mps, path=BoardPath.from_board_pos(np.asarray(entry.t), board))
 
 
 @dataclass
@@ -126,7 +126,7 @@ class TwinLoop:
         self.feedback: Callable[[Any], Any] = self.sensed
         if self.cfg.state == "estimate":
             on_deck = self.ref.contact(self.ref.t0) == BOARD
-            start = start_state(ride.x0, ride.board0, ride.speed_mps, on_deck, p.com_offset_m)
+            start = start_state(ride.x0, ride.board0, ride.from_velocity_mps, on_deck, p.com_offset_m)
             estimated = EstimatedFeedback(plant, lib, p, self.contacts.at, start, self.tick_s, self.cfg.sensor_errors,
                                           loop.settings.seed)
             self.run.estimator = estimated.errors
@@ -144,8 +144,8 @@ class TwinLoop:
         R = rpy_matrices(x0[3:6])
         self.plant.place(x0[0:3] - R @ self.p.com_offset_m, quat_wxyz(R), x0[12:24],
                          np.array([board0[0], board0[1], board0[3]]))
-        if ride.speed_mps:
-            self.plant.launch(ride.speed_mps)
+        if ride.from_velocity_mps:
+            self.plant.launch(ride.from_velocity_mps)
         on_deck = self.ref.contact(self.ref.t0) == BOARD
         deck_top = float(self.plant.state().deck_pos[2])
         high = float(np.max(self.plant.foot_centres()[2, on_deck]))  # every deck foot touching, 0.2 mm pressed

@@ -41,7 +41,7 @@ class TwinRecord:
         """The forces the ticks after the last update applied (the row of that update)."""
         self.forces.append(np.array(forces, dtype=np.float64))
 
-    def as_entry(self, key: str, label_mps: float) -> Entry:
+    def as_entry(self, key: str, target_velocity_mps: float) -> Entry:
         n = min(len(self.t), len(self.forces))
         if n < 2:
             raise ValueError(f"{key}: a run of {n} updates is too short to show")
@@ -55,6 +55,6 @@ class TwinRecord:
         }
         columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
                    schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: ("board_x", "board_y", "board_z", "board_yaw")}
-        attrs = {schema.A_TARGET_VELOCITY: label_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
+        attrs = {schema.A_TARGET_VELOCITY: target_velocity_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
                  schema.A_STATUS: "full physics"}
         return Entry(key, attrs, arrays, columns)

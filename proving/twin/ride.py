@@ -24,7 +24,7 @@ def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: 
     lib = check_twin(path, perturb)
     plan = plan_ride(lib, stages)
     run, _ = ride_twin(lib, plan.entry, perturb, (mpc, settings), outputs)
-    label = stages[-1][1]
-    kept = run.record.as_entry(plan.key, label) if outputs[0] and len(run.record.forces) > 1 else None
-    return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), twin_result(plan.key, label, run), kept,
-                      plan.entry)
+    target_velocity_mps = stages[-1][1]
+    kept = run.record.as_entry(plan.key, target_velocity_mps) if outputs[0] and len(run.record.forces) > 1 else None
+    verdict = twin_result(plan.key, target_velocity_mps, run)
+    return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), verdict, kept, plan.entry)

@@ -40,12 +40,12 @@ class SteerPlan:
                            feet_a=zeros, q=ref.q, board_v=np.array([ref.speed, 0.0, 0.0]))
 
 
-def steer_ride(lib: Any, loop: ClosedLoop, speed_mps: float, duration_s: float, foot_radius_m: float,
+def steer_ride(lib: Any, loop: ClosedLoop, target_velocity_mps: float, duration_s: float, foot_radius_m: float,
                adapt_stiffness: bool = True) -> Ride:
-    ref = SteerReference(lib, loop.model, speed_mps, duration_s, adapt_stiffness=adapt_stiffness)
+    ref = SteerReference(lib, loop.model, target_velocity_mps, duration_s, adapt_stiffness=adapt_stiffness)
     x0 = ref.initial_state()[:NX]
     board0 = np.array([0.0, 0.0, ref.deck_z, 0.0])
-    return Ride(ref, SteerPlan(ref, foot_radius_m), x0, board0, board0, speed_mps)
+    return Ride(ref, SteerPlan(ref, foot_radius_m), x0, board0, board0, target_velocity_mps)
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,7 @@ class SteerRun:
     loop: TwinLoopSettings = field(default_factory=TwinLoopSettings)
 
 
-def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, speed_mps: float,
+def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, target_velocity_mps: float,
                run_settings: SteerRun | None = None) -> SteerResult:
     """Run the maneuver on ``plant`` and judge it (module docstring)."""
     from skatelib.control.kinematics import LegKinematics
@@ -66,7 +66,7 @@ def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, speed_mps: flo
     cfg = run_settings or SteerRun()
     duration_s = cfg.duration_s
     radius = LegKinematics.from_library(lib).foot_radius_m
-    ride = steer_ride(lib, loop, speed_mps, duration_s, radius, cfg.adapt_stiffness)
+    ride = steer_ride(lib, loop, target_velocity_mps, duration_s, radius, cfg.adapt_stiffness)
     loop_ = TwinLoop(lib, ride, loop, plant, cfg.loop)
     run = loop_.ride()
     ticks = np.array(run.ticks) if run.ticks else np.zeros((0, 5))
@@ -88,7 +88,7 @@ def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, speed_mps: flo
     if run.fall:
         reasons.append(f"fall: {run.fall}")
     return SteerResult(
-        speed_mps=speed_mps, duration_s=duration_s, roll_rms_error_rad=rms,
+        target_velocity_mps=target_velocity_mps, duration_s=duration_s, roll_rms_error_rad=rms,
         max_roll_rad=float(np.max(np.abs(ticks[:, 1]), initial=0.0)),
         max_lateral_shift_m=float(np.max(np.abs(ticks[settled, 2]), initial=0.0)),
         min_normal_N=float(np.min(ticks[:, 4], initial=np.inf)), unloaded_steps=off_deck,

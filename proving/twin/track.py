@@ -81,10 +81,10 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: t
 
 @dataclass(frozen=True)
 class TwinSteerJob:
-    """The steering maneuver at ``speed_mps`` on the twin (:mod:`skatelib.proving.twin.steer`)."""
+    """The steering maneuver at ``target_velocity_mps`` on the twin (:mod:`skatelib.proving.twin.steer`)."""
 
     path: str
-    speed_mps: float
+    target_velocity_mps: float
     perturb: str
     mpc: MpcConfig
     settings: TrackSettings
@@ -103,7 +103,7 @@ class TwinSteerJob:
         sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=self.settings.state)
         with threadpool_limits(limits=1, user_api="blas"):
             return steer_twin(lib, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
-                              self.speed_mps, SteerRun(loop=sensors))
+                              self.target_velocity_mps, SteerRun(loop=sensors))
 
 
 def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[TwinPlant, TwinErrors]:

@@ -39,7 +39,7 @@ class TwinResult:
     """One entry's run on the twin (JSON-able numbers)."""
 
     key: str
-    label_mps: float
+    target_velocity_mps: float
     momentum_at_end_mps: float
     delivered_mps: float
     speed_error: float
@@ -76,11 +76,11 @@ def _ms(times: list[float]) -> float:
     return float(np.median(times) * 1e3) if times else float("nan")
 
 
-def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
+def twin_result(key: str, target_velocity_mps: float, run: TwinRun) -> TwinResult:
     """The verdict on one run (module docstring)."""
     m = run.measures
     delivered = m.momentum_after_1s_mps + m.friction_loss_Ns / m.system_mass_kg
-    err, reasons = speed_verdict(label, delivered)
+    err, reasons = speed_verdict(target_velocity_mps, delivered)
     slip = m.max_slip_m()
     if run.fall:
         reasons.append(f"fall: {run.fall}")
@@ -95,7 +95,8 @@ def twin_result(key: str, label: float, run: TwinRun) -> TwinResult:
     if not abs(m.lateral_at_end_m) <= LATERAL_LIMIT_M:
         reasons.append(f"board {100 * m.lateral_at_end_m:+.1f} cm to the side of the plan's at the entry's end")
     return TwinResult(
-        key=key, label_mps=label, momentum_at_end_mps=m.momentum_at_end_mps, delivered_mps=delivered,
+        key=key, target_velocity_mps=target_velocity_mps, momentum_at_end_mps=m.momentum_at_end_mps,
+        delivered_mps=delivered,
         speed_error=err, max_slip_m=slip, touchdowns=len(m.slips_m), floor_touch_ticks=m.floor_touch_ticks,
         wheel_lift_ticks=m.wheel_lift_ticks, min_wheel_load_N=m.min_wheel_load_N,
         heading_error_rad=m.heading_at_end_rad, lateral_drift_m=m.lateral_at_end_m,

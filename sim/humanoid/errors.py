@@ -15,11 +15,14 @@ Keys (``KEY=VALUE,...``; ``+5%`` relative, a plain number absolute):
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.library.errors import SkatelibError
 from skatelib.library.perturb import perturbation_items
+
+if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
+    import mujoco
 
 UPPER_BODY = "torso"
 SHOVE_S = 0.1
@@ -54,7 +57,7 @@ class HumanoidErrors:
     shove_N: float = 0.0
     shove_t_s: float = 0.0
 
-    def apply(self, spec: Any) -> Any:
+    def apply(self, spec: mujoco.MjSpec) -> mujoco.MjSpec:
         """``spec`` with the links' masses, the COM offset and the floor's friction changed."""
         total = sum(b.mass for b in spec.bodies)
         for b in spec.bodies:
@@ -72,7 +75,7 @@ class HumanoidErrors:
                     g.friction = [self.floor_mu, g.friction[1], g.friction[2]]
         return spec
 
-    def push(self, d: Any, body: int) -> None:
+    def push(self, d: mujoco.MjData, body: int) -> None:
         """The shove's force on ``body`` while it lasts (else none)."""
         on = self.shove_N != 0.0 and self.shove_t_s <= d.time < self.shove_t_s + SHOVE_S
         d.xfrc_applied[body, 0:3] = (0.0, self.shove_N if on else 0.0, 0.0)

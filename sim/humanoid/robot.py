@@ -9,7 +9,7 @@ the floor as support: any other link touching it is a fall."""
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import TYPE_CHECKING
 
 from skatelib.library.urdf import without_meshes
 from skatelib.sim.humanoid.figures import (
@@ -25,6 +25,9 @@ from skatelib.sim.humanoid.figures import (
     TIMESTEP_S,
     HumanoidFigures,
 )
+
+if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
+    import mujoco
 
 FLOOR_BIT, SOLE_BIT = 1, 2
 ROOT = "waist"
@@ -43,7 +46,7 @@ def ft_site(side: int) -> str:
     return f"{FEET[side]}_ft"
 
 
-def humanoid_spec(f: HumanoidFigures) -> Any:
+def humanoid_spec(f: HumanoidFigures) -> mujoco.MjSpec:
     """Floor and robot (standing in the first knot's posture, keyframe ``initial``) as an ``MjSpec``."""
     import mujoco
 
@@ -80,7 +83,7 @@ def humanoid_spec(f: HumanoidFigures) -> Any:
     return spec
 
 
-def _add_motors(spec: Any, f: HumanoidFigures) -> None:
+def _add_motors(spec: mujoco.MjSpec, f: HumanoidFigures) -> None:
     import mujoco
 
     for name, limit in zip(f.joint_names, f.torque_limit_Nm, strict=True):
@@ -96,7 +99,7 @@ def _add_motors(spec: Any, f: HumanoidFigures) -> None:
         act.forcerange = [-float(limit), float(limit)]
 
 
-def _add_soles(spec: Any, f: HumanoidFigures) -> None:
+def _add_soles(spec: mujoco.MjSpec, f: HumanoidFigures) -> None:
     """Per foot: the sole box (its bottom face on the sole frame), the ankle's force/torque sensor."""
     import mujoco
 

@@ -68,13 +68,14 @@ class SkateSystem:
     def push_index(self) -> int:
         return LEGS.index(self.push_leg)
 
-    def drive(self, v_from: float, v_to: float, duration_s: float) -> float:
-        """Which way the planted push foot drives robot and board in an entry from ``v_from`` to
-        ``v_to`` lasting ``duration_s``: +1 (pushes forward) when rolling friction alone (as the plan
-        has it) would end slower than ``v_to``, -1 (brakes) when it would end faster. A slow-down
-        smaller than what the coast takes pushes a little; a start-up always pushes."""
+    def drive(self, from_velocity_mps: float, target_velocity_mps: float, duration_s: float) -> float:
+        """Which way the planted push foot drives robot and board in an entry from
+        ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] lasting ``duration_s``: +1 (pushes
+        forward) when rolling friction alone (as the plan has it) would end slower than the target,
+        -1 (brakes) when it would end faster. A slow-down smaller than what the coast takes pushes a
+        little; a start-up always pushes."""
         coast = self.board.rolling_friction_N / (self.srb.mass_kg + self.board.mass_kg) * duration_s
-        return 1.0 if v_to >= v_from - coast else -1.0
+        return 1.0 if target_velocity_mps >= from_velocity_mps - coast else -1.0
 
     @property
     def riding_com_m(self) -> np.ndarray:

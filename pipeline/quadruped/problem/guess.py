@@ -13,21 +13,22 @@ from skatelib.pipeline.quadruped.model.system import SkateSystem
 from skatelib.pipeline.quadruped.problem.knots import I_BOARD_XY, NXA
 
 
-def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, v_from: float, v_target: float,
-                  kind: str) -> np.ndarray:
-    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp from ``v_from`` (or
-    at ``v_from``), the push leg by IK, and contact forces that carry the ramp's momentum."""
-    sch = schedule
+def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, from_velocity_mps: float,
+                  target_velocity_mps: float, kind: str) -> np.ndarray:
+    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp from
+    ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] (or at ``from_velocity_mps``), the push
+    leg by IK, and contact forces that carry the ramp's momentum."""
+    sch, v0, v = schedule, from_velocity_mps, target_velocity_mps
     K = len(sch.t)
     guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
-    a = (v_target - v_from) / sch.t[-1] if kind == "ramp" else 0.0
-    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = v_from + a * sch.t
-    travel = v_from * sch.t + 0.5 * a * sch.t**2
+    a = (v - v0) / sch.t[-1] if kind == "ramp" else 0.0
+    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = v0 + a * sch.t
+    travel = v0 * sch.t + 0.5 * a * sch.t**2
     guess[:, S_POS.start] += travel
     guess[:, I_BOARD_XY.start] = travel
     guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m,
                                      system.end_push_foot_height_m + 0.01)
-    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v_target - v_from, a, kind)
+    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v - v0, a, kind)
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
 

@@ -73,16 +73,17 @@ class Window:
 START_UP = Window()  # a start-up's window: no lead-in, the schedule's push time
 
 
-def transition_window(config: QuadrupedConfig, v_from: float, v_to: float, drive: float) -> Window:
-    """The window of a transition from ``v_from`` to ``v_to`` whose planted foot drives ``drive``
-    (+1 pushes, -1 brakes: ``SkateSystem.drive``): the touchdown lead-in, and ground phases no
-    longer than the trunk takes to ride ``ground_sweep_m`` (``brake_sweep_m`` for a brake) at the
-    faster speed (a planted foot stays where it touched down: at 1 m/s the legs' reach holds it
-    about a quarter second), whole knots, at most the schedule's push time."""
-    tr, dt = config.transitions, config.optimization.dt_s
+def transition_window(config: QuadrupedConfig, from_velocity_mps: float, target_velocity_mps: float,
+                      drive: float) -> Window:
+    """The window of a transition from ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] whose
+    planted foot drives ``drive`` (+1 pushes, -1 brakes: ``SkateSystem.drive``): the touchdown
+    lead-in, and ground phases no longer than the trunk takes to ride ``ground_sweep_m``
+    (``brake_sweep_m`` for a brake) at the faster speed (a planted foot stays where it touched down:
+    at 1 m/s the legs' reach holds it about a quarter second), whole knots, at most the push time."""
+    tr, dt, faster = config.transitions, config.optimization.dt_s, max(from_velocity_mps, target_velocity_mps)
     push = config.schedule.push_duty * config.schedule.period_s
     sweep = tr.ground_sweep_m if drive > 0 else tr.brake_sweep_m
-    knots = min(round(push / dt), int(sweep / max(v_from, v_to) / dt + 1e-9))
+    knots = min(round(push / dt), int(sweep / faster / dt + 1e-9))
     return Window(lead_s=tr.touchdown_s, ground_s=max(knots, 1) * dt)
 
 
@@ -159,12 +160,12 @@ class PushoffProblem:
     def n(self) -> int:
         return NXA + NU
 
-    def start_state(self, v_from: float) -> np.ndarray:
-        """Where the window starts: riding at ``v_from`` for a transition, else the start-up's rest."""
+    def start_state(self, from_velocity_mps: float) -> np.ndarray:
+        """Where the window starts: riding at ``from_velocity_mps`` (a transition), or at rest."""
         if self.window.riding:
-            return riding_state(self.system, v_from)
-        if v_from != 0.0:
-            raise ValueError(f"a start-up starts at rest, not at {v_from} m/s")
+            return riding_state(self.system, from_velocity_mps)
+        if from_velocity_mps != 0.0:
+            raise ValueError(f"a start-up starts at rest, not at {from_velocity_mps} m/s")
         return self.x0
 
     def _initial_state(self) -> np.ndarray:
@@ -184,36 +185,37 @@ class PushoffProblem:
             self._solvers[key] = ca.nlpsol("pushoff", "ipopt", self.tr.nlp.nlp, opts)
         return self._solvers[key]
 
-    def parameters(self, v_from: float, v_target: float) -> np.ndarray:
-        N = self.schedule.n_intervals
+    def parameters(self, from_velocity_mps: float, target_velocity_mps: float) -> np.ndarray:
+        N, v0, v = self.schedule.n_intervals, from_velocity_mps, target_velocity_mps
         P = np.zeros((N, N_PARAMS))
-        P[:, P_VDES] = v_from + (v_target - v_from) * self.schedule.t[:N] / self.schedule.t[-1]
+        P[:, P_VDES] = v0 + (v - v0) * self.schedule.t[:N] / self.schedule.t[-1]
         P[:, P_RATE] = 1.0
         P[-1, P_RATE] = 0.0
         P[-1, P_TERMINAL] = 1.0
-        P[:, P_TARGET] = v_target
-        P[:, P_DRIVE] = drive = self.system.drive(v_from, v_target, float(self.schedule.t[-1]))
+        P[:, P_TARGET] = v
+        P[:, P_DRIVE] = drive = self.system.drive(v0, v, float(self.schedule.t[-1]))
         opt = self.config.optimization
         margin = opt.friction_margin if drive > 0 else self.config.transitions.brake_friction_margin
         P[:, P_MU_GROUND] = margin * self.system.friction_mu
-        P[:, P_SPEED_SCALE] = v_target if v_target > 0 else self.config.transitions.stop_speed_tol_mps / max(
+        P[:, P_SPEED_SCALE] = v if v > 0 else self.config.transitions.stop_speed_tol_mps / max(
             opt.final_velocity_tol, 1e-9)
         return P.reshape(-1)  # row-major (N, n_p) == column-major (n_p, N)
 
-    def bound_terms(self, v_from: float) -> list[Any]:
-        """The bound terms of a start at ``v_from`` (:mod:`skatelib.pipeline.quadruped.problem.bounds`)."""
-        return bound_terms(self.config, self.system, self.schedule, self.start_state(v_from))
+    def bound_terms(self, from_velocity_mps: float) -> list[Any]:
+        """The bound terms of a start at ``from_velocity_mps`` [m/s] (:mod:`.bounds`)."""
+        return bound_terms(self.config, self.system, self.schedule, self.start_state(from_velocity_mps))
 
-    def bounds(self, v_from: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def bounds(self, from_velocity_mps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Variable bounds (the bound terms' intersection) and constraint-row bounds; the start speed
         fixes the first knot, the targets enter through the stage parameters."""
-        lbx, ubx = variable_bounds(self.bound_terms(v_from), len(self.schedule.t), self.n)
+        lbx, ubx = variable_bounds(self.bound_terms(from_velocity_mps), len(self.schedule.t), self.n)
         return lbx, ubx, self.tr.lbg.copy(), self.tr.ubg.copy()
 
-    def initial_guess(self, v_from: float, v_target: float, kind: str) -> np.ndarray:
-        return initial_guess(self.system, self.schedule, self.start_state(v_from), v_from, v_target, kind)
+    def initial_guess(self, from_velocity_mps: float, target_velocity_mps: float, kind: str) -> np.ndarray:
+        v0, v = from_velocity_mps, target_velocity_mps
+        return initial_guess(self.system, self.schedule, self.start_state(v0), v0, v, kind)
 
-    def fingerprint(self, v_from: float, v_target: float, guess: str) -> str:
+    def fingerprint(self, from_velocity_mps: float, target_velocity_mps: float, guess: str) -> str:
         """SHA-256 of everything this problem feeds IPOPT for one target besides its options and warm
         start: the stage function (every cost and constraint term), the problem config (URDF by
         content), parameters, bounds and the cold initial guess."""
@@ -221,8 +223,8 @@ class PushoffProblem:
         h.update(self.tr.fingerprint.encode())
         h.update(self.config.problem_json().encode())
         h.update(str(self.n_strides).encode())
-        for a in (self.parameters(v_from, v_target), *self.bounds(v_from),
-                  self.initial_guess(v_from, v_target, guess)):
+        for a in (self.parameters(from_velocity_mps, target_velocity_mps), *self.bounds(from_velocity_mps),
+                  self.initial_guess(from_velocity_mps, target_velocity_mps, guess)):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()
 

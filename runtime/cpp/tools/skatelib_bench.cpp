@@ -1,4 +1,4 @@
-// skatelib_bench LIB [velocity strides]: open time, allocation-free sample() and window(10) times.
+// skatelib_bench LIB [target_velocity_mps strides]: open time, allocation-free sample() and window(10) times.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -10,7 +10,7 @@ using Clock = std::chrono::steady_clock;
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: skatelib_bench LIB [velocity strides]\n");
+    std::fprintf(stderr, "usage: skatelib_bench LIB [target_velocity_mps strides]\n");
     return 2;
   }
   const auto t_open = Clock::now();

@@ -289,18 +289,20 @@ class MotionLibrary {
     return std::any_of(entries.begin(), entries.end(), [&](const Entry& e) { return e.key == key; });
   }
 
-  // The successful entry from `from_velocity` (0: a start-up from rest; speeds as keys name them, two
-  // decimals) whose target speed is nearest (fewest strides on ties; strides <= 0: any).
-  const Entry& select(double velocity, int strides = 0, double from_velocity = 0.0) const {
+  // The successful entry from `from_velocity_mps` (0: a start-up from rest; speeds as keys name them,
+  // two decimals) whose target speed is nearest `target_velocity_mps` (fewest strides on ties;
+  // strides <= 0: any). The names are the Python runtime's (docs/library-format.md, "Names").
+  const Entry& select(double target_velocity_mps, int strides = 0, double from_velocity_mps = 0.0) const {
     const Entry* best = nullptr;
     for (const auto& e : entries) {
       if (!e.success || (strides > 0 && e.n_strides != strides)) continue;
-      if (std::round(e.from_velocity_mps * 100.0) != std::round(from_velocity * 100.0)) continue;
+      if (std::round(e.from_velocity_mps * 100.0) != std::round(from_velocity_mps * 100.0)) continue;
       if (best == nullptr) {
         best = &e;
         continue;
       }
-      const double de = std::fabs(e.target_velocity_mps - velocity), db = std::fabs(best->target_velocity_mps - velocity);
+      const double de = std::fabs(e.target_velocity_mps - target_velocity_mps);
+      const double db = std::fabs(best->target_velocity_mps - target_velocity_mps);
       if (de < db || (de == db && e.n_strides < best->n_strides)) best = &e;
     }
     if (best == nullptr) throw std::out_of_range(path + ": no successful entry from that speed with those strides");

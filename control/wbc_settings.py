@@ -1,0 +1,45 @@
+"""The whole-body controller's settings (:class:`WbcSettings`): the targets' gains, the tasks'
+weights and the QP's bounds and backend, one frozen record shared by the targets
+(:mod:`skatelib.control.wbc_targets`), the tasks (:mod:`skatelib.control.wbc_tasks`), the
+constraints (:mod:`skatelib.control.wbc_constraints`) and the QP (:mod:`skatelib.control.wbc`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+NV = 18  # the floating-base model's velocity (and joint-acceleration) dimension: base 6 + joints 12
+
+
+@dataclass(frozen=True)
+class WbcSettings:
+    """Gains [1/s^2, 1/s], weights and bounds of the whole-body QP.
+
+    Attributes:
+        stance_gain: The stance feet's velocity feedback toward their deck point's [1/s].
+        w_force: The force task's weight [per N^2].
+        regularization: Every decision variable's own weight (keeps the QP strictly convex).
+        normal_min_N / normal_max_N: A stance foot's normal force bounds [N].
+        friction_rows: Hold the forces in the friction pyramid (False only for the negative
+            control that shows the rows matter).
+        qp_solver: A backend of :data:`skatelib.control.qp.SOLVERS`.
+    """
+
+    kp_com: float = 100.0
+    kd_com: float = 20.0
+    kp_attitude: float = 100.0
+    kd_attitude: float = 20.0
+    kp_swing: float = 400.0
+    kd_swing: float = 40.0
+    kp_posture: float = 50.0
+    kd_posture: float = 5.0
+    stance_gain: float = 10.0
+    w_com: float = 1.0
+    w_attitude: float = 1.0
+    w_swing: float = 1.0
+    w_force: float = 1e-1
+    w_posture: float = 1e-3
+    regularization: float = 1e-6
+    normal_min_N: float = 1.0
+    normal_max_N: float = 150.0
+    friction_rows: bool = True
+    qp_solver: str = "daqp"
