@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from skatelib.control.estimator.vec3 import cross
 from skatelib.library.rotations import board_rotations
 
 UP = np.array([0.0, 0.0, 1.0])
@@ -62,23 +63,35 @@ def plane_normal(points: np.ndarray) -> np.ndarray:
 
 def heading_fit(footholds: np.ndarray, centres: np.ndarray) -> float:
     """The rotation about z that best carries footholds' x, y onto the centres' (2-D Procrustes)."""
-    a = footholds[0:2] - footholds[0:2].mean(axis=1, keepdims=True)
-    b = centres[0:2] - centres[0:2].mean(axis=1, keepdims=True)
+    n = footholds.shape[1]
+    a = footholds[0:2] - footholds[0:2].sum(axis=1, keepdims=True) / n
+    b = centres[0:2] - centres[0:2].sum(axis=1, keepdims=True) / n
     return math.atan2(float(np.sum(a[0] * b[1] - a[1] * b[0])), float(np.sum(a[0] * b[0] + a[1] * b[1])))
+
+
+def _rolled(footholds: np.ndarray, roll: float) -> np.ndarray:
+    """The footholds' x, y rolled by ``roll`` about x (Rx(roll) f's first two rows)."""
+    return np.stack((footholds[0], math.cos(roll) * footholds[1] - math.sin(roll) * footholds[2]))
+
+
+PAIRS = {n: np.triu_indices(n, 1) for n in range(5)}  # the pairs of n deck feet
 
 
 def deck_rates(centres: np.ndarray, velocities: np.ndarray, h: np.ndarray, prior: np.ndarray,
                weight: float) -> np.ndarray:
-    """(yaw rate, roll rate) from the deck feet's centres and contact-point velocities (3, n)."""
-    rows, rhs = [weight * np.eye(2)], [weight * prior]
-    n = centres.shape[1]
-    for i in range(n):
-        for j in range(i + 1, n):
-            d = centres[:, i] - centres[:, j]
-            rows.append(np.column_stack([np.cross(UP, d), np.cross(h, d)]))
-            rhs.append(velocities[:, i] - velocities[:, j])
-    A, b = np.vstack(rows), np.concatenate(rhs)
-    return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
+    """(yaw rate, roll rate) from the deck feet's centres and contact-point velocities (3, n): the
+    least-squares solution of the pairs' rows and the prior's, by its 2 x 2 normal equations."""
+    i, j = PAIRS[centres.shape[1]] if centres.shape[1] < 5 else np.triu_indices(centres.shape[1], 1)
+    d = centres[:, i] - centres[:, j]
+    dv = velocities[:, i] - velocities[:, j]
+    c1 = np.stack((-d[1], d[0], np.zeros(d.shape[1])))  # e_z x d
+    c2 = cross(h, d)
+    w2 = weight * weight
+    a11, a12, a22 = w2 + float(np.sum(c1 * c1)), float(np.sum(c1 * c2)), w2 + float(np.sum(c2 * c2))
+    b1 = w2 * float(prior[0]) + float(np.sum(c1 * dv))
+    b2 = w2 * float(prior[1]) + float(np.sum(c2 * dv))
+    det = a11 * a22 - a12 * a12
+    return np.array([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
 
 
 @dataclass(frozen=True)
@@ -93,21 +106,22 @@ def update_deck(deck: DeckEstimate, on_deck: np.ndarray, centres: np.ndarray, ve
                 dt: float, settings: DeckSettings = DeckSettings()) -> DeckEstimate:
     """The deck after one tick of ``dt`` [s] from the feet ``on_deck`` (bool (4,)) with their centres
     and contact-point velocities (3, 4, world)."""
-    idx = np.nonzero(on_deck)[0]
+    idx = np.flatnonzero(on_deck)
+    n = len(idx)
     c, f = centres[:, idx], deck.footholds[:, idx]
-    rates = np.array([deck.yaw_rate, deck.roll_rate])
-    if len(idx) >= 2:
-        rates = deck_rates(c, velocities[:, idx], deck.R[:, 0], rates, settings.prior)
-    roll = deck.roll + rates[1] * dt
-    yaw = heading_fit(board_rotations(0.0, roll) @ f, c) if len(idx) >= 2 else deck.yaw + rates[0] * dt
-    if len(idx) >= 3:
-        n = plane_normal(c)
+    yaw_rate, roll_rate = deck.yaw_rate, deck.roll_rate
+    if n >= 2:
+        yaw_rate, roll_rate = (float(w) for w in deck_rates(c, velocities[:, idx], deck.R[:, 0],
+                                                            np.array([yaw_rate, roll_rate]), settings.prior))
+    roll = deck.roll + roll_rate * dt
+    yaw = heading_fit(_rolled(f, roll), c) if n >= 2 else deck.yaw + yaw_rate * dt
+    if n >= 3:
+        nz = plane_normal(c)
         for _ in range(2):  # the roll from the normal at the heading, the heading of the rolled footholds
-            y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-            roll = math.atan2(-float(n @ y_axis), float(n[2]))
-            yaw = heading_fit(board_rotations(0.0, roll) @ f, c)
-    out = DeckEstimate(yaw=yaw, roll=roll, pos=deck.pos, footholds=deck.footholds, yaw_rate=float(rates[0]),
-                       roll_rate=float(rates[1]))
-    if len(idx):
-        out.pos = c.mean(axis=1) - out.R @ f.mean(axis=1)
+            roll = math.atan2(math.sin(yaw) * float(nz[0]) - math.cos(yaw) * float(nz[1]), float(nz[2]))
+            yaw = heading_fit(_rolled(f, roll), c)
+    out = DeckEstimate(yaw=yaw, roll=roll, pos=deck.pos, footholds=deck.footholds, yaw_rate=yaw_rate,
+                       roll_rate=roll_rate)
+    if n:
+        out.pos = c.sum(axis=1) / n - out.R @ (f.sum(axis=1) / n)
     return out
