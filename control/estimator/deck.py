@@ -96,10 +96,12 @@ def deck_rates(centres: np.ndarray, velocities: np.ndarray, h: np.ndarray, prior
 
 @dataclass(frozen=True)
 class DeckSettings:
-    """The rates' pull towards the last ones (prior weight [s]... in units of metres of foot
-    spacing: a pair 5 cm apart observes as much as the prior)."""
+    """The rates' pull towards the last ones (``prior``, in metres of foot spacing: a pair 5 cm
+    apart observes as much as the prior); ``roll``: False takes the deck's roll and roll rate as
+    zero (a board assumed level: the negative control of the steering maneuver)."""
 
     prior: float = 0.05
+    roll: bool = True
 
 
 def update_deck(deck: DeckEstimate, on_deck: np.ndarray, centres: np.ndarray, velocities: np.ndarray,
@@ -120,6 +122,9 @@ def update_deck(deck: DeckEstimate, on_deck: np.ndarray, centres: np.ndarray, ve
         for _ in range(2):  # the roll from the normal at the heading, the heading of the rolled footholds
             roll = math.atan2(math.sin(yaw) * float(nz[0]) - math.cos(yaw) * float(nz[1]), float(nz[2]))
             yaw = heading_fit(_rolled(f, roll), c)
+    if not settings.roll:
+        roll = roll_rate = 0.0
+        yaw = heading_fit(f[0:2], c) if n >= 2 else yaw
     out = DeckEstimate(yaw=yaw, roll=roll, pos=deck.pos, footholds=deck.footholds, yaw_rate=yaw_rate,
                        roll_rate=roll_rate)
     if n:
