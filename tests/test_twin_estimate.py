@@ -40,16 +40,20 @@ def lib_path(tmp_path_factory) -> Path:
     return _solve(tmp_path_factory.mktemp("est"), tmp_path_factory.mktemp("cache"), "one", 0.4, 1)
 
 
+@pytest.fixture(scope="module")
+def two_stride_path(tmp_path_factory) -> Path:
+    return _solve(tmp_path_factory.mktemp("est2"), tmp_path_factory.mktemp("cache2"), "two", 0.5, 2)
+
+
 def _ride(path: Path, settings: EstimatorSettings | None = None):
+    """The library's first entry on the estimate under the default model and sensor errors."""
     lib = MotionLibrary.open(path)
     key = lib.keys()[0]
     p = SkateParams.from_library(lib)
-    plant = TwinPlant(TwinFigures.from_library(lib), parse_twin_perturbation(DEFAULT_TWIN_PERTURBATION, p.mu))
-    loop = TwinLoop(lib, key, ClosedLoop(p, p), plant, TwinLoopSettings(state="estimate"))
-    if settings is not None:
-        est = loop.feedback.estimator  # type: ignore[attr-defined]
-        est.s = settings
-        est.odometry.s = settings.odometry
+    errors = parse_twin_perturbation(DEFAULT_TWIN_PERTURBATION, p.mu)
+    plant = TwinPlant(TwinFigures.from_library(lib), errors)
+    loop = TwinLoop(lib, key, ClosedLoop(p, p), plant,
+                    TwinLoopSettings(state="estimate", sensor_errors=errors.sensors, estimator=settings))
     run = loop.ride()
     return twin_result(key, float(lib[key].attrs[schema.A_TARGET_VELOCITY]), run)
 
@@ -80,6 +84,29 @@ def test_feet_assumed_put_misread_the_velocity(lib_path):
     classical = replace(EstimatorSettings(), odometry=OdometrySettings(moving_deck=False))
     r = _ride(lib_path, classical)
     assert not r.est_trunk_v_rms <= 0.1, r.est_trunk_v_rms
+
+
+@pytest.fixture(scope="module")
+def two_strides(two_stride_path):
+    """The 0.5 m/s two-stride entry on the estimate, and on the classical estimator."""
+    classical = replace(EstimatorSettings(), odometry=OdometrySettings(moving_deck=False))
+    return _ride(two_stride_path), _ride(two_stride_path, classical)
+
+
+def test_a_two_stride_entry_passes_on_the_estimate(two_strides):
+    """A 0.5 m/s two-stride entry passes the twin's verdict with the controller on the estimate
+    (default model and sensor errors), the estimator within the issue's bounds of the truth."""
+    r, _ = two_strides
+    assert r.passed, r.reasons
+    assert r.est_trunk_v_rms <= 0.03 and r.est_board_speed_rms <= 0.03 and r.est_board_roll_rms <= 0.012, r
+
+
+def test_feet_assumed_put_fail_the_entry(two_strides):
+    """Negative control: the same entry on the classical estimator (every stance foot stays put)
+    fails, its velocity error on the deck ten times the moving deck's."""
+    r, classical = two_strides
+    assert not classical.passed
+    assert classical.est_trunk_v_rms > 10 * r.est_trunk_v_rms, (classical.est_trunk_v_rms, r.est_trunk_v_rms)
 
 
 # --- The sensors' errors (``--perturb`` keys): estimators on the same ride --------------------------
