@@ -55,23 +55,37 @@ class DeckEstimate:
 
 
 def plane_normal(points: np.ndarray) -> np.ndarray:
-    """The upward unit normal of the least-squares plane through (3, n >= 3) points."""
-    centred = points - points.mean(axis=1, keepdims=True)
-    n = np.linalg.svd(centred)[0][:, 2]
+    """The upward unit normal of the least-squares plane through (3, n >= 3) points (three: the
+    plane through them)."""
+    if points.shape[1] == 3:
+        n = cross(points[:, 1] - points[:, 0], points[:, 2] - points[:, 0])
+        n = n / math.sqrt(float(n @ n))
+    else:
+        n = np.linalg.svd(points - points.mean(axis=1, keepdims=True))[0][:, 2]
     return n if n[2] > 0 else -n
 
 
 def heading_fit(footholds: np.ndarray, centres: np.ndarray) -> float:
     """The rotation about z that best carries footholds' x, y onto the centres' (2-D Procrustes)."""
-    n = footholds.shape[1]
-    a = footholds[0:2] - footholds[0:2].sum(axis=1, keepdims=True) / n
-    b = centres[0:2] - centres[0:2].sum(axis=1, keepdims=True) / n
-    return math.atan2(float(np.sum(a[0] * b[1] - a[1] * b[0])), float(np.sum(a[0] * b[0] + a[1] * b[1])))
+    return _HeadingFit(footholds, centres)(0.0)
 
 
-def _rolled(footholds: np.ndarray, roll: float) -> np.ndarray:
-    """The footholds' x, y rolled by ``roll`` about x (Rx(roll) f's first two rows)."""
-    return np.stack((footholds[0], math.cos(roll) * footholds[1] - math.sin(roll) * footholds[2]))
+class _HeadingFit:
+    """:func:`heading_fit` of the footholds rolled by any angle about x (Rx(roll) f), the sums it
+    needs taken once: rolling is linear in (cos, sin) of the roll."""
+
+    def __init__(self, footholds: np.ndarray, centres: np.ndarray):
+        n = footholds.shape[1]
+        f = footholds - footholds.sum(axis=1, keepdims=True) / n
+        bx, by = (centres[0:2] - centres[0:2].sum(axis=1, keepdims=True) / n)
+        fx, fy, fz = f
+        self.sums = [float(s.sum()) for s in (fx * by, fy * bx, fz * bx, fx * bx, fy * by, fz * by)]
+
+    def __call__(self, roll: float) -> float:
+        xby, ybx, zbx, xbx, yby, zby = self.sums
+        c, s = math.cos(roll), math.sin(roll)
+        # a = (f_x, c f_y - s f_z): sum(a_x b_y - a_y b_x), sum(a_x b_x + a_y b_y)
+        return math.atan2(xby - c * ybx + s * zbx, xbx + c * yby - s * zby)
 
 
 PAIRS = {n: np.triu_indices(n, 1) for n in range(5)}  # the pairs of n deck feet
@@ -84,12 +98,12 @@ def deck_rates(centres: np.ndarray, velocities: np.ndarray, h: np.ndarray, prior
     i, j = PAIRS[centres.shape[1]] if centres.shape[1] < 5 else np.triu_indices(centres.shape[1], 1)
     d = centres[:, i] - centres[:, j]
     dv = velocities[:, i] - velocities[:, j]
-    c1 = np.stack((-d[1], d[0], np.zeros(d.shape[1])))  # e_z x d
+    c1 = np.array((-d[1], d[0], np.zeros(d.shape[1])))  # e_z x d
     c2 = cross(h, d)
     w2 = weight * weight
-    a11, a12, a22 = w2 + float(np.sum(c1 * c1)), float(np.sum(c1 * c2)), w2 + float(np.sum(c2 * c2))
-    b1 = w2 * float(prior[0]) + float(np.sum(c1 * dv))
-    b2 = w2 * float(prior[1]) + float(np.sum(c2 * dv))
+    a11, a12, a22 = w2 + float((c1 * c1).sum()), float((c1 * c2).sum()), w2 + float((c2 * c2).sum())
+    b1 = w2 * float(prior[0]) + float((c1 * dv).sum())
+    b2 = w2 * float(prior[1]) + float((c2 * dv).sum())
     det = a11 * a22 - a12 * a12
     return np.array([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
 
@@ -116,15 +130,16 @@ def update_deck(deck: DeckEstimate, on_deck: np.ndarray, centres: np.ndarray, ve
         yaw_rate, roll_rate = (float(w) for w in deck_rates(c, velocities[:, idx], deck.R[:, 0],
                                                             np.array([yaw_rate, roll_rate]), settings.prior))
     roll = deck.roll + roll_rate * dt
-    yaw = heading_fit(_rolled(f, roll), c) if n >= 2 else deck.yaw + yaw_rate * dt
-    if n >= 3:
-        nz = plane_normal(c)
+    fit = _HeadingFit(f, c) if n >= 2 else None
+    yaw = fit(roll) if fit else deck.yaw + yaw_rate * dt
+    if fit and n >= 3:
+        nx, ny, nz = (float(x) for x in plane_normal(c))
         for _ in range(2):  # the roll from the normal at the heading, the heading of the rolled footholds
-            roll = math.atan2(math.sin(yaw) * float(nz[0]) - math.cos(yaw) * float(nz[1]), float(nz[2]))
-            yaw = heading_fit(_rolled(f, roll), c)
+            roll = math.atan2(math.sin(yaw) * nx - math.cos(yaw) * ny, nz)
+            yaw = fit(roll)
     if not settings.roll:
         roll = roll_rate = 0.0
-        yaw = heading_fit(f[0:2], c) if n >= 2 else yaw
+        yaw = fit(0.0) if fit else yaw
     out = DeckEstimate(yaw=yaw, roll=roll, pos=deck.pos, footholds=deck.footholds, yaw_rate=yaw_rate,
                        roll_rate=roll_rate)
     if n:

@@ -12,7 +12,7 @@ import numpy as np
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b of two 3-vectors, or column-wise of (3, n) arrays (one broadcasting against the other),
     with numpy's ``np.cross`` operation order (a1 b2 - a2 b1, ...)."""
-    return np.stack((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]))
+    return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]))
 
 
 def exp_so3(w: np.ndarray) -> np.ndarray:
