@@ -76,6 +76,12 @@ class FootMeasure:
     height_target: float
 
 
+def _sym_outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a b^T + b a^T."""
+    B = a[:, None] * b
+    return B + B.T
+
+
 class LegOdometry:
     """The filter of the module docstring (10 states). Its matrices are kept and filled in place:
     it runs at every whole-body tick."""
@@ -91,6 +97,7 @@ class LegOdometry:
         self._q = np.array([s.position_walk**2] * 3 + [s.accel_noise**2] * 3 + [s.board_accel**2]
                            + [s.bias_walk**2] * 3)  # the process noise per second (diagonal)
         self._diag = np.diag_indices(self.N)
+        self._foot_noise = s.foot_velocity**2 * np.eye(3)
         self._rows: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
 
     @property
@@ -150,11 +157,11 @@ class LegOdometry:
         target = surface_v - relative_v
         nu = target - x[3:6, None] + (d * x[6]) * heading[:, None]
         # Each foot's velocity innovation covariance G P G^T + sigma^2 I, G = [I, -d h] on (v, u).
-        A = P[3:6, 3:6] + s.foot_velocity**2 * np.eye(3)
-        B = np.outer(heading, P[3:6, 6])
-        S = A - d[:, None, None] * (B + B.T) + (d * d * P[6, 6])[:, None, None] * np.outer(heading, heading)
+        A = P[3:6, 3:6] + self._foot_noise
+        S = A[None] if not d.any() else (A - d[:, None, None] * _sym_outer(heading, P[3:6, 6])
+                                         + (d * d * P[6, 6])[:, None, None] * (heading[:, None] * heading))
         nu_t = nu.T
-        maha = np.einsum("ki,ki->k", nu_t, np.linalg.solve(S, nu_t[:, :, None])[:, :, 0])
+        maha = (nu_t * np.linalg.solve(S, nu_t[:, :, None])[:, :, 0]).sum(axis=1)
         used = ~(maha > s.gate)
         k = int(used.sum())
         if k:
