@@ -38,6 +38,13 @@ class AttitudeSettings:
     gravity_mps2: float = 9.81
 
 
+def _onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking unit vector ``a`` onto unit vector ``b``."""
+    w = np.cross(a, b)
+    norm = float(np.linalg.norm(w))
+    return exp_so3(w / norm * math.atan2(norm, float(a @ b))) if norm > 1e-12 else np.eye(3)
+
+
 class AttitudeFilter:
     """The trunk's rotation (trunk to world) and angular velocity (trunk frame)."""
 
@@ -54,8 +61,20 @@ class AttitudeFilter:
         """The gyroscope's bias and the tilt from readings taken standing still (module docstring)."""
         self.gyro_bias = np.mean(np.asarray(gyro), axis=0)
         up = self.mount @ np.mean(np.asarray(accel), axis=0)
-        up /= np.linalg.norm(up)
-        # The smallest rotation that turns the filter's up (R^T e_z) onto the measured one.
+        self.still_up = up / np.linalg.norm(up)  # gravity's direction at the standstill (trunk frame)
+        self._level(self.still_up)
+
+    def align_mount(self, up: np.ndarray) -> None:
+        """After :meth:`calibrate`: the trunk's up known otherwise (``up``, trunk frame, unit): the
+        IMU's mounting turned so that the standstill's gravity reads along it (a tilted mount,
+        and the accelerometer's bias with it), the filter levelled on it."""
+        self.mount = _onto(self.still_up, up) @ self.mount
+        self._turn = True
+        self.still_up = up
+        self._level(up)
+
+    def _level(self, up: np.ndarray) -> None:
+        # The smallest rotation that turns the filter's up (R^T e_z) onto ``up``.
         w = np.cross(self.R[2], up)
         angle = math.atan2(float(np.linalg.norm(w)), float(self.R[2] @ up))
         if angle > 1e-12:

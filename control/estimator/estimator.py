@@ -19,7 +19,7 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 from skatelib.control.estimator.attitude import AttitudeFilter, AttitudeSettings
-from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, update_deck
+from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, plane_normal, update_deck
 from skatelib.control.estimator.odometry import LegOdometry, OdometrySettings
 from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
@@ -60,13 +60,17 @@ class BoardGeometry:
 @dataclass(frozen=True)
 class EstimatorSettings:
     """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
-    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s]."""
+    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
+    ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
+    deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
+    the trunk's)."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
     deck: DeckSettings = field(default_factory=DeckSettings)
     touch_m: float = 0.005
     settle_s: float = 0.02
+    mount_from_legs: bool = True
 
 
 @dataclass
@@ -166,8 +170,12 @@ class StateEstimator:
         self.legs = LegTermsBuffer(kin)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
-        """The gyroscope's bias and the trunk's tilt from readings taken standing still."""
+        """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
+        ``mount_from_legs`` the IMU's mounting from the deck feet (the deck level at the start)."""
         self.attitude.calibrate([r.gyro for r in still], [r.accel for r in still])
+        if self.s.mount_from_legs and still and int(self.stance.sum()) >= 3:
+            r, _, _ = self.legs(still[-1].q)
+            self.attitude.align_mount(plane_normal(r[:, self.stance]))
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
