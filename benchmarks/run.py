@@ -4,9 +4,9 @@ the table of ``docs/benchmarks.md``.
 One module per subject, each with its figures (name, target, baseline) as data and a ``measure``
 function: :mod:`benchmarks.pushoff`, :mod:`benchmarks.library`, :mod:`benchmarks.runtime`,
 :mod:`benchmarks.humanoid`, :mod:`benchmarks.rerun_log`, :mod:`benchmarks.mpc`,
-:mod:`benchmarks.fatrop`, :mod:`benchmarks.sim`, :mod:`benchmarks.wbc`.
+:mod:`benchmarks.fatrop`, :mod:`benchmarks.sim`, :mod:`benchmarks.wbc`, :mod:`benchmarks.estimator`.
 
-``python -m benchmarks.run [pushoff|library|runtime|humanoid|rerun|mpc|fatrop|sim|wbc ...]`` runs a subset
+``python -m benchmarks.run [pushoff|library|runtime|humanoid|rerun|mpc|fatrop|sim|wbc|estimator ...]`` runs a subset
 (and rewrites only its rows); ``--no-write`` leaves the table alone.
 """
 
@@ -36,6 +36,7 @@ PARTS: dict[str, tuple[str, bool]] = {
     "fatrop": ("benchmarks.fatrop", False),
     "sim": ("benchmarks.sim", False),
     "wbc": ("benchmarks.wbc", True),
+    "estimator": ("benchmarks.estimator", True),
 }
 
 

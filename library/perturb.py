@@ -63,7 +63,24 @@ BOUNDS: dict[str, Bound] = {
     "payload_y": Bound(-0.5, 0.5, "m"),
     "payload_z": Bound(-0.5, 0.5, "m"),
     "delay": Bound(0.0, 0.1, "s"),  # the feedback's delay (twin)
+    # The robot's sensors on the twin (with --state estimate): added to the IMU's figures (a
+    # BMI088's noise, per-run biases and bias walks) and the encoders' quantization. A gyroscope
+    # bias of 0.1 rad/s is 6 deg/s (six times the datasheet's zero-rate offset), an accelerometer
+    # bias of 0.5 m/s^2 about 50 mg; 10x the noise a poor IMU; 0.05 rad a joint zeroed 3 deg off.
+    "gyro_bias": Bound(-0.1, 0.1, "rad/s"),  # on each gyroscope axis, beside the drawn one
+    "accel_bias": Bound(-0.5, 0.5, "m/s^2"),  # on each accelerometer axis, beside the drawn one
+    "imu_noise": Bound(0.0, 10.0, "x the datasheet's"),  # the IMU's white noise and bias walks
+    "encoder_offset": Bound(-0.05, 0.05, "rad"),  # a zero offset on one joint (FL hip)
+    "imu_tilt": Bound(-0.1, 0.1, "rad"),  # the IMU mounted rolled about the trunk's x axis
+    "sensor_delay": Bound(0.0, 0.02, "s"),  # every reading this late (whole ticks)
 }
+SENSOR_KEYS = ("gyro_bias", "accel_bias", "imu_noise", "encoder_offset", "imu_tilt", "sensor_delay")
+# The sensor errors of a run when --perturb omits their keys: the datasheet's IMU, a joint zeroed a
+# tenth of a degree off, the IMU mounted 0.3 deg rolled (a machining tolerance) and one tick
+# (2 ms) of delay; no bias beyond the drawn ones (the standstill calibration removes a constant
+# gyroscope bias; gyro_bias= tests it).
+DEFAULT_SENSOR_PERTURBATION = ("gyro_bias=0,accel_bias=0,imu_noise=1,encoder_offset=0.002,imu_tilt=0.005,"
+                               "sensor_delay=0.002")
 
 
 def bounded(item: str, key: str, value: float, error: type[Exception]) -> float:

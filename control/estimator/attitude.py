@@ -24,15 +24,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from skatelib.control.estimator.vec3 import cross, exp_so3
 
-
-def exp_so3(w: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: the rotation of rotation vector ``w``."""
-    a = math.sqrt(float(w @ w))
-    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    if a < 1e-9:
-        return np.eye(3) + K
-    return np.eye(3) + (math.sin(a) / a) * K + ((1.0 - math.cos(a)) / (a * a)) * (K @ K)
+__all__ = ["AttitudeFilter", "AttitudeSettings", "exp_so3"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +38,13 @@ class AttitudeSettings:
     gravity_mps2: float = 9.81
 
 
+def _onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking unit vector ``a`` onto unit vector ``b``."""
+    w = np.cross(a, b)
+    norm = float(np.linalg.norm(w))
+    return exp_so3(w / norm * math.atan2(norm, float(a @ b))) if norm > 1e-12 else np.eye(3)
+
+
 class AttitudeFilter:
     """The trunk's rotation (trunk to world) and angular velocity (trunk frame)."""
 
@@ -52,14 +53,28 @@ class AttitudeFilter:
         self.s = settings or AttitudeSettings()
         self.gyro_bias = np.zeros(3)
         self.mount = np.eye(3) if mount is None else mount  # the IMU's axes in the trunk frame
+        self._turn = mount is not None and not np.array_equal(mount, np.eye(3))  # readings to turn
         self.omega = np.zeros(3)
+        self.accel = np.zeros(3)  # the last specific force (trunk frame)
 
     def calibrate(self, gyro: Sequence[np.ndarray], accel: Sequence[np.ndarray]) -> None:
         """The gyroscope's bias and the tilt from readings taken standing still (module docstring)."""
         self.gyro_bias = np.mean(np.asarray(gyro), axis=0)
         up = self.mount @ np.mean(np.asarray(accel), axis=0)
-        up /= np.linalg.norm(up)
-        # The smallest rotation that turns the filter's up (R^T e_z) onto the measured one.
+        self.still_up = up / np.linalg.norm(up)  # gravity's direction at the standstill (trunk frame)
+        self._level(self.still_up)
+
+    def align_mount(self, up: np.ndarray) -> None:
+        """After :meth:`calibrate`: the trunk's up known otherwise (``up``, trunk frame, unit): the
+        IMU's mounting turned so that the standstill's gravity reads along it (a tilted mount,
+        and the accelerometer's bias with it), the filter levelled on it."""
+        self.mount = _onto(self.still_up, up) @ self.mount
+        self._turn = True
+        self.still_up = up
+        self._level(up)
+
+    def _level(self, up: np.ndarray) -> None:
+        # The smallest rotation that turns the filter's up (R^T e_z) onto ``up``.
         w = np.cross(self.R[2], up)
         angle = math.atan2(float(np.linalg.norm(w)), float(self.R[2] @ up))
         if angle > 1e-12:
@@ -67,12 +82,13 @@ class AttitudeFilter:
 
     def update(self, gyro: np.ndarray, accel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """One reading (IMU frame) over ``dt`` [s]: the rotation and the angular velocity."""
-        omega = self.mount @ (gyro - self.gyro_bias)
-        a = self.mount @ accel
-        norm = math.sqrt(float(a @ a))
+        omega, a = gyro - self.gyro_bias, accel
+        if self._turn:
+            omega, a = self.mount @ omega, self.mount @ a
+        norm = math.sqrt(float(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]))
         w = omega
         if abs(norm - self.s.gravity_mps2) < self.s.gate * self.s.gravity_mps2:
-            w = omega + self.s.k_tilt * np.cross(a / norm, self.R[2])  # R^T e_z is R's third row
+            w = omega + self.s.k_tilt * cross(a / norm, self.R[2])  # R^T e_z is R's third row
         self.R = self.R @ exp_so3(w * dt)
-        self.omega = omega
+        self.omega, self.accel = omega, a
         return self.R, omega

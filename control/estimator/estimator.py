@@ -19,8 +19,9 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 from skatelib.control.estimator.attitude import AttitudeFilter, AttitudeSettings
-from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, update_deck
-from skatelib.control.estimator.odometry import FootMeasure, LegOdometry, OdometrySettings
+from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, plane_normal, update_deck
+from skatelib.control.estimator.odometry import LegOdometry, OdometrySettings
+from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
 from skatelib.control.kinematics import LegKinematics
 from skatelib.library.channels import BOARD, GROUND
@@ -59,13 +60,17 @@ class BoardGeometry:
 @dataclass(frozen=True)
 class EstimatorSettings:
     """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
-    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s]."""
+    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
+    ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
+    deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
+    the trunk's)."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
     deck: DeckSettings = field(default_factory=DeckSettings)
     touch_m: float = 0.005
     settle_s: float = 0.02
+    mount_from_legs: bool = True
 
 
 @dataclass
@@ -90,6 +95,36 @@ def leg_terms(kin: LegKinematics, q: np.ndarray) -> LegTerms:
         full = pin.getFrameJacobian(kin.model, kin.data, f, pin.LOCAL_WORLD_ALIGNED)[:, kin.v_index[3 * i:3 * i + 3]]
         J[i], Jw[i] = full[:3], full[3:]
     return LegTerms(r, J, Jw)
+
+
+class LegTermsBuffer:
+    """:func:`leg_terms` for every tick: its configuration and outputs kept, each leg's Jacobian
+    columns a plain slice (the legs' joints follow each other in the model, as CyberDog2's do; else
+    :func:`leg_terms` itself)."""
+
+    def __init__(self, kin: LegKinematics):
+        self.kin = kin
+        self.qp = pin.neutral(kin.model)
+        v = [int(i) for i in kin.v_index]
+        self.cols = [slice(v[3 * i], v[3 * i] + 3) if v[3 * i:3 * i + 3] == list(range(v[3 * i], v[3 * i] + 3))
+                     else None for i in range(4)]
+        self.frames = list(enumerate(kin.feet))
+
+    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Foot centres (3, 4), linear and angular Jacobians (4, 3, 3) at ``q`` (channel order)."""
+        kin = self.kin
+        if any(c is None for c in self.cols):
+            legs = leg_terms(kin, q)
+            return legs.r, legs.J, legs.Jw
+        m, d = kin.model, kin.data
+        self.qp[kin.q_index] = q
+        pin.computeJointJacobians(m, d, self.qp)
+        pin.updateFramePlacements(m, d)
+        r, J = np.empty((3, 4)), np.empty((4, 6, 3))
+        for i, f in self.frames:
+            r[:, i] = d.oMf[f].translation
+            J[i] = pin.getFrameJacobian(m, d, f, pin.LOCAL_WORLD_ALIGNED)[:, self.cols[i]]
+        return r, J[:, :3], J[:, 3:]
 
 
 class StateEstimator:
@@ -132,59 +167,58 @@ class StateEstimator:
         self.last_t: float | None = None
         self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
+        self.legs = LegTermsBuffer(kin)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
-        """The gyroscope's bias and the trunk's tilt from readings taken standing still."""
+        """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
+        ``mount_from_legs`` the IMU's mounting from the deck feet (the deck level at the start)."""
         self.attitude.calibrate([r.gyro for r in still], [r.accel for r in still])
+        if self.s.mount_from_legs and still and int(self.stance.sum()) >= 3:
+            r, _, _ = self.legs(still[-1].q)
+            self.attitude.align_mount(plane_normal(r[:, self.stance]))
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
         dt = 0.0 if self.last_t is None else reading.t - self.last_t
         self.last_t = self.now = reading.t
         R, omega = self.attitude.update(reading.gyro, reading.accel, dt)
-        imu_accel = self.attitude.mount @ reading.accel
         odo = self.odometry
         if dt > 0:
-            odo.predict(R, imu_accel, dt, self.g)
-        legs = leg_terms(self.kin, reading.q)
-        qd = reading.qd
-        rel = np.empty((3, 4))  # the feet's contact points' velocities relative to the trunk's (world)
-        spin = np.empty((3, 4))  # the feet's angular velocities (world)
-        for i in range(4):
-            j = slice(3 * i, 3 * i + 3)
-            rel[:, i] = R @ (np.cross(omega, legs.r[:, i]) + legs.J[i] @ qd[j])
-            spin[:, i] = R @ (omega + legs.Jw[i] @ qd[j])
+            odo.predict(R, self.attitude.accel, dt, self.g)
+        r, J, Jw = self.legs(reading.q)
+        qd = np.asarray(reading.qd, dtype=float).reshape(4, 3, 1)
+        # the feet's contact points' velocities relative to the trunk's, and their angular velocities (world)
+        rel = R @ (cross(omega, r) + (J @ qd)[:, :, 0].T)
+        spin = R @ (omega[:, None] + (Jw @ qd)[:, :, 0].T)
         plan = self.schedule(reading.t)
-        deck_n = self.deck.R[:, 2]
-        normals = np.where((plan == BOARD)[None, :], deck_n[:, None], UP[:, None])
-        rel -= np.cross(spin.T, (self.rho * normals).T).T
-        centres = odo.p[:, None] + R @ legs.r
-        on_deck = (plan == BOARD) & self.stance
-        self.deck = update_deck(self.deck, on_deck, centres, odo.v[:, None] + rel, dt, self.s.deck)
-        feet = self._measures(plan, centres, rel, legs.r, R)
-        used = odo.correct([m for _, m in feet])
-        self.used = np.zeros(4, dtype=bool)
-        self.used[[i for i, _ in feet]] = used
-        return self._state(reading, R, omega, legs.r, plan)
+        board = plan == BOARD
+        normals = np.where(board, self.deck.R[:, 2:3], UP[:, None])
+        rel -= cross(spin, self.rho * normals)
+        centres = odo.p[:, None] + R @ r
+        self.deck = update_deck(self.deck, board & self.stance, centres, odo.v[:, None] + rel, dt, self.s.deck)
+        self.used = self._correct(plan, centres, rel, r, R)
+        return self._state(reading, R, omega, r, plan)
 
-    def _measures(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
-                  R: np.ndarray) -> list[tuple[int, FootMeasure]]:
+    def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
+                 R: np.ndarray) -> np.ndarray:
+        """The filter's correction by the feet that stand (planned on a surface, their touchdown
+        ``settle_s`` past): returns which were used."""
+        used = np.zeros(4, dtype=bool)
+        board = plan == BOARD
+        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s))
+        if not len(idx):
+            return used
         deck, b = self.deck, self.board
-        axis = deck.pos - b.axis_depth_m * deck.R[:, 2]
-        out = []
-        for i in range(4):
-            if plan[i] not in (BOARD, GROUND) or not self.now - self.down_since[i] >= self.s.settle_s:
-                continue
-            offset_z = float((R @ r[:, i])[2])
-            if plan[i] == BOARD:
-                moving = self.s.odometry.moving_deck
-                surface = np.cross(deck.omega, centres[:, i] - axis) if moving else np.zeros(3)
-                held = deck.R @ (deck.footholds[:, i] + b.axis_depth_m * UP)
-                target = b.deck_height_m - b.axis_depth_m + float(held[2])
-                out.append((i, FootMeasure(True, rel[:, i], surface, deck.R[:, 0], offset_z, target)))
-            else:
-                out.append((i, FootMeasure(False, rel[:, i], np.zeros(3), deck.R[:, 0], offset_z, self.rho)))
-        return out
+        on_deck = board[idx]
+        surface = np.zeros((3, len(idx)))
+        if self.s.odometry.moving_deck and on_deck.any():
+            axis = deck.pos - b.axis_depth_m * deck.R[:, 2]
+            surface[:, on_deck] = cross(deck.omega, centres[:, idx[on_deck]] - axis[:, None])
+        held = deck.footholds[:, idx].copy()
+        held[2] += b.axis_depth_m
+        target = np.where(on_deck, b.deck_height_m - b.axis_depth_m + deck.R[2] @ held, self.rho)
+        used[idx] = self.odometry.correct_feet(on_deck, rel[:, idx], surface, deck.R[:, 0], target - R[2] @ r[:, idx])
+        return used
 
     def _state(self, reading: Reading, R: np.ndarray, omega: np.ndarray, r: np.ndarray,
                plan: np.ndarray) -> RobotState:
@@ -205,10 +239,10 @@ class StateEstimator:
         stance = touching & (plan != 0)
         self.down_since = np.where(stance & ~self.stance, self.now, np.where(stance, self.down_since, np.inf))
         self.stance = stance
-        normals = np.where(deck_side[None, :], deck_n[:, None], UP[:, None])
-        deck_v = odo.u * deck.R[:, 0] + np.cross(deck.omega, b.axis_depth_m * deck_n)
+        normals = np.where(deck_side, deck_n[:, None], UP[:, None])
+        omega_b = deck.omega
+        deck_v = odo.u * deck.R[:, 0] + cross(omega_b, b.axis_depth_m * deck_n)
         return RobotState(trunk_pos=odo.p.copy(), trunk_R=R.copy(), trunk_v=odo.v.copy(), trunk_omega=omega.copy(),
                           q=np.array(reading.q), qd=np.array(reading.qd), deck_pos=deck.pos.copy(),
-                          deck_R=deck.R.copy(),
-                          deck_v=deck_v, deck_omega=deck.omega, foot_touch=touch,
+                          deck_R=deck.R.copy(), deck_v=deck_v, deck_omega=omega_b, foot_touch=touch,
                           contact_points=centres - self.rho * normals)

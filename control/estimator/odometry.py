@@ -76,16 +76,29 @@ class FootMeasure:
     height_target: float
 
 
+def _sym_outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a b^T + b a^T."""
+    B = a[:, None] * b
+    return B + B.T
+
+
 class LegOdometry:
-    """The filter of the module docstring (10 states)."""
+    """The filter of the module docstring (10 states). Its matrices are kept and filled in place:
+    it runs at every whole-body tick."""
 
     N = 10
 
     def __init__(self, p0: np.ndarray, v0: np.ndarray, u0: float, settings: OdometrySettings | None = None,
                  bias_sd: float = 0.02):
-        self.s = settings or OdometrySettings()
+        self.s = s = settings or OdometrySettings()
         self.x = np.concatenate([p0, v0, [u0], np.zeros(3)])
         self.P = np.diag([1e-6] * 3 + [1e-4] * 3 + [1e-4] + [bias_sd**2] * 3)
+        self._F = np.eye(self.N)
+        self._q = np.array([s.position_walk**2] * 3 + [s.accel_noise**2] * 3 + [s.board_accel**2]
+                           + [s.bias_walk**2] * 3)  # the process noise per second (diagonal)
+        self._diag = np.diag_indices(self.N)
+        self._foot_noise = s.foot_velocity**2 * np.eye(3)
+        self._rows: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
 
     @property
     def p(self) -> np.ndarray:
@@ -100,46 +113,66 @@ class LegOdometry:
         return float(self.x[6])
 
     def predict(self, R: np.ndarray, accel: np.ndarray, dt: float, gravity: float) -> None:
-        s, x = self.s, self.x
-        a = R @ (accel - x[7:10]) - gravity * UP
+        x, F = self.x, self._F
+        a = R @ (accel - x[7:10])
+        a[2] -= gravity
         x[0:3] += x[3:6] * dt + 0.5 * a * dt * dt
         x[3:6] += a * dt
-        F = np.eye(self.N)
-        F[0:3, 3:6] = dt * np.eye(3)
+        F[0, 3] = F[1, 4] = F[2, 5] = dt
         F[0:3, 7:10] = -0.5 * dt * dt * R
         F[3:6, 7:10] = -dt * R
-        q = np.r_[[s.position_walk**2 * dt] * 3, [s.accel_noise**2 * dt] * 3, s.board_accel**2 * dt,
-                  [s.bias_walk**2 * dt] * 3]
-        self.P = F @ self.P @ F.T + np.diag(q)
+        P = F @ self.P @ F.T
+        P[self._diag] += self._q * dt
+        self.P = P
 
     def correct(self, feet: list[FootMeasure]) -> np.ndarray:
         """The stance feet's rows (those within the gate); returns which were used (bool, per item)."""
-        s, x = self.s, self.x
-        rows, z, r = [], [], []
-        used = np.zeros(len(feet), dtype=bool)
-        for k, f in enumerate(feet):
-            H = np.zeros((3, self.N))
-            H[:, 3:6] = np.eye(3)
-            target = f.surface_v - f.relative_v
-            if f.on_deck and s.moving_deck:
-                H[:, 6] = -f.heading
-            nu = target - H @ x
-            S = H @ self.P @ H.T + s.foot_velocity**2 * np.eye(3)
-            if float(nu @ np.linalg.solve(S, nu)) > s.gate:
-                continue
-            used[k] = True
-            rows.append(H)
-            z.append(target)
-            r += [s.foot_velocity**2] * 3
-            h = np.zeros((1, self.N))
-            h[0, 2] = 1.0
-            rows.append(h)
-            z.append(np.array([f.height_target - f.centre_offset_z]))
-            r.append(s.foot_height**2)
-        if rows:
-            H, zz = np.vstack(rows), np.concatenate(z)
-            S = H @ self.P @ H.T + np.diag(r)
-            K = np.linalg.solve(S, H @ self.P).T
-            self.x = x + K @ (zz - H @ x)
-            self.P = (np.eye(self.N) - K @ H) @ self.P
+        if not feet:
+            return np.zeros(0, dtype=bool)
+        return self.correct_feet(np.array([f.on_deck for f in feet]), np.column_stack([f.relative_v for f in feet]),
+                                 np.column_stack([f.surface_v for f in feet]), feet[0].heading,
+                                 np.array([f.height_target - f.centre_offset_z for f in feet]))
+
+    def _template(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The rows of ``k`` feet (3 velocity rows and a height row each, foot after foot): H without
+        the board speed's column, the velocity rows' and the height rows' indices, the noise."""
+        if k not in self._rows:
+            s = self.s
+            H = np.zeros((4 * k, self.N))
+            vel = (4 * np.arange(k)[:, None] + np.arange(3)).ravel()
+            height = 4 * np.arange(k) + 3
+            H[vel, 3 + np.tile(np.arange(3), k)] = 1.0
+            H[height, 2] = 1.0
+            r = np.tile([s.foot_velocity**2] * 3 + [s.foot_height**2], k)
+            self._rows[k] = (H, vel, height, r)
+        return self._rows[k]
+
+    def correct_feet(self, on_deck: np.ndarray, relative_v: np.ndarray, surface_v: np.ndarray, heading: np.ndarray,
+                     height: np.ndarray) -> np.ndarray:
+        """The rows of m stance feet: ``on_deck`` (m,), their contact points' velocities relative to
+        the trunk's and their surfaces' (3, m, world), the board's heading, what the trunk's height
+        p_z should be by each foot (m,). Returns which were used (within the gate)."""
+        s, x, P = self.s, self.x, self.P
+        d = on_deck.astype(float) if s.moving_deck else np.zeros(len(on_deck))
+        target = surface_v - relative_v
+        nu = target - x[3:6, None] + (d * x[6]) * heading[:, None]
+        # Each foot's velocity innovation covariance G P G^T + sigma^2 I, G = [I, -d h] on (v, u).
+        A = P[3:6, 3:6] + self._foot_noise
+        S = A[None] if not d.any() else (A - d[:, None, None] * _sym_outer(heading, P[3:6, 6])
+                                         + (d * d * P[6, 6])[:, None, None] * (heading[:, None] * heading))
+        nu_t = nu.T
+        maha = (nu_t * np.linalg.solve(S, nu_t[:, :, None])[:, :, 0]).sum(axis=1)
+        used = ~(maha > s.gate)
+        k = int(used.sum())
+        if k:
+            H0, vel, rows_h, r = self._template(k)
+            H = H0.copy()
+            H[vel, 6] = (-d[used][:, None] * heading).ravel()
+            z = np.empty(4 * k)
+            z[vel] = target[:, used].T.ravel()
+            z[rows_h] = height[used]
+            HP = H @ P
+            K = np.linalg.solve(HP @ H.T + np.diag(r), HP).T
+            self.x = x + K @ (z - H @ x)
+            self.P = P - K @ HP
         return used

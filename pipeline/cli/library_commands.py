@@ -11,7 +11,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
-from skatelib.library.perturb import BOUNDS, bounds_text
+from skatelib.library.perturb import BOUNDS, DEFAULT_SENSOR_PERTURBATION, bounds_text
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, perturbation
 from skatelib.pipeline.views.console import (
     console,
@@ -68,7 +68,9 @@ def info(
 PerturbOpt = Annotated[str, typer.Option(
     help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
          "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
-         "armature payload payload_x payload_y payload_z noise delay. 'none' for the plant as planned. Ranges: "
+         "armature payload payload_x payload_y payload_z noise delay, and with --state estimate the sensors' gyro_bias "
+         "accel_bias imu_noise encoder_offset imu_tilt sensor_delay (omitted: "
+         f"{DEFAULT_SENSOR_PERTURBATION}). 'none' for the plant as planned. Ranges: "
          f"{bounds_text(BOUNDS)}.", callback=perturbation)]
 DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from skatelib.control.body_plan import BodyPlan, Plan
 from skatelib.control.controller import Rates, SkateController
+from skatelib.control.estimator.estimator import EstimatorSettings
 from skatelib.control.feedback import quat_wxyz
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.qp import QpSolveFailed
@@ -54,6 +55,7 @@ class TwinLoopSettings:
     steering: SteeringGains | None = field(default_factory=SteeringGains)  # None: no line keeper
     state: str = "true"  # the controller's feedback: "estimate" (the robot's sensors and estimator) or "true"
     sensor_errors: SensorErrors = field(default_factory=SensorErrors)
+    estimator: EstimatorSettings | None = None  # the estimator's settings (None: its defaults)
 
 
 @dataclass(frozen=True)
@@ -128,7 +130,7 @@ class TwinLoop:
             on_deck = self.ref.contact(self.ref.t0) == BOARD
             start = start_state(ride.x0, ride.board0, ride.from_velocity_mps, on_deck, p.com_offset_m)
             estimated = EstimatedFeedback(plant, lib, p, self.contacts.at, start, self.tick_s, self.cfg.sensor_errors,
-                                          loop.settings.seed)
+                                          loop.settings.seed, self.cfg.estimator)
             self.run.estimator = estimated.errors
             self.feedback = estimated
         elif self.cfg.state != "true":

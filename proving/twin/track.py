@@ -68,7 +68,8 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: t
     nominal = SkateParams.from_library(lib)
     plant, errors = _plant(lib, perturb, nominal.mu)
     loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
-                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state),
+                    TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
+                                     sensor_errors=errors.sensors),
                     keep=keep or video is not None)
     with threadpool_limits(limits=1, user_api="blas"):
         run = loop.ride()
@@ -100,7 +101,8 @@ class TwinSteerJob:
         lib = MotionLibrary.open(self.path)
         nominal = SkateParams.from_library(lib)
         plant, errors = _plant(lib, self.perturb, nominal.mu)
-        sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=self.settings.state)
+        sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=self.settings.state,
+                                   sensor_errors=errors.sensors)
         with threadpool_limits(limits=1, user_api="blas"):
             return steer_twin(lib, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
                               self.target_velocity_mps, SteerRun(loop=sensors))
