@@ -126,10 +126,15 @@ class HumanoidReference:
         return np.asarray((1 - w) * x[k] + w * x[k + 1])
 
     def sample(self, t: float) -> ReferenceSample:
+        """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
+        the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
         feet = self._at(self.feet, t)
         base = self._at(self.base, t)
         m = self.model
+        still = t >= self.duration_s
         return ReferenceSample(q=self._at(self.q, t), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
             base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=feet[:, 2] < GROUND_M,
-            com=self._at(self.com, t), com_vel=self._at(self.com_vel, t), com_acc=self._at(self.com_acc, t),
-            zmp=self._at(self.zmp, t), gravity=m.gravity_mps2, sole_size=(m.foot_length_m, m.foot_width_m))
+            com=self._at(self.com, t), com_vel=np.zeros(3) if still else self._at(self.com_vel, t),
+            com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
+            zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
+            sole_size=(m.foot_length_m, m.foot_width_m))

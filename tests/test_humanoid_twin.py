@@ -9,9 +9,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from skatelib.control.humanoid_stabilizer import StabilizerGains
-from skatelib.pipeline.build.contract import BuildOptions
-from skatelib.pipeline.build.orchestrate import build_library
-from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.proving.humanoid.loop import figures_for, run_entry
 from skatelib.proving.humanoid.verdict import ZMP_OUTSIDE_TOL_M, verdict
 from skatelib.runtime import MotionLibrary
@@ -22,11 +19,8 @@ mujoco = pytest.importorskip("mujoco")
 
 
 @pytest.fixture(scope="module")
-def walk(tmp_path_factory):
-    out = tmp_path_factory.mktemp("walk") / "walk.h5"
-    rep = build_library(load_config(CONFIG_DIR / "hrp2_walk.toml"), out, BuildOptions(jobs=1, cache=False))
-    assert not rep.failed
-    lib = MotionLibrary.open(out)
+def walk(hrp2_walk_path):
+    lib = MotionLibrary.open(hrp2_walk_path)
     return lib, next(e.key for e in lib if e.success)
 
 

@@ -1,6 +1,7 @@
 """A humanoid entry executed on the twin: the stabilizer (500 Hz) reads the twin's sensors and
-sends joint angle targets to its servos (1 kHz physics), through the entry and a hold at its end;
-what the twin did and what was planned, sampled at every tick."""
+sends joint angle targets to its servos (1 kHz physics), with the plan's joint speeds and the
+torques its motion needs fed forward (:mod:`skatelib.control.humanoid_torques`), through the entry
+and a static hold at its end; what the twin did and what was planned, sampled at every tick."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
 from skatelib.control.humanoid_reference import HumanoidReference, polygon_margin
 from skatelib.control.humanoid_stabilizer import LipStabilizer, StabilizerGains
+from skatelib.control.humanoid_torques import PlannedTorques
 from skatelib.library import schema
 from skatelib.runtime import MotionLibrary
 from skatelib.sim.humanoid.errors import HumanoidErrors
@@ -62,15 +64,33 @@ def _fallen(plant: HumanoidPlant) -> str:
     return ""
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """How a run goes besides the plant's errors and the stabilizer's gains.
+
+    Attributes:
+        seed: The sensors' noise seed.
+        hold_s: How long the robot holds the entry's last posture after it [s].
+        feedforward: Feed the servos the plan's joint speeds and torques (else the angles alone).
+    """
+
+    seed: int = 0
+    hold_s: float = HOLD_S
+    feedforward: bool = True
+
+
 def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None,
-              gains: StabilizerGains | None = None, seed: int = 0, hold_s: float = HOLD_S) -> HumanoidRun:
+              gains: StabilizerGains | None = None, options: RunOptions | None = None) -> HumanoidRun:
     """Execute entry ``key`` on the twin with ``errors`` under the stabilizer (``gains``)."""
+    o = options or RunOptions()
     f = figures_for(lib, key)
-    plant = HumanoidPlant(f, errors, seed)
+    plant = HumanoidPlant(f, errors, o.seed)
     ref = HumanoidReference(lib[key], lib.humanoid_model)
     dt = STEPS_PER_TICK * plant.timestep_s
-    stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), dt, gains)
-    n = round((ref.duration_s + hold_s) / dt)
+    kin = HumanoidKinematics(lib.urdf, f.joint_names)
+    stab = LipStabilizer(kin, dt, gains)
+    torques = PlannedTorques(HumanoidKinematics(lib.urdf, f.joint_names), ref)
+    n = round((ref.duration_s + o.hold_s) / dt)
     rows: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref",
                                                          "margin", "support", "sole_pos", "sole_yaw", "torque")}
     fell_at, reason = None, ""
@@ -78,7 +98,11 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
         r = plant.readings()
         s = ref.sample(r.t)
         out = stab.tick(s, r.q, np.roll(r.imu_quat_wxyz, -1), r.ft_force, r.ft_torque)
-        plant.step(out.q_target, STEPS_PER_TICK)
+        qd, tau = torques.sample(r.t)
+        if o.feedforward:
+            plant.step(out.q_target, STEPS_PER_TICK, qd, tau)
+        else:
+            plant.step(out.q_target, STEPS_PER_TICK)
         tr = plant.truth()
         for k, v in (("t", tr.t), ("com", tr.com), ("com_ref", s.com), ("zmp", tr.zmp), ("zmp_measured",
                      out.zmp_measured), ("zmp_ref", s.zmp), ("support", s.support), ("sole_pos", tr.sole_pos),

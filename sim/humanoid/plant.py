@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.sim.humanoid.errors import HumanoidErrors
-from skatelib.sim.humanoid.figures import FEET, HumanoidFigures
+from skatelib.sim.humanoid.figures import FEET, SERVO_KD_NMS_PER_RAD, SERVO_KP_NM_PER_RAD, HumanoidFigures
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
 
 
@@ -86,10 +86,20 @@ class HumanoidPlant:
     def timestep_s(self) -> float:
         return float(self.m.opt.timestep)
 
-    def step(self, q_target: np.ndarray, n: int = 1) -> None:
+    def step(self, q_target: np.ndarray, n: int = 1, qd_target: np.ndarray | None = None,
+             tau_ff: np.ndarray | None = None) -> None:
+        """``n`` physics steps with the servos at ``q_target`` [rad], fed the joints' target speed
+        [rad/s] and a feed-forward torque [N m] when given: the driver's
+        tau = kp (q_t - q) + kd (qd_t - qd) + tau_ff, as the servo's own target
+        q_t + (kd qd_t + tau_ff) / kp (the damping stays in MuJoCo's implicit integration)."""
         import mujoco
 
-        self.d.ctrl[self.act] = q_target
+        extra = np.zeros(len(self.act))
+        if qd_target is not None:
+            extra += SERVO_KD_NMS_PER_RAD * qd_target
+        if tau_ff is not None:
+            extra += tau_ff
+        self.d.ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
         for _ in range(n):
             self.errors.push(self.d, self.root)
             mujoco.mj_step(self.m, self.d)
