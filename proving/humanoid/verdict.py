@@ -26,6 +26,7 @@ class HumanoidVerdict:
     slip_m: float  # the most a support sole moved over the floor while it supported
     yaw_slip_rad: float
     torque_ratio: float  # the largest |tau| / limit
+    board_mps: float | None = None  # a skate's board speed when its push ends (None: no board)
 
     def failures(self) -> list[str]:
         out = [f"fell: {self.fell}"] if self.fell else []
