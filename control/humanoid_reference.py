@@ -5,7 +5,7 @@ support soles' rectangles) that holds the desired ZMP."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.library import schema
@@ -73,6 +73,12 @@ class ReferenceSample:
                 for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)):
                     corners.append(self.soles[s][0:2] + np.array([c * dx - sn * dy, sn * dx + c * dy]))
         return _hull(np.array(corners))
+
+    def with_landed(self, load_N: np.ndarray, min_load_N: float, window_m: float) -> ReferenceSample:
+        """This sample with the soles landed early among its support: those the plan still swings
+        but has within ``window_m`` of the ground, carrying ``min_load_N`` of ``load_N`` (2,)."""
+        landed = (~self.support) & (self.soles[:, 2] < window_m) & (np.asarray(load_N) > min_load_N)
+        return replace(self, support=self.support | landed) if landed.any() else self
 
     def clamp(self, p: np.ndarray, margin: float) -> np.ndarray:
         """``p`` held inside the support polygon less ``margin`` (the nearest point of it)."""

@@ -2,6 +2,8 @@
 2010's linear-inverted-pendulum tracking, for a robot whose joints are position servoed (HRP-2),
 in its DCM form:
 
+* landing detection: the contact phase by the ankle sensors' force near a planned touchdown, not
+  the clock alone (:meth:`LipStabilizer.phase`);
 * estimate: the COM by kinematics from the joint encoders and the waist IMU's attitude, anchored
   on the plan's support soles (the robot does not know where it is otherwise), its velocity by
   a filtered difference; the ZMP measured by the ankles' force/torque sensors; and the COM's
@@ -48,6 +50,9 @@ class StabilizerGains:
     com_shift_max_m: float = 0.08
     com_mode: str = "velocity"  # or "lip"
     com_velocity_gain_per_s: float = 2.0  # k_c
+    landing_load_N: float = 50.0  # a swing sole this loaded near its touchdown has landed
+    landing_window_m: float = 0.01  # near: the plan has it this low over its foothold
+    landing: bool = True  # the landing detection (off: the clock alone says when a sole lands)
     enabled: bool = True
 
 
@@ -59,6 +64,7 @@ class StabilizerOutput:
     zmp_measured: np.ndarray  # (2,) from the force/torque sensors (NaN with no sole loaded) [m]
     zmp_desired: np.ndarray  # (2,) [m]
     com_shift: np.ndarray  # (2,) dc [m]
+    support: np.ndarray  # (2,) the soles the stabilizer took as support (the plan's, and any landed early)
 
 
 class LipStabilizer:
@@ -105,6 +111,7 @@ class LipStabilizer:
         """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
         each foot at its ankle sensor, foot frame) and the reference at this instant."""
         g, dt = self.g, self.dt
+        r = self.phase(r, force)
         qfull = self.kin.configuration(quat_xyzw, q)
         com, zmp_meas, loads, cops = self._estimate(r, qfull, force, torque)
         omega = math.sqrt(r.gravity / max(r.com[2] - r.ground_z, 0.2))
@@ -131,7 +138,16 @@ class LipStabilizer:
             self._ankles(r, p_d, loads, cops)
         base = self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)
         dq = self.kin.correction(base, np.append(self.dc, 0.0), self.tilt) if g.enabled else np.zeros(len(r.q))
-        return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy())
+        return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy(), r.support.copy())
+
+    def phase(self, r: ReferenceSample, force: np.ndarray) -> ReferenceSample:
+        """The landing detection: the contact phase by the measured foot force, not the clock alone. A
+        sole the plan still swings but has within ``landing_window_m`` of its foothold, whose ankle
+        sensor carries ``landing_load_N``, has landed (a foot 1 mm lower than planned touches down
+        some 10 ms early); it supports from then on, at its planned place."""
+        if not self.g.landing:
+            return r
+        return r.with_landed(force[:, 2], self.g.landing_load_N, self.g.landing_window_m)
 
     def _ankles(self, r: ReferenceSample, p_d: np.ndarray, loads: np.ndarray, cops: np.ndarray) -> None:
         """Damping control of each loaded support sole's tilt towards its share of the desired ZMP."""

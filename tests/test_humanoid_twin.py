@@ -80,10 +80,13 @@ def test_a_stand_without_its_servos_falls(walk):
 
 
 def test_the_walk_under_the_default_errors_stands_with_the_stabilizer_and_leaves_its_polygon_without(walk):
+    """Under mass +5 %, the COM 2 cm off, mu 0.4 and sensor noise the stabilized walk stands, its
+    contact ZMP within 2 cm of the support polygon (the soles down at their planned places) and
+    its ZMP error under half the unstabilized one's; unstabilized it leaves the polygon."""
     lib, key = walk
     errors = parse_humanoid_perturbation(DEFAULT_HUMANOID_PERTURBATION)
     on = verdict(run_entry(lib, key, errors))
     assert not on.fell and on.zmp_outside_m <= ZMP_OUTSIDE_TOL_M, on
     off = verdict(run_entry(lib, key, errors, StabilizerGains(enabled=False)))
     assert off.fell or off.zmp_outside_m > ZMP_OUTSIDE_TOL_M, off
-    assert on.com_rms_m < off.com_rms_m
+    assert on.zmp_rms_m < off.zmp_rms_m / 2, (on, off)  # measured 3.7 against 9.5 cm

@@ -22,6 +22,7 @@ STEPS_PER_TICK = 2  # 1 ms physics, a 500 Hz stabilizer
 HOLD_S = 1.0  # after the entry, the reference holds its end
 FALLEN_HEIGHT_M = 0.4  # the waist lower than this: fallen
 FALLEN_TILT_RAD = 0.5
+LANDING = StabilizerGains()  # the landing rule the verdict's support polygon follows
 
 
 @dataclass(frozen=True)
@@ -35,10 +36,13 @@ class HumanoidRun:
     zmp: np.ndarray  # (N, 2) from the soles' contact forces (NaN when airborne)
     zmp_measured: np.ndarray  # (N, 2) the stabilizer's, from the ankle sensors
     zmp_ref: np.ndarray  # (N, 2) the plan's
-    zmp_margin: np.ndarray  # (N,) the contact ZMP inside the plan's support polygon [m]
+    zmp_margin: np.ndarray  # (N,) the contact ZMP inside the support polygon [m]: the planned places of
+    # the plan's support soles and of any the twin has landed early (the stabilizer's rule on the contact forces)
+    zmp_margin_clock: np.ndarray  # (N,) the same inside the polygon of the soles the plan's clock has down
     support: np.ndarray  # (N, 2) the plan's support soles
     sole_pos: np.ndarray  # (N, 2, 3)
     sole_yaw: np.ndarray  # (N, 2)
+    sole_fz: np.ndarray  # (N, 2) the floor's normal force on each sole [N]
     torque: np.ndarray  # (N, n)
     torque_limit: np.ndarray  # (n,)
     fell_at: float | None  # the first time the twin had fallen (None: it did not)
@@ -91,8 +95,9 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     stab = LipStabilizer(kin, dt, gains)
     torques = PlannedTorques(HumanoidKinematics(lib.urdf, f.joint_names), ref)
     n = round((ref.duration_s + o.hold_s) / dt)
-    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref",
-                                                         "margin", "support", "sole_pos", "sole_yaw", "torque")}
+    rows: dict[str, list[np.ndarray]] = {k: [] for k in (
+        "t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref", "margin", "margin_clock", "support", "sole_pos",
+        "sole_yaw", "sole_fz", "torque")}
     fell_at, reason = None, ""
     for _ in range(n):
         r = plant.readings()
@@ -106,14 +111,17 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
         tr = plant.truth()
         for k, v in (("t", tr.t), ("com", tr.com), ("com_ref", s.com), ("zmp", tr.zmp), ("zmp_measured",
                      out.zmp_measured), ("zmp_ref", s.zmp), ("support", s.support), ("sole_pos", tr.sole_pos),
-                     ("sole_yaw", tr.sole_yaw), ("torque", tr.torque)):
+                     ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque)):
             rows[k].append(np.asarray(v))
-        rows["margin"].append(np.asarray(polygon_margin(s.polygon(), tr.zmp) if not np.isnan(tr.zmp).any()
-                                         else -np.inf))
+        airborne = np.isnan(tr.zmp).any()
+        down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
+        rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), tr.zmp)))
+        rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(s.polygon(), tr.zmp)))
         reason = _fallen(plant)
         if reason:
             fell_at = tr.t
             break
     a = {k: np.array(v) for k, v in rows.items()}
     return HumanoidRun(key, a["t"], a["com"], a["com_ref"], a["zmp"], a["zmp_measured"], a["zmp_ref"], a["margin"],
-                       a["support"], a["sole_pos"], a["sole_yaw"], a["torque"], f.torque_limit_Nm, fell_at, reason)
+                       a["margin_clock"], a["support"], a["sole_pos"], a["sole_yaw"], a["sole_fz"], a["torque"],
+                       f.torque_limit_Nm, fell_at, reason)
