@@ -61,3 +61,18 @@ def test_double_support_shares_follow_the_zmp_and_single_support_takes_all():
     both = np.array([True, True])
     assert support_shares(both, soles, np.array([0.0, -0.05])) == pytest.approx([0.75, 0.25])
     assert support_shares(np.array([False, True]), soles, np.array([0.0, -0.05])) == pytest.approx([0.0, 1.0])
+
+
+def test_a_swing_sole_loaded_near_its_touchdown_lands_early_and_not_elsewhere(walk):
+    """The landing rule: a swing sole within 1 cm of the ground in the plan carrying 50 N supports;
+    the same load higher in the swing (a stumble) or a light touch does not."""
+    _, ref, _ = walk
+    swing = next(t for t in ref.t if not ref.sample(t).support.all())  # the first single support
+    s = ref.sample(swing)
+    up = int(np.flatnonzero(~s.support)[0])
+    load = np.zeros(2)
+    load[up] = 200.0
+    assert s.soles[up, 2] < 0.01 and s.with_landed(load, 50.0, 0.01).support.all()
+    assert not s.with_landed(load / 10, 50.0, 0.01).support.all()
+    high = ref.sample(swing + 0.3)
+    assert high.soles[up, 2] > 0.01 and not high.with_landed(load, 50.0, 0.01).support[up]

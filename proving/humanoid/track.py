@@ -66,7 +66,7 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     """One job per entry (``entries``, or every successful one).
 
     Raises:
-        SkatelibError: Not a humanoid library, an entry it does not hold or one stored as failed,
+        SkatelibError: Not a humanoid walk library (the twin has no board for a skate), an entry it does not hold or one stored as failed,
             or MuJoCo missing (with the install hint).
         HumanoidPerturbationError: A bad ``perturb`` (before any run).
     """
@@ -81,6 +81,9 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     lib = MotionLibrary.open(path)
     if lib.kind != "humanoid":
         raise SkatelibError(f"{path}: the humanoid twin runs humanoid libraries; this one is {lib.kind}")
+    if lib.humanoid_model.motion != "walk":
+        raise SkatelibError(f"{path}: a {lib.humanoid_model.motion} library; the humanoid twin has no skateboard yet, "
+                            "so only walks are executed on it (docs/humanoid-twin.md)")
     if perturb:
         parse_humanoid_perturbation(perturb)
     keys = list(entries) if entries else [e.key for e in lib if e.success]
