@@ -66,8 +66,8 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     """One job per entry (``entries``, or every successful one).
 
     Raises:
-        SkatelibError: Not a humanoid walk library (the twin has no board for a skate), an entry it does not hold or one stored as failed,
-            or MuJoCo missing (with the install hint).
+        SkatelibError: Not a humanoid walk library (the twin has no board for a skate), an entry it
+            does not hold or one stored as failed, or MuJoCo missing (with the install hint).
         HumanoidPerturbationError: A bad ``perturb`` (before any run).
     """
     try:
