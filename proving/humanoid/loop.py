@@ -16,7 +16,7 @@ from skatelib.library import schema
 from skatelib.runtime import MotionLibrary
 from skatelib.sim.humanoid.errors import HumanoidErrors
 from skatelib.sim.humanoid.figures import HumanoidFigures
-from skatelib.sim.humanoid.plant import HumanoidPlant
+from skatelib.sim.humanoid.plant import HumanoidPlant, Truth
 
 STEPS_PER_TICK = 2  # 1 ms physics, a 500 Hz stabilizer
 HOLD_S = 1.0  # after the entry, the reference holds its end
@@ -56,8 +56,7 @@ def figures_for(lib: MotionLibrary, key: str) -> HumanoidFigures:
                                        np.asarray(e.arrays[schema.D_BASE_POSE])[0])
 
 
-def _fallen(plant: HumanoidPlant) -> str:
-    tr = plant.truth()
+def _fallen(tr: Truth) -> str:
     if tr.base_pos[2] < FALLEN_HEIGHT_M:
         return f"waist at {tr.base_pos[2]:.2f} m"
     tilt = float(np.arccos(np.clip(tr.base_R[2, 2], -1.0, 1.0)))
@@ -117,7 +116,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
         down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
         rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), tr.zmp)))
         rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(s.polygon(), tr.zmp)))
-        reason = _fallen(plant)
+        reason = _fallen(tr)
         if reason:
             fell_at = tr.t
             break
