@@ -43,7 +43,8 @@ class HumanoidKinematics:
         rots = np.array([data.oMi[j].rotation for j in self.ankles])
         return np.array(c), soles, pts, rots
 
-    def correction(self, qfull: np.ndarray, dcom: np.ndarray, dtilt: np.ndarray) -> np.ndarray:
+    def correction(self, qfull: np.ndarray, dcom: np.ndarray, dtilt: np.ndarray, lift: np.ndarray | None = None
+                   ) -> np.ndarray:
         """Joint angle changes (n,) that move the COM by ``dcom`` (3,) and tilt each sole by
         ``dtilt`` (2, 2: roll, pitch about its own axes), holding both soles' positions and
         yaws and the waist's attitude (18 rows for the 18 degrees of freedom, at ``qfull``)."""
@@ -56,7 +57,8 @@ class HumanoidKinematics:
             J = pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED)
             R = data.oMf[f].rotation
             rows.append(J)
-            rhs.append(np.concatenate([np.zeros(3), R @ np.array([dtilt[s, 0], dtilt[s, 1], 0.0])]))
+            up = 0.0 if lift is None else float(lift[s])
+            rhs.append(np.concatenate([[0.0, 0.0, up], R @ np.array([dtilt[s, 0], dtilt[s, 1], 0.0])]))
         rows.append(pin.getFrameJacobian(model, data, self.waist, pin.LOCAL_WORLD_ALIGNED)[3:6])
         rhs.append(np.zeros(3))
         dq = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]

@@ -5,7 +5,7 @@ support soles' rectangles) that holds the desired ZMP."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.library import schema
@@ -74,6 +74,12 @@ class ReferenceSample:
                     corners.append(self.soles[s][0:2] + np.array([c * dx - sn * dy, sn * dx + c * dy]))
         return _hull(np.array(corners))
 
+    def with_landed(self, load_N: np.ndarray, min_load_N: float, window_m: float) -> ReferenceSample:
+        """This sample with the soles landed early among its support: those the plan still swings
+        but has within ``window_m`` of the ground, carrying ``min_load_N`` of ``load_N`` (2,)."""
+        landed = (~self.support) & (self.soles[:, 2] < window_m) & (np.asarray(load_N) > min_load_N)
+        return replace(self, support=self.support | landed) if landed.any() else self
+
     def clamp(self, p: np.ndarray, margin: float) -> np.ndarray:
         """``p`` held inside the support polygon less ``margin`` (the nearest point of it)."""
         poly = self.polygon(margin)
@@ -126,10 +132,15 @@ class HumanoidReference:
         return np.asarray((1 - w) * x[k] + w * x[k + 1])
 
     def sample(self, t: float) -> ReferenceSample:
+        """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
+        the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
         feet = self._at(self.feet, t)
         base = self._at(self.base, t)
         m = self.model
+        still = t >= self.duration_s
         return ReferenceSample(q=self._at(self.q, t), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
             base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=feet[:, 2] < GROUND_M,
-            com=self._at(self.com, t), com_vel=self._at(self.com_vel, t), com_acc=self._at(self.com_acc, t),
-            zmp=self._at(self.zmp, t), gravity=m.gravity_mps2, sole_size=(m.foot_length_m, m.foot_width_m))
+            com=self._at(self.com, t), com_vel=np.zeros(3) if still else self._at(self.com_vel, t),
+            com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
+            zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
+            sole_size=(m.foot_length_m, m.foot_width_m))

@@ -2,6 +2,8 @@
 2010's linear-inverted-pendulum tracking, for a robot whose joints are position servoed (HRP-2),
 in its DCM form:
 
+* landing detection: the contact phase by the ankle sensors' force near a planned touchdown, not
+  the clock alone (:meth:`LipStabilizer.phase`);
 * estimate: the COM by kinematics from the joint encoders and the waist IMU's attitude, anchored
   on the plan's support soles (the robot does not know where it is otherwise), its velocity by
   a filtered difference; the ZMP measured by the ankles' force/torque sensors; and the COM's
@@ -16,8 +18,10 @@ in its DCM form:
   late, the loop rocked from the first double support and the walk fell (docs/humanoid-twin.md);
 * ankle damping control: each support sole tilts by dtheta' = (tau_measured - tau_desired) / D
   - dtheta / T, so that its ankle torque follows the share of the desired ZMP it carries;
+* swing height control: each swing sole's measured height driven to the plan's;
 * joint targets: the plan's angles plus the linearised whole-body correction that moves the COM
-  by dc and tilts the soles, soles held in place (:mod:`.humanoid_kinematics`).
+  by dc, tilts the soles and lifts the swing soles, the rest held in place
+  (:mod:`.humanoid_kinematics`).
 
 With ``enabled`` False it passes the plan's joint angles through (the estimate still runs).
 """
@@ -48,6 +52,11 @@ class StabilizerGains:
     com_shift_max_m: float = 0.08
     com_mode: str = "velocity"  # or "lip"
     com_velocity_gain_per_s: float = 2.0  # k_c
+    landing_load_N: float = 50.0  # a swing sole this loaded near its touchdown has landed
+    landing_window_m: float = 0.01  # near: the plan has it this low over its foothold
+    swing_height_gain_per_s: float = 30.0  # a swing sole's height error (measured: encoders, IMU) integrated
+    swing_return_s: float = 0.1  # a support sole's lift returns to the plan at this time constant
+    landing: bool = True  # the landing detection (off: the clock alone says when a sole lands)
     enabled: bool = True
 
 
@@ -59,6 +68,7 @@ class StabilizerOutput:
     zmp_measured: np.ndarray  # (2,) from the force/torque sensors (NaN with no sole loaded) [m]
     zmp_desired: np.ndarray  # (2,) [m]
     com_shift: np.ndarray  # (2,) dc [m]
+    support: np.ndarray  # (2,) the soles the stabilizer took as support (the plan's, and any landed early)
 
 
 class LipStabilizer:
@@ -69,6 +79,8 @@ class LipStabilizer:
         self.dc, self.dv, self.acc = np.zeros(2), np.zeros(2), np.zeros(2)
         self.offset = np.zeros(2)
         self.tilt = np.zeros((2, 2))
+        self.lift = np.zeros(2)
+        self.swing_z = np.zeros(2)  # the soles' heights by kinematics, anchored on the support soles
         self.rel_prev: np.ndarray | None = None
         self.support_prev: tuple[bool, bool] = (True, True)
         self.v = np.zeros(3)
@@ -81,6 +93,7 @@ class LipStabilizer:
         sup = r.support
         anchor = np.mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]], axis=0)
         rel = c - np.mean([soles[s] for s in (0, 1) if sup[s]], axis=0)
+        self.swing_z = soles[:, 2] + anchor[2]
         if self.rel_prev is not None and tuple(sup) == self.support_prev:
             a = 1.0 - math.exp(-2 * math.pi * self.g.velocity_cutoff_hz * self.dt)
             self.v += a * ((rel - self.rel_prev) / self.dt - self.v)
@@ -105,6 +118,7 @@ class LipStabilizer:
         """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
         each foot at its ankle sensor, foot frame) and the reference at this instant."""
         g, dt = self.g, self.dt
+        r = self.phase(r, force)
         qfull = self.kin.configuration(quat_xyzw, q)
         com, zmp_meas, loads, cops = self._estimate(r, qfull, force, torque)
         omega = math.sqrt(r.gravity / max(r.com[2] - r.ground_z, 0.2))
@@ -129,9 +143,32 @@ class LipStabilizer:
                 self.dc *= g.com_shift_max_m / n
                 self.dv[:] = 0.0
             self._ankles(r, p_d, loads, cops)
+            self._swing_height(r)
         base = self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)
-        dq = self.kin.correction(base, np.append(self.dc, 0.0), self.tilt) if g.enabled else np.zeros(len(r.q))
-        return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy())
+        dq = (self.kin.correction(base, np.append(self.dc, 0.0), self.tilt, self.lift) if g.enabled
+              else np.zeros(len(r.q)))
+        return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy(), r.support.copy())
+
+    def _swing_height(self, r: ReferenceSample) -> None:
+        """Swing height control: each swing sole's height, measured by kinematics anchored on the
+        support soles with the IMU's attitude, driven to the plan's by lifting its target. Under an
+        unmodelled load the stance ankle's servo gives a few mrad, the robot leans and a swing
+        foot 0.3 m ahead comes down a millimetre low, touching down early."""
+        g, dt = self.g, self.dt
+        for s in (0, 1):
+            if r.support[s]:
+                self.lift[s] *= 1.0 - dt / g.swing_return_s
+            else:
+                self.lift[s] += g.swing_height_gain_per_s * dt * (r.soles[s][2] - self.swing_z[s])
+
+    def phase(self, r: ReferenceSample, force: np.ndarray) -> ReferenceSample:
+        """The landing detection: the contact phase by the measured foot force, not the clock alone. A
+        sole the plan still swings but has within ``landing_window_m`` of its foothold, whose ankle
+        sensor carries ``landing_load_N``, has landed (a foot 1 mm lower than planned touches down
+        some 10 ms early); it supports from then on, at its planned place."""
+        if not self.g.landing:
+            return r
+        return r.with_landed(force[:, 2], self.g.landing_load_N, self.g.landing_window_m)
 
     def _ankles(self, r: ReferenceSample, p_d: np.ndarray, loads: np.ndarray, cops: np.ndarray) -> None:
         """Damping control of each loaded support sole's tilt towards its share of the desired ZMP."""

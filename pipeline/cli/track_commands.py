@@ -19,6 +19,7 @@ from skatelib.pipeline.cli.library_commands import (
     QpSolver,
 )
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
+from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -73,21 +74,19 @@ def track(
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
-    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller."""
-    try:
-        from skatelib.control.mpc import MpcConfig
-        from skatelib.control.settings import TrackSettings
-        from skatelib.pipeline.build.sweep import run_calls
-        from skatelib.proving.track import steer_jobs
-    except ImportError as e:
-        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller; a humanoid
+    library's entries on the humanoid twin under its balance stabilizer (docs/humanoid-twin.md)."""
+    if is_humanoid(library):
+        quadruped_only = ride is not None or maneuver is not Maneuver.entries or save is not None or video is not None
+        track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
+                       (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed))
+        return
+    mpc, settings = _controller(solver, mpc_mu, seed, state)
     plant_error = "" if perturb == "none" else perturb
-    mpc, settings = MpcConfig(solver=solver.value, mu=mpc_mu), TrackSettings(seed=seed, state=state.value)
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
     if ride is not None:
-        alone = maneuver is Maneuver.entries and not entry
         _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
-                    (alone, plant is PlantKind.mujoco))
+                    (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
         return
     if plant is PlantKind.mujoco:
         _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver, (save, video))
@@ -95,11 +94,23 @@ def track(
     if video is not None:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     if maneuver is Maneuver.steer:
-        steer = steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings)
-        if steer_table(run_calls(steer, jobs), perturb):
+        from skatelib.pipeline.build.sweep import run_calls
+        from skatelib.proving.track import steer_jobs
+
+        if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs), perturb):
             raise typer.Exit(1)
         return
     _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), save)
+
+
+def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind) -> tuple[Any, Any]:
+    """The MPC's and the run's settings (the controller's packages there, or the install hint)."""
+    try:
+        from skatelib.control.mpc import MpcConfig
+        from skatelib.control.settings import TrackSettings
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    return MpcConfig(solver=solver.value, mu=mpc_mu), TrackSettings(seed=seed, state=state.value)
 
 
 def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:

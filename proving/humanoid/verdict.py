@@ -22,10 +22,12 @@ class HumanoidVerdict:
     com_max_m: float
     zmp_rms_m: float
     zmp_max_m: float
-    zmp_outside_m: float  # the most the contact ZMP left the planned polygon (0: never)
+    zmp_outside_m: float  # the most the contact ZMP left the support polygon (0: never)
     slip_m: float  # the most a support sole moved over the floor while it supported
     yaw_slip_rad: float
     torque_ratio: float  # the largest |tau| / limit
+    zmp_outside_clock_m: float = 0.0  # the same against the soles the plan's clock alone has down
+    board_mps: float | None = None  # a skate's board speed when its push ends (None: no board)
 
     def failures(self) -> list[str]:
         out = [f"fell: {self.fell}"] if self.fell else []
@@ -66,5 +68,6 @@ def verdict(run: HumanoidRun) -> HumanoidVerdict:
     return HumanoidVerdict(
         key=run.key, fell=run.fall_reason, com_rms_m=float(np.sqrt(np.mean(ec**2))), com_max_m=float(ec.max()),
         zmp_rms_m=float(np.sqrt(np.mean(ez**2))), zmp_max_m=float(ez.max()),
-        zmp_outside_m=float(max(0.0, -run.zmp_margin[ok].min())) if ok.any() else np.inf, slip_m=slip,
+        zmp_outside_m=float(max(0.0, -run.zmp_margin[ok].min())) if ok.any() else np.inf,
+        zmp_outside_clock_m=float(max(0.0, -run.zmp_margin_clock[ok].min())) if ok.any() else np.inf, slip_m=slip,
         yaw_slip_rad=yaw, torque_ratio=float(np.abs(run.torque / run.torque_limit).max()))

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.sim.humanoid.errors import HumanoidErrors
-from skatelib.sim.humanoid.figures import FEET, HumanoidFigures
+from skatelib.sim.humanoid.figures import FEET, SERVO_KD_NMS_PER_RAD, SERVO_KP_NM_PER_RAD, HumanoidFigures
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
 
 
@@ -59,6 +59,11 @@ class Truth:
     floor_touches: tuple[str, ...]
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors (np.cross costs 30 us a call; a contact loop calls it thousands of times)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 class HumanoidPlant:
     """The twin's ``MjModel`` and ``MjData``, stepped with joint angle targets."""
 
@@ -86,10 +91,20 @@ class HumanoidPlant:
     def timestep_s(self) -> float:
         return float(self.m.opt.timestep)
 
-    def step(self, q_target: np.ndarray, n: int = 1) -> None:
+    def step(self, q_target: np.ndarray, n: int = 1, qd_target: np.ndarray | None = None,
+             tau_ff: np.ndarray | None = None) -> None:
+        """``n`` physics steps with the servos at ``q_target`` [rad], fed the joints' target speed
+        [rad/s] and a feed-forward torque [N m] when given: the driver's
+        tau = kp (q_t - q) + kd (qd_t - qd) + tau_ff, as the servo's own target
+        q_t + (kd qd_t + tau_ff) / kp (the damping stays in MuJoCo's implicit integration)."""
         import mujoco
 
-        self.d.ctrl[self.act] = q_target
+        extra = np.zeros(len(self.act))
+        if qd_target is not None:
+            extra += SERVO_KD_NMS_PER_RAD * qd_target
+        if tau_ff is not None:
+            extra += tau_ff
+        self.d.ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
         for _ in range(n):
             self.errors.push(self.d, self.root)
             mujoco.mj_step(self.m, self.d)
@@ -130,7 +145,7 @@ class HumanoidPlant:
             fw = fw if pair[0] == self.floor else -fw
             s = self.soles.index(other)
             force[s] += fw
-            moment[s] += np.cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == self.floor
+            moment[s] += _cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == self.floor
                                                                                           else -1))
         zmp = np.full((2, 2), np.nan)
         for s in (0, 1):

@@ -1,0 +1,47 @@
+"""``skatelib track HUMANOID_LIB --plant mujoco``: the humanoid library's entries executed on its
+twin under the balance stabilizer (dispatched from ``track`` by the library's kind)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.markup import escape
+from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.views.console import console, count, run_with_progress
+
+
+def is_humanoid(library: Path) -> bool:
+    """Whether the library at ``library`` is a humanoid's."""
+    from skatelib.runtime import MotionLibrary
+
+    return bool(MotionLibrary.open(library).kind == "humanoid")
+
+
+def track_humanoid(library: Path, entry: list[str] | None, perturb: str | None, how: tuple[bool, bool],
+                   runner: tuple[int, bool, int]) -> None:
+    """Run the jobs, print the table, exit 1 if any entry failed. ``perturb``: the errors' text
+    (``none``: as planned; None: the humanoid's default set); ``how``: on the twin, and whether an
+    option of the quadruped's alone was given; ``runner``: parallel jobs, progress, the noise seed."""
+    on_twin, quadruped_only = how
+    if quadruped_only:
+        raise SkatelibError("a humanoid library's track executes its entries: --ride, --maneuver, --save and "
+                            "--video are the quadruped's")
+    if not on_twin:
+        raise SkatelibError("a humanoid library is executed on its physical twin: add --plant mujoco")
+    from skatelib.pipeline.views.humanoid_table import humanoid_table
+    from skatelib.proving.humanoid.track import humanoid_jobs
+    from skatelib.sim.humanoid.errors import DEFAULT_HUMANOID_PERTURBATION, HumanoidPerturbationError
+
+    perturb = DEFAULT_HUMANOID_PERTURBATION if perturb is None else perturb
+
+    jobs, progress, seed = runner
+    try:
+        calls = humanoid_jobs(library, entry, "" if perturb == "none" else perturb, seed=seed)
+    except HumanoidPerturbationError as e:
+        raise typer.BadParameter(str(e), param_hint="--perturb") from None
+    results = run_with_progress(calls, jobs, "executing on the humanoid twin", progress)
+    failed = humanoid_table(results, perturb)
+    if failed:
+        console.print(escape(f"{failed} of {count(len(results), 'entry')} failed on the twin"))
+        raise typer.Exit(1)

@@ -1,0 +1,51 @@
+"""``skatelib track HUMANOID_LIB --plant mujoco`` as a user runs it: the walk executed on the twin
+with its verdict's figures per entry, the humanoid's model errors, and what it refuses."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from tests.helpers import run_cli
+
+pytest.importorskip("mujoco")
+
+
+def _row(out: str, key: str) -> list[str]:
+    line = next(x for x in out.splitlines() if key in x and "│" in x)
+    return [c.strip() for c in line.split("│")[1:-1]]
+
+
+def test_the_walk_as_planned_passes_with_its_figures(hrp2_walk_path):
+    """As planned the walk does not fall, its contact ZMP never leaves the planned polygon, its
+    COM stays within 2 cm and its ZMP within 5 cm RMS of the plan, and no sole slips 1 cm."""
+    r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--perturb", "none", "--no-progress"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    cells = _row(r.stdout, "walk_v0.375_n6")
+    fell, out, zmp, com, slip = cells[1], float(cells[2].split()[0]), cells[3], cells[4], float(cells[5])
+    zmp_rms, com_max = float(zmp.split("/")[0]), float(com.split("/")[1])
+    assert fell == "no" and out == 0.0 and zmp_rms < 5.0 and com_max < 2.0 and slip < 1.0, cells
+    assert cells[7] == "-" and cells[-1] == "pass"  # no board in a walk
+
+
+def test_the_humanoid_keys_are_checked_and_the_quadrupeds_refused(hrp2_walk_path):
+    """A quadruped's error key is refused naming the humanoid's; the model plant and --ride too."""
+    r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--perturb", "kb=-20%", "--no-progress"])
+    assert r.returncode == 2 and "com_x" in r.stderr, r.stderr
+    r = run_cli(["track", str(hrp2_walk_path), "--no-progress"])
+    assert r.returncode != 0 and "--plant mujoco" in r.stdout + r.stderr
+    r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--ride", "0:0.5"])
+    assert r.returncode != 0 and re.search(r"--ride", r.stdout + r.stderr)
+
+
+def test_by_default_the_walk_runs_under_the_humanoid_error_set_and_stands(hrp2_walk_path):
+    """Without --perturb the run takes mass +5 %, the COM 2 cm off, mu 0.4 and sensor noise (named
+    in the title), does not fall and keeps its ZMP within 2 cm of the soles down (measured 0.0 cm;
+    9.6 cm against the plan's clock alone, touchdowns 2-12 ms early)."""
+    r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--no-progress"])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "mass=+5%,com_x=0.02,mu=0.4,noise=1" in r.stdout
+    cells = _row(r.stdout, "walk_v0.375_n6")
+    out = float(cells[2].split()[0])
+    assert cells[1] == "no" and out <= 2.0 and cells[-1] == "pass", cells
