@@ -23,12 +23,19 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:  # the plant the sensors read (sim.plant builds the twin with mujoco)
-    from skatelib.sim.plant import TwinPlant
+
+class TwinPlant(Protocol):
+    """What the sensors read of :class:`skatelib.sim.plant.TwinPlant`: MuJoCo's data and where the
+    trunk's free joint and the leg joints sit in it."""
+
+    d: Any  # mujoco.MjData
+    trunk_q: int
+    trunk_v: int
+    qadr: np.ndarray
 
 GRAVITY_MPS2 = 9.81
 DEG = math.pi / 180.0
