@@ -156,7 +156,7 @@ def sensor_runs(lib_path):
     loop = TwinLoop(lib, key, ClosedLoop(p, p), plant)
     on_deck = loop.ref.contact(loop.ref.t0) == BOARD
     ride = entry_ride(lib, key, loop.loop, loop.kin.foot_radius_m)
-    start = start_state(ride.x0, ride.board0, ride.speed_mps, on_deck, p.com_offset_m)
+    start = start_state(ride.x0, ride.board0, ride.from_velocity_mps, on_deck, p.com_offset_m)
 
     def side(text: str, settings: EstimatorSettings | None = None) -> _Side:
         errors = parse_twin_perturbation(text, p.mu).sensors
