@@ -14,20 +14,15 @@ import pytest
 from skatelib.library import schema
 from skatelib.library.reader import read_library
 from skatelib.library.writer import write_library
-from skatelib.pipeline.build.contract import BuildOptions
-from skatelib.pipeline.build.orchestrate import build_library
-from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.runtime import MotionLibrary
 
 CLI = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
 
 
 @pytest.fixture(scope="module")
-def walk(tmp_path_factory):
-    out = tmp_path_factory.mktemp("walk") / "walk.h5"
-    rep = build_library(load_config(CONFIG_DIR / "hrp2_walk.toml"), out, BuildOptions(jobs=1, cache=False))
-    assert not rep.failed
-    return out
+def walk(hrp2_walk_path):
+    """The session's walk library (tests/conftest.py); the tests below read it and doctor copies."""
+    return hrp2_walk_path
 
 
 def _validate(path) -> subprocess.CompletedProcess:
