@@ -91,6 +91,14 @@ def entry_table(title: str, columns: tuple[str, ...]) -> Table:
     return t
 
 
+def print_failures(results: list[Any], why: Callable[[Any], str]) -> int:
+    """Print ``key: why`` for each failed result (``.key``, ``.passed``); returns how many failed."""
+    failed = [r for r in results if not r.passed]
+    for r in failed:
+        console.print(escape(f"{r.key}: {why(r)}"))
+    return len(failed)
+
+
 def parameter_table(title: str, rows: list[tuple[str, Any]], number: str = "{:.4g}", head: str = "parameter") -> None:
     """Print a two-column table of named values (numbers as ``number``)."""
     t = Table(title=title)
@@ -143,10 +151,7 @@ def track_table(results: list[Any], perturb: str) -> int:
                          "fric margin: the smallest mu f_n - |f_t| of a commanded foot force in the plant's cone "
                          "(< 0: clipped, a slip); tau max: the largest stance-joint torque at the "
                          "inverse-kinematics angles [N m]"))
-    for r in results:
-        if not r.passed:
-            console.print(escape(f"{r.key}: {r.reasons}"))
-    return sum(not r.passed for r in results)
+    return print_failures(results, lambda r: str(r.reasons))
 
 
 def ride_table(result: Any, perturb: str) -> bool:
@@ -205,10 +210,7 @@ def twin_table(results: list[Any], perturb: str) -> int:
                          "plan when the entry ends; crab max: the deck's velocity from its heading [rad]; sat: the "
                          "share of ticks with a joint at its torque limit"))
     _estimator_table(results)
-    for r in results:
-        if not r.passed:
-            console.print(escape(f"{r.key}: {r.reasons}"))
-    return sum(not r.passed for r in results)
+    return print_failures(results, lambda r: str(r.reasons))
 
 
 def steer_table(results: list[Any], perturb: str) -> int:

@@ -5,8 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from rich.markup import escape
-from rich.table import Table
-from skatelib.pipeline.views.console import console
+from skatelib.pipeline.views.console import console, entry_table, print_failures
 
 
 def _cm(x: float) -> str:
@@ -15,10 +14,9 @@ def _cm(x: float) -> str:
 
 def humanoid_table(results: list[Any], perturb: str) -> int:
     """Print one row per entry (fall, ZMP, COM, slips, board speed, torque); returns how many failed."""
-    t = Table(title=escape(f"humanoid on the MuJoCo twin (stabilizer 500 Hz, servos 1 kHz), errors: {perturb}"))
-    for col in ("entry", "fell", "ZMP out (clock) [cm]", "ZMP err RMS/max [cm]", "COM err RMS/max [cm]", "slip [cm]",
-                "yaw slip [rad]", "board at push end [m/s]", "tau/limit", "verdict"):
-        t.add_column(escape(col), justify="right")
+    t = entry_table(escape(f"humanoid on the MuJoCo twin (stabilizer 500 Hz, servos 1 kHz), errors: {perturb}"),
+                    ("entry", "fell", "ZMP out (clock) [cm]", "ZMP err RMS/max [cm]", "COM err RMS/max [cm]",
+                     "slip [cm]", "yaw slip [rad]", "board at push end [m/s]", "tau/limit", "verdict"))
     for r in results:
         v = r.verdict
         board = "-" if v.board_mps is None else f"{v.board_mps:.3f} / {r.label_mps:.2f}"
@@ -32,7 +30,4 @@ def humanoid_table(results: list[Any], perturb: str) -> int:
                          "of its touchdown; in brackets: of the soles the plan's clock alone has down); slip, yaw "
                          "slip: a support sole's motion over the floor from 50 ms after it landed; board: its speed "
                          "when the push ends against the entry's label"))
-    for r in results:
-        if not r.passed:
-            console.print(escape(f"{r.key}: {'; '.join(r.failures)}"))
-    return sum(not r.passed for r in results)
+    return print_failures(results, lambda r: "; ".join(r.failures))
