@@ -205,3 +205,25 @@ def test_h_is_help_for_every_command():
     for args in ([], *([n] for n in names)):
         short, long = (runner.invoke(app, [*args, flag], env={"COLUMNS": "200"}) for flag in ("-h", "--help"))
         assert short.exit_code == 0 and short.output == long.output and "Usage:" in short.output, (args, short.output)
+
+
+def test_help_reads_as_a_terminal_help():
+    """The program's help lists every command with a whole summary (click cut its own at about 45
+    characters with "..."); usage lines name arguments in capitals, required bare and optional in
+    brackets (typer wrote a required one as ``{library}``); no reStructuredText quotes in any help."""
+    from skatelib.pipeline.cli.app import SUMMARIES, app
+    from typer.testing import CliRunner
+
+    runner = CliRunner()
+    top = runner.invoke(app, ["--help"], env={"COLUMNS": "80"})
+    assert top.exit_code == 0 and "..." not in top.output.split("Commands:")[1], top.output
+    names = sorted({name for name, _, _ in _options()})
+    assert set(SUMMARIES) == set(names)
+    for summary in SUMMARIES.values():
+        assert " ".join(summary.split()) in " ".join(top.output.split()), summary
+    usage = {n: runner.invoke(app, [n, "--help"], env={"COLUMNS": "200"}).output for n in names}
+    assert "info [OPTIONS] LIBRARY\n" in usage["info"], usage["info"]
+    assert "build [OPTIONS] [CONFIG]\n" in usage["build"], usage["build"]
+    assert "diff [OPTIONS] A B\n" in usage["diff"], usage["diff"]
+    for name, text in usage.items():
+        assert "{" not in text.splitlines()[0] and "``" not in text, (name, text)

@@ -4,16 +4,18 @@
 from __future__ import annotations
 
 import logging
+import re
 import warnings
 from typing import Annotated, Any
 
+import click
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.cli import build_commands, diff_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
-from typer.core import TyperCommand, TyperOption
+from typer.core import TyperArgument, TyperCommand, TyperOption
 
 
 def _plain_metavar(option: TyperOption, command: TyperCommand) -> str | None:
@@ -27,14 +29,54 @@ def _plain_metavar(option: TyperOption, command: TyperCommand) -> str | None:
     return plain if plain != shown else None
 
 
+# Each command's line in ``skatelib --help`` (click cuts a summary it makes itself at about 45 characters).
+SUMMARIES = {
+    "model": "Print the robot and board model of a config (or write the twin).",
+    "build": "Build a motion library: speeds x stride counts, in parallel.",
+    "frontier": "The fastest label that converges, per stride count.",
+    "solve": "Solve one push-off and write it as a one-entry library.",
+    "info": "Summarize a motion library: provenance, model and entries.",
+    "validate": "Re-check a library: checksum, fields and every entry's physics.",
+    "inspect": "Look at trajectories in Rerun: robot, board, forces, margins.",
+    "plot": "Figures of a library (matplotlib).",
+    "diff": "What changed between two libraries, channel by channel.",
+    "export": "Write a library as npz, csv or an MCAP ROS 2 bag.",
+    "track": "Ride the entries in closed loop on the model plant or the twin.",
+}
+
+
+def _plain_help(text: str) -> str:
+    """Help as a terminal shows it: reStructuredText's ``literal`` quotes become 'literal'."""
+    return re.sub(r"``([^`]+)``", r"'\1'", text)
+
+
 class _Command(TyperCommand):
-    """A command whose help names values as a user reads them (see :func:`_plain_metavar`)."""
+    """A command whose help names values as a user reads them (see :func:`_plain_metavar`), whose
+    usage line names its arguments as Unix tools do (``LIBRARY``, ``[CONFIG]``) and whose summary in
+    the program's help is not cut."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         for param in self.params:
             if isinstance(param, TyperOption) and param.metavar is None:
                 param.metavar = _plain_metavar(param, self)
+        if self.help:
+            self.help = _plain_help(self.help)
+        for param in self.params:
+            if isinstance(param, (TyperOption, TyperArgument)) and param.help:
+                param.help = _plain_help(param.help)
+        if self.short_help is None and self.name in SUMMARIES:
+            self.short_help = SUMMARIES[self.name]
+
+    def collect_usage_pieces(self, ctx: click.Context) -> list[str]:
+        pieces = [self.options_metavar] if self.options_metavar else []
+        for param in self.get_params(ctx):
+            if isinstance(param, TyperArgument):
+                name = (param.metavar or param.name or "").upper() + ("..." if param.nargs != 1 else "")
+                pieces.append(name if param.required else f"[{name}]")
+            else:
+                pieces.extend(param.get_usage_pieces(ctx))
+        return pieces
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
