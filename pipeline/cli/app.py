@@ -8,13 +8,13 @@ import re
 import warnings
 from typing import Annotated, Any
 
-import click
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import interrupt
 from skatelib.pipeline.cli import build_commands, diff_commands, library_commands, track_commands
 from skatelib.pipeline.views.console import console, err_console
+from typer._click.core import Context
 from typer.core import TyperArgument, TyperCommand, TyperOption
 
 
@@ -68,7 +68,7 @@ class _Command(TyperCommand):
         if self.short_help is None and self.name in SUMMARIES:
             self.short_help = SUMMARIES[self.name]
 
-    def collect_usage_pieces(self, ctx: click.Context) -> list[str]:
+    def collect_usage_pieces(self, ctx: Context) -> list[str]:
         pieces = [self.options_metavar] if self.options_metavar else []
         for param in self.get_params(ctx):
             if isinstance(param, TyperArgument):
