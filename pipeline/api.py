@@ -171,7 +171,8 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
     Raises:
         SkatelibError: A library that is not a quadruped's, an unknown entry key (naming the valid
             ones) or a bad ``perturb`` (naming the key and its range), before any run.
-        ImportError: The controller's (or the twin's) packages are missing, naming the extra.
+        ImportError: The controller's packages are missing, naming the extra (MuJoCo missing on
+            ``plant="mujoco"``: a SkatelibError naming it).
         ValueError: An argument out of its range (naming it).
     """
     check_choice("skatelib.track", "plant", plant, ("model", "mujoco"))
