@@ -83,9 +83,10 @@ def test_the_shipped_config_by_name_loads(tmp_path):
 
 @pytest.mark.parametrize(("call", "message"), [
     (lambda p: skatelib.build(None, p, jobs=0), "jobs=0.*1 to 256"),
-    (lambda p: skatelib.build(None, p, backend="ray"), "backend is one of 'loky', 'dask'"),
-    (lambda p: skatelib.track(REFERENCE, plant="bullet"), "plant is one of 'model', 'mujoco'"),
-    (lambda p: skatelib.track(REFERENCE, solver="qp"), "solver is one of 'daqp'"),
+    # (mypy refuses these three: the choices are Literal types; at run time they are checked too)
+    (lambda p: skatelib.build(None, p, backend="ray"), "backend is one of 'loky', 'dask'"),  # type: ignore[arg-type]
+    (lambda p: skatelib.track(REFERENCE, plant="bullet"), "plant is one of 'model', 'mujoco'"),  # type: ignore[arg-type]
+    (lambda p: skatelib.track(REFERENCE, solver="qp"), "solver is one of 'daqp'"),  # type: ignore[arg-type]
     (lambda p: skatelib.track(REFERENCE, seed=-1), "seed=-1"),
     (lambda p: skatelib.track(REFERENCE, mpc_mu=float("nan")), "mpc_mu=nan"),
     (lambda p: skatelib.validate(REFERENCE, jobs=True), "jobs=True"),
@@ -170,3 +171,45 @@ def test_the_build_command_runs_the_api(tmp_path, monkeypatch):
                                  str(tmp_path / "x.h5"), "-j", "3", "--no-cache", "--no-progress"])
     assert isinstance(r.exception, Called), r.output
     assert seen["jobs"] == 3 and seen["cache"] is False and seen["out"] == tmp_path / "x.h5"
+
+
+def test_progress_true_draws_the_commands_bar(tmp_path, monkeypatch):
+    """``progress=True`` hands the build the command line's bar (which hears every entry), a
+    function hands it that function; the sweep itself replaced by one that reports two entries."""
+    from skatelib.pipeline.build import orchestrate
+    from skatelib.pipeline.build.contract import EntryEvent
+    from skatelib.pipeline.views.progress import BuildBar
+
+    heard: list[object] = []
+
+    def sweep(cfg: object, out: object, opts: object, on_entry: object = None) -> str:
+        heard.append(on_entry)
+        for key in ("v0.30_s1", "v0.40_s1"):
+            on_entry(EntryEvent(key, False))  # type: ignore[operator]
+            on_entry(EntryEvent(key, True, "Solve_Succeeded", True))  # type: ignore[operator]
+        return "report"
+
+    monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(orchestrate, "build_library", sweep)
+    tiny = Path(__file__).parent / "configs" / "tiny.toml"
+    assert skatelib.build(tiny, tmp_path / "x.h5", progress=True) == "report"
+    bar = heard[-1]
+    assert isinstance(bar, BuildBar) and bar.done == ["v0.30_s1", "v0.40_s1"]
+    events: list[EntryEvent] = []
+    skatelib.build(tiny, tmp_path / "x.h5", progress=events.append)
+    assert heard[-1] == events.append and [e.key for e in events if e.done] == ["v0.30_s1", "v0.40_s1"]
+
+
+def test_validate_closed_loop_stores_the_verdicts(tmp_path):
+    """``closed_loop=True`` rides every successful entry, returns each verdict and stores it in the
+    library, as ``validate --closed-loop`` does (the file read back holds them)."""
+    from skatelib.library import schema
+    from skatelib.runtime import MotionLibrary
+
+    lib = tmp_path / "lib.h5"
+    shutil.copy(REFERENCE, lib)
+    report = skatelib.validate(lib, closed_loop=True, perturb="none", jobs=1)
+    assert [r.key for r in report.closed_loop] == ["v0.30_s1", "v0.40_s1"]
+    assert all(isinstance(r, skatelib.TrackResult) for r in report.closed_loop)
+    stored = {e.key: json.loads(e.attrs[schema.A_CLOSED_LOOP]) for e in MotionLibrary.open(lib)}
+    assert {k: v["passed"] for k, v in stored.items()} == {r.key: r.passed for r in report.closed_loop}
