@@ -12,6 +12,7 @@ One function per command, each named in ``skatelib.__all__`` (``api/__init__.py`
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
     from skatelib.proving.twin.verdict import TwinResult
     from skatelib.proving.verdict import TrackResult
 
+PIPELINE_MODULES = ("typer", "rich", "casadi", "pinocchio", "joblib")  # the [build] extra's, as imported
 PathLike = str | os.PathLike[str]
 Backend = Literal["loky", "dask"]
 """Where a build's workers run: ``loky``, processes on this machine; ``dask``, a cluster."""
@@ -71,6 +73,7 @@ def build(config: PathLike | Any | None = None, out: PathLike | None = None, *, 
         BuildTooLarge: A build beyond the size bounds without ``allow_large``.
         ValueError: An argument out of its range (naming it).
     """
+    require_pipeline("skatelib.build")
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import build_library, check_options, default_output
     from skatelib.pipeline.build.preflight import check_output
@@ -118,6 +121,7 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
         SkatelibError: A bad ``perturb`` (naming the key and its range).
         ValueError: An argument out of its range (naming it).
     """
+    require_pipeline("skatelib.validate")
     from skatelib.pipeline.validate import EntryVerdict, ValidationReport, closed_loop_jobs, validate_library
 
     check_range("skatelib.validate", "jobs", jobs, 1, MAX_JOBS)
@@ -175,6 +179,7 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
             ``plant="mujoco"``: a SkatelibError naming it).
         ValueError: An argument out of its range (naming it).
     """
+    require_pipeline("skatelib.track")
     check_choice("skatelib.track", "plant", plant, ("model", "mujoco"))
     check_range("skatelib.track", "jobs", jobs, 1, MAX_JOBS)
     check_range("skatelib.track", "seed", seed, 0, MAX_SEED)
@@ -192,6 +197,19 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
         calls = list(track_jobs(Path(library), keys, errors, mpc, settings))
     label = "riding on the twin" if plant == "mujoco" else "tracking"
     return [out[0] for out in run_jobs(calls, jobs, progress, label)]
+
+
+def require_pipeline(where: str) -> None:
+    """Refuse at once, naming what to install, when the build pipeline's packages are missing (a
+    runtime-only install: numpy and h5py).
+
+    Raises:
+        ImportError: Naming ``where``, the missing packages and the extra that brings them.
+    """
+    missing = [m for m in PIPELINE_MODULES if importlib.util.find_spec(m) is None]
+    if missing:
+        raise ImportError(f"{where} needs the build pipeline's packages; missing: {', '.join(missing)}; "
+                          "pip install 'skatelib[pipeline]'")
 
 
 def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tuple[Any, Any]:

@@ -213,3 +213,16 @@ def test_validate_closed_loop_stores_the_verdicts(tmp_path):
     assert all(isinstance(r, skatelib.TrackResult) for r in report.closed_loop)
     stored = {e.key: json.loads(e.attrs[schema.A_CLOSED_LOOP]) for e in MotionLibrary.open(lib)}
     assert {k: v["passed"] for k, v in stored.items()} == {r.key: r.passed for r in report.closed_loop}
+
+
+def test_a_runtime_only_install_is_told_what_to_install(tmp_path, monkeypatch):
+    """Without the build pipeline's packages (here one named that does not exist), each function
+    refuses at once with an ImportError naming the package and the extra, writing nothing."""
+    from skatelib.pipeline import api
+
+    monkeypatch.setattr(api, "PIPELINE_MODULES", (*api.PIPELINE_MODULES, "no_such_package_here"))
+    for call in (lambda: skatelib.build(None, tmp_path / "x.h5"), lambda: skatelib.validate(REFERENCE),
+                 lambda: skatelib.track(REFERENCE)):
+        with pytest.raises(ImportError, match=r"missing: no_such_package_here; pip install 'skatelib\[pipeline\]'"):
+            call()
+    assert list(tmp_path.iterdir()) == []
