@@ -24,6 +24,7 @@ from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED, check_choice, check_ran
 if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import EntryEvent
     from skatelib.pipeline.build.orchestrate import BuildReport
+    from skatelib.pipeline.kinds import KindConfig
     from skatelib.pipeline.validate import EntryVerdict, ValidationReport
     from skatelib.proving.twin.verdict import TwinResult
     from skatelib.proving.verdict import TrackResult
@@ -40,7 +41,7 @@ StateSource = Literal["true", "estimate"]
 """On the twin, what the controller is fed: the twin's state, or the robot's estimator on its sensors."""
 
 
-def build(config: PathLike | Any | None = None, out: PathLike | None = None, *, jobs: int = 2,  # noqa: PLR0913
+def build(config: PathLike | KindConfig | None = None, out: PathLike | None = None, *, jobs: int = 2,  # noqa: PLR0913
           progress: bool | Callable[[EntryEvent], None] = False, cache: bool = True, frontier: bool = False,
           backend: Backend = "loky", scheduler: str | None = None, force: bool = False,
           allow_large: bool = False) -> BuildReport:
@@ -81,10 +82,11 @@ def build(config: PathLike | Any | None = None, out: PathLike | None = None, *, 
 
     check_range("skatelib.build", "jobs", jobs, 1, MAX_JOBS)
     check_choice("skatelib.build", "backend", backend, ("loky", "dask"))
+    cfg: KindConfig
     if config is None or isinstance(config, str | os.PathLike):
         cfg = load_config(None if config is None else Path(config))
     else:
-        cfg = config
+        cfg = config  # loaded already (the command line's, or a config changed in Python)
     target = Path(out) if out is not None else default_output(cfg)
     check_output(target, [cfg.path], force)
     opts = BuildOptions(jobs, backend, scheduler, progress is not False, cache, frontier, allow_large)
