@@ -1,13 +1,11 @@
 """The commands as Python functions: :func:`build`, :func:`validate` and :func:`track`, imported from
-the package (``import skatelib; skatelib.build(...)``, which loads this module on first use).
+the package (``skatelib.build(...)``; ``import skatelib`` loads this module on first use).
 
 Each takes the command's options as keyword arguments, checks them as the command does (a wrong
 config key raises the same :class:`~skatelib.library.errors.ConfigError`, naming the file and the
 key), runs the code the command runs, and returns its result records instead of printing. Progress
-goes to a callback of yours, or (``progress=True``) to the command's own bar on the terminal.
-
-One function per command, each named in ``skatelib.__all__`` (``api/__init__.py``): ``certify``
-(a library's certification) is to be added here, beside the three.
+goes to a callback of yours, or (``progress=True``) to the command's own bar on the terminal. One
+function per command, each named in ``skatelib.__all__`` (``api/__init__.py``): ``certify`` joins here.
 """
 
 from __future__ import annotations
@@ -20,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from skatelib.library.perturb import DEFAULT_PLANT_PERTURBATION
 from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED, check_choice, check_range
+from skatelib.pipeline.track_setup import controller, run_jobs
 
 if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import EntryEvent
@@ -44,7 +43,7 @@ StateSource = Literal["true", "estimate"]
 def build(config: PathLike | KindConfig | None = None, out: PathLike | None = None, *, jobs: int = 2,  # noqa: PLR0913
           progress: bool | Callable[[EntryEvent], None] = False, cache: bool = True, frontier: bool = False,
           backend: Backend = "loky", scheduler: str | None = None, force: bool = False,
-          allow_large: bool = False) -> BuildReport:
+          allow_large: bool = False, on_start: Callable[[int], None] | None = None) -> BuildReport:
     """Build a motion library from a config, as ``skatelib build`` does.
 
     Args:
@@ -59,9 +58,11 @@ def build(config: PathLike | KindConfig | None = None, out: PathLike | None = No
         cache: Reuse the entries a build with the same inputs finished (an interrupted build resumes).
         frontier: Also search the reachable-speed frontier and store it.
         backend: ``loky`` (processes here) or ``dask`` (the cluster at ``scheduler``, tcp://HOST:PORT).
-        scheduler: The dask scheduler's address; run code only on a cluster you run.
+        scheduler: The dask scheduler's address (run code only on a cluster you run).
         force: Overwrite an output file that is not a skatelib library.
         allow_large: Go on past the size bounds (a build that could take hours and many GB).
+        on_start: Called with the number of entries once the config, the output and the options
+            are checked, before any solve.
 
     Returns:
         The report: the file written, each entry's outcome (``report.failed``: those stored with
@@ -78,25 +79,23 @@ def build(config: PathLike | KindConfig | None = None, out: PathLike | None = No
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import build_library, check_options, default_output
     from skatelib.pipeline.build.preflight import check_output
-    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.kinds import kind_of
 
     check_range("skatelib.build", "jobs", jobs, 1, MAX_JOBS)
     check_choice("skatelib.build", "backend", backend, ("loky", "dask"))
-    cfg: KindConfig
-    if config is None or isinstance(config, str | os.PathLike):
-        cfg = load_config(None if config is None else Path(config))
-    else:
-        cfg = config  # loaded already (the command line's, or a config changed in Python)
+    cfg = _loaded(config)
     target = Path(out) if out is not None else default_output(cfg)
     check_output(target, [cfg.path], force)
     opts = BuildOptions(jobs, backend, scheduler, progress is not False, cache, frontier, allow_large)
     check_options(cfg, opts)
+    total = sum(t.n_entries for t in kind_of(cfg).tasks(cfg))
+    if on_start is not None:
+        on_start(total)
     if callable(progress):
         return build_library(cfg, target, opts, on_entry=progress)
-    from skatelib.pipeline.kinds import kind_of
     from skatelib.pipeline.views.progress import build_bar
 
-    with build_bar(sum(t.n_entries for t in kind_of(cfg).tasks(cfg)), enabled=bool(progress)) as bar:
+    with build_bar(total, enabled=bool(progress)) as bar:
         return build_library(cfg, target, opts, on_entry=bar)
 
 
@@ -201,6 +200,20 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
     return [out[0] for out in run_jobs(calls, jobs, progress, label)]
 
 
+def _loaded(config: PathLike | KindConfig | None) -> KindConfig:
+    """A config from its path (the shipped default for None), or one loaded already (the command
+    line's, or a config changed in Python).
+
+    Raises:
+        ConfigError: Naming the file and the key.
+    """
+    if config is None or isinstance(config, str | os.PathLike):
+        from skatelib.pipeline.config import load_config
+
+        return load_config(None if config is None else Path(config))
+    return config
+
+
 def require_pipeline(where: str) -> None:
     """Refuse at once, naming what to install, when the build pipeline's packages are missing (a
     runtime-only install: numpy and h5py).
@@ -212,36 +225,6 @@ def require_pipeline(where: str) -> None:
     if missing:
         raise ImportError(f"{where} needs the build pipeline's packages; missing: {', '.join(missing)}; "
                           "pip install 'skatelib[pipeline]'")
-
-
-def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tuple[Any, Any]:
-    """The MPC's and the run's settings of ``track`` (``mpc_mu`` checked against the MPC's range).
-
-    Raises:
-        ImportError: The controller's packages are missing, naming the extra.
-        ValueError: ``mpc_mu`` not a number from 0.05 to 2.
-    """
-    if mpc_mu is not None and not (isinstance(mpc_mu, int | float) and 0.05 <= mpc_mu <= 2.0):
-        raise ValueError(f"skatelib.track(mpc_mu={mpc_mu!r}): mpc_mu is a friction coefficient from 0.05 to 2")
-    try:
-        from skatelib.control.mpc import MpcConfig
-        from skatelib.control.settings import TrackSettings
-    except ImportError as e:
-        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    return MpcConfig(solver=solver, mu=mpc_mu), TrackSettings(seed=seed, state=state)
-
-
-def run_jobs(calls: Sequence[Callable[[], Any]], jobs: int, progress: bool | Callable[[int, int], None],
-             label: str) -> list[Any]:
-    """Run the picklable ``calls`` on ``jobs`` workers (the build's runner), reporting progress to a
-    function of (done, total), to the command's bar (True) or to nothing."""
-    if callable(progress):
-        from skatelib.pipeline.build.sweep import run_calls
-
-        return run_calls(calls, jobs, lambda n: progress(n, len(calls)))
-    from skatelib.pipeline.views.console import run_with_progress
-
-    return run_with_progress(calls, jobs, label, bool(progress))
 
 
 __all__ = ["Backend", "Plant", "QpSolver", "StateSource", "build", "track", "validate"]

@@ -4,6 +4,7 @@ kind's table, the notes and the file written."""
 
 from __future__ import annotations
 
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
@@ -12,12 +13,13 @@ from skatelib.library.errors import Interrupted
 from skatelib.pipeline.build.contract import BuildOptions, BuildRun
 from skatelib.pipeline.kinds import kind_of
 from skatelib.pipeline.views.console import console, count
-from skatelib.pipeline.views.progress import build_bar
+from skatelib.pipeline.views.progress import BuildBar, build_bar
 
 
 def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None) -> BuildRun:
     """``skatelib build``: :func:`skatelib.build` (the output and the options checked, the sweep)
-    with the progress bar, then the kind's table. ``force``: overwrite a file of another type.
+    with the progress bar, drawn once the checks pass, then the kind's table. ``force``: overwrite a
+    file of another type.
 
     Raises:
         Interrupted: On Ctrl-C or SIGTERM (what is cached is kept; no library is written).
@@ -25,16 +27,20 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None
     from skatelib.pipeline import api
 
     kind = kind_of(cfg)
-    total = sum(t.n_entries for t in kind.tasks(cfg))
-    console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
-    kind.announce(cfg)
-    with build_bar(total, opts.progress) as bar:
+    with ExitStack() as stack:
+        bars: list[BuildBar] = []
+
+        def start(total: int) -> None:  # the output and the options are checked: nothing is printed before
+            console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
+            kind.announce(cfg)
+            bars.append(stack.enter_context(build_bar(total, opts.progress)))
+
         try:
-            report = api.build(cfg, out, jobs=opts.jobs, progress=bar, cache=opts.cache, frontier=opts.frontier,
-                               backend="dask" if opts.backend == "dask" else "loky", scheduler=opts.scheduler,
-                               force=bool(force), allow_large=opts.yes)
+            report = api.build(cfg, out, jobs=opts.jobs, progress=lambda event: bars[0](event), cache=opts.cache,
+                               frontier=opts.frontier, backend="dask" if opts.backend == "dask" else "loky",
+                               scheduler=opts.scheduler, force=bool(force), allow_large=opts.yes, on_start=start)
         except KeyboardInterrupt:
-            kept = (f"{len(bar.done)} of {total} entries are cached" if opts.cache
+            kept = (f"{len(bars[0].done) if bars else 0} entries are cached" if opts.cache
                     else "nothing is cached (--no-cache)")
             raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
     kind.summary(report.written)

@@ -10,7 +10,6 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.api import run_jobs
 from skatelib.pipeline.cli.library_commands import (
     DEFAULT_PERTURB,
     LibArg,
@@ -21,6 +20,7 @@ from skatelib.pipeline.cli.library_commands import (
 )
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
+from skatelib.pipeline.track_setup import run_jobs
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -105,7 +105,7 @@ def track(
 
 def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind) -> tuple[Any, Any]:
     """The MPC's and the run's settings (the controller's packages there, or the install hint)."""
-    from skatelib.pipeline.api import controller
+    from skatelib.pipeline.track_setup import controller
 
     return controller(solver.value, mpc_mu, seed, state.value)
 
