@@ -13,7 +13,7 @@ OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
 CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library check-default
+.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library check-default docs
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build], [control] and [sim] extras (the twin judges the transitions)"
@@ -21,6 +21,7 @@ help:
 	@echo "make test      run the test suite (installs every extra)"
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
+	@echo "make docs      the API reference from the docstrings (pdoc) -> build/docs/index.html; a warning fails it"
 	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
 	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
 	@echo "make check-default build the default library and validate it (physics checks, chain continuity)"
@@ -31,7 +32,7 @@ define install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
 	$(BIN)/python -m pip install -q -e '.[$(1)]' --config-settings editable_mode=strict
-	@find pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules
+	@find api pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules
 endef
 
 $(STAMP): pyproject.toml
@@ -56,11 +57,11 @@ ifneq ($(origin PYTHON),file)
 	   echo "rebuilding $(VENV) with $(PYTHON) ($$want; it had $$have)"; rm -rf $(VENV); \
 	   $(MAKE) --no-print-directory $(STAMP); fi
 endif
-	@{ find pipeline library runtime control sim proving -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
+	@{ find api pipeline library runtime control sim proving -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
 	   $(BIN)/python -c 'import skatelib.pipeline.cli.app, skatelib.library.reader' 2>/dev/null; } || { \
 	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
-	  find pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules; }
+	  find api pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules; }
 
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
@@ -71,8 +72,8 @@ test: venv
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
 PACKAGES := pipeline library runtime control sim proving
 lint: venv
-	$(BIN)/ruff check $(PACKAGES) tests benchmarks tools examples
-	$(BIN)/mypy $(foreach p,$(PACKAGES),-p skatelib.$(p))
+	$(BIN)/ruff check api $(PACKAGES) tests benchmarks tools examples
+	$(BIN)/mypy -m skatelib $(foreach p,$(PACKAGES),-p skatelib.$(p))
 	$(BIN)/mypy benchmarks tools examples
 	$(BIN)/python tools/check_layout.py
 
@@ -93,6 +94,12 @@ check-default: venv
 
 bench: venv
 	$(BIN)/python -m benchmarks.run
+
+# The API reference (pdoc, Google-style docstrings) into build/docs (not committed); every warning
+# pdoc gives fails it. tests/test_docs.py runs the same, so CI checks it.
+docs: venv
+	rm -rf build/docs
+	$(BIN)/python tools/build_docs.py build/docs
 
 # The README's figures from the current code: the default library (built when missing), its
 # frontier for 1-4 strides, `skatelib plot`, a screenshot of `skatelib inspect` in the viewer, the

@@ -32,7 +32,8 @@ robot's vertical one that the model misses (rolling friction and masses differ o
 the prediction carries them.
 """
 
-from __future__ import annotations
+# No postponed annotations here: pdoc (make docs) resolves a NamedTuple's field types only when
+# they are evaluated at class creation.
 
 from dataclasses import dataclass
 from typing import NamedTuple

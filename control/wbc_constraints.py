@@ -10,7 +10,8 @@ QP's assembly (:mod:`skatelib.control.wbc`) stacks in order:
   ``friction_rows``) its force inside the 4-facet pyramid about its surface's normal.
 """
 
-from __future__ import annotations
+# No postponed annotations here: pdoc (make docs) resolves a NamedTuple's field types only when
+# they are evaluated at class creation.
 
 import functools
 from typing import NamedTuple, Protocol

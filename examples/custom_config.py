@@ -1,12 +1,15 @@
-"""A config of your own, built and validated: the shipped default config with a sweep of your own
-(here 0.3 and 0.5 m/s in 2 strides, and the transitions between them and to rest). Any other key
-of ``configs/cyberdog2.toml`` can be set the same way; an unknown key or a value out of range is
-refused, naming the file and the key.
+"""A config of your own, built, validated and ridden in closed loop with the Python API: the shipped
+default config with a sweep of your own (here 0.3 and 0.5 m/s in 2 strides, and the transitions
+between them and to rest). Any other key of the shipped ``cyberdog2.toml`` can be set the same
+way; an unknown key or a value out of range is refused, naming the file and the key.
 
     python examples/custom_config.py [--out out/custom.h5] [--speeds 0.3 0.5] [--strides 2]
+                                     [--interpreted] [--plant model|mujoco]
 
-The config file is written next to the library so that you can edit and rebuild it with
-``skatelib build out/custom.toml``.
+The config file is written next to the library (``extends = "skatelib:cyberdog2.toml"`` names the
+shipped default wherever skatelib is installed), so that you can edit and rebuild it with
+``skatelib build out/custom.toml``. Each entry is printed as it starts and finishes; pass
+``progress=True`` to ``skatelib.build`` for the command line's progress bar instead.
 """
 
 from __future__ import annotations
@@ -14,16 +17,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from skatelib.pipeline.build.contract import BuildOptions
-from skatelib.pipeline.build.orchestrate import build_library
-from skatelib.pipeline.config import CONFIG_DIR, load_config
-from skatelib.pipeline.validate import validate_library
+import skatelib
 
 
 def write_config(path: Path, speeds: list[float], strides: int, compile_c: bool) -> Path:
     """A TOML config that extends the shipped default and changes only what it names."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(f'''extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"
+    path.write_text(f'''extends = "skatelib:cyberdog2.toml"
 
 [meta]
 kind = "quadruped"
@@ -43,25 +43,38 @@ strides = [{strides}, {strides + 1}]
     return path
 
 
+def show(event: skatelib.EntryEvent) -> None:
+    """Each entry as it starts and as it finishes (solves run in worker processes)."""
+    if not event.done:
+        print(f"  solving {event.key}", flush=True)
+    else:
+        outcome = "ok" if event.success else f"FAILED ({event.status})"
+        print(f"  {event.key}: {outcome}{' (cached)' if event.cached else ''}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=Path, default=Path("out/custom.h5"))
     ap.add_argument("--speeds", type=float, nargs="+", default=[0.3, 0.5])
     ap.add_argument("--strides", type=int, default=2)
     ap.add_argument("--interpreted", action="store_true", help="do not compile the stage functions")
+    ap.add_argument("--plant", choices=["model", "mujoco"], default="model", help="where to ride the entries")
     args = ap.parse_args()
 
-    cfg = load_config(write_config(args.out.with_suffix(".toml"), args.speeds, args.strides, not args.interpreted))
-    report = build_library(cfg, args.out, BuildOptions(jobs=2, progress=False))
-    for o in report.outcomes:
-        print(f"{o.key}: {'ok' if o.success else 'FAILED'}")
+    config = write_config(args.out.with_suffix(".toml"), args.speeds, args.strides, not args.interpreted)
+    print(f"building {config} -> {args.out}")
+    report = skatelib.build(config, args.out, jobs=2, progress=show)
+    print(f"wrote {report.path} in {report.wall_time_s:.1f} s; {len(report.failed)} entries failed")
 
-    def show(key: str, verdict: str, message: str, figures: dict[str, float]) -> None:
-        print(f"validate {key}: {verdict}: {message}")
-
-    failures = validate_library(report.path, show)
-    print(f"wrote {report.path} in {report.wall_time_s:.1f} s; {failures} entries failed validation")
-    raise SystemExit(1 if failures or report.failed else 0)
+    checked = skatelib.validate(report.path, on_entry=lambda v: print(f"validate {v.key}: {v.status}: {v.message}"))
+    runs = skatelib.track(report.path, plant=args.plant, jobs=2,
+                          progress=lambda done, total: print(f"  ridden {done} of {total}", flush=True))
+    for r in runs:
+        why = "" if r.passed else f": {r.reasons}"
+        print(f"track {r.key} ({args.plant} plant, default model errors): delivered {r.delivered_mps:.3f} m/s, "
+              f"{'passed' if r.passed else 'FAILED'}{why}")
+    ok = not report.failed and checked.valid and all(r.passed for r in runs)
+    raise SystemExit(0 if ok else 1)
 
 
 if __name__ == "__main__":

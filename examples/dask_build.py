@@ -5,18 +5,16 @@ workers: connect only to a cluster you run.
 
     python examples/dask_build.py [CONFIG] [--scheduler tcp://HOST:8786] [--out out/dask.h5]
 
-Same as ``skatelib build CONFIG --backend dask --scheduler tcp://HOST:8786``.
+Same as ``skatelib build CONFIG --backend dask --scheduler tcp://HOST:8786``, with the command line's
+progress bar (``progress=True``).
 """
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
 
-from skatelib.pipeline.build.contract import BuildOptions
-from skatelib.pipeline.build.orchestrate import BuildReport, build_library
-from skatelib.pipeline.config import load_config
+import skatelib
 
 
 def main() -> None:
@@ -28,21 +26,20 @@ def main() -> None:
 
     from distributed import Client, LocalCluster  # pip install 'skatelib[dask]'
 
-    cfg = load_config(args.config)
     if args.scheduler is None:
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-            report = build(cfg, args.out, cluster.scheduler_address)
+            report = build(args.config, args.out, cluster.scheduler_address)
     else:
         with Client(args.scheduler):  # fails early when the scheduler cannot be reached
             pass
-        report = build(cfg, args.out, args.scheduler)
+        report = build(args.config, args.out, args.scheduler)
     print(f"wrote {report.path}: {len(report.outcomes) - len(report.failed)} of {len(report.outcomes)} entries "
           f"succeeded in {report.wall_time_s:.1f} s")
     raise SystemExit(1 if report.failed else 0)
 
 
-def build(cfg: Any, out: Path, scheduler: str) -> BuildReport:
-    return build_library(cfg, out, BuildOptions(backend="dask", scheduler=scheduler, progress=False))
+def build(config: Path | None, out: Path, scheduler: str) -> skatelib.BuildReport:
+    return skatelib.build(config, out, backend="dask", scheduler=scheduler, progress=True)
 
 
 if __name__ == "__main__":

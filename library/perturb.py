@@ -79,6 +79,9 @@ SENSOR_KEYS = ("gyro_bias", "accel_bias", "imu_noise", "encoder_offset", "imu_ti
 # tenth of a degree off, the IMU mounted 0.3 deg rolled (a machining tolerance) and one tick
 # (2 ms) of delay; no bias beyond the drawn ones (the standstill calibration removes a constant
 # gyroscope bias; gyro_bias= tests it).
+# The model plant's and the twin's default errors (``skatelib track`` and ``validate --closed-loop``
+# without --perturb): 10 % more mass, a 20 % softer deck, twice the rolling resistance, mu 0.5.
+DEFAULT_PLANT_PERTURBATION = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
 DEFAULT_SENSOR_PERTURBATION = ("gyro_bias=0,accel_bias=0,imu_noise=1,encoder_offset=0.002,imu_tilt=0.005,"
                                "sensor_delay=0.002")
 

@@ -3,8 +3,9 @@ robot kind's tables in its own ``config`` module: ``quadruped/config.py``, ``hum
 
 Every physical field carries its unit in its name. An unknown key, a wrong type or a value out
 of range raises :class:`ConfigError` naming the file, the dotted key and the allowed values.
-A config may start from another with ``extends = "other.toml"`` (path relative to the file);
-tables are merged key by key, the extending file winning.
+A config may start from another with ``extends = "other.toml"`` (path relative to the file) or
+from a shipped one, ``extends = "skatelib:cyberdog2.toml"``; tables are merged key by key, the
+extending file winning.
 """
 
 from __future__ import annotations

@@ -22,6 +22,8 @@ from skatelib.library.schema import HDF5_SIGNATURE
 # data of a wheel): the same place relative to this file.
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT_CONFIG = "cyberdog2.toml"
+# ``extends = "skatelib:cyberdog2.toml"`` names a shipped config, wherever skatelib is installed.
+SHIPPED = "skatelib:"
 
 
 def setting(lo: float | None = None, hi: float | None = None, doc: str = "", **kw: Any) -> Any:
@@ -78,7 +80,9 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
     if parent is not None:
         if not isinstance(parent, str):
             raise ConfigError(path, "extends", "must be a file name (string)")
-        base, _ = read_toml((path.parent / parent).resolve(), (*chain, path.resolve()))
+        shipped = parent.startswith(SHIPPED)
+        base_path = CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent
+        base, _ = read_toml(base_path.resolve(), (*chain, path.resolve()))
         data = _merge(base, data)
     return data, text
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import datetime
 import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +13,39 @@ from skatelib.library import schema
 from skatelib.library.reader import read_library
 from skatelib.pipeline.kinds import ReportFn, kind_named
 from skatelib.runtime import MotionLibrary
+
+
+@dataclass(frozen=True)
+class EntryVerdict:
+    """One entry's (or one junction's between entries) validation: its key, its status (``ok``,
+    ``failed``, ``skipped`` for an entry stored as failed), the message ``skatelib validate`` prints
+    and the figures measured (each named with its unit)."""
+
+    key: str
+    status: str
+    message: str
+    figures: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ValidationReport:
+    """What :func:`skatelib.validate` found: each entry's verdict, how many failed, and the
+    closed-loop verdicts when asked for (``TrackResult`` on the model plant, ``TwinResult`` on the twin)."""
+
+    path: Path
+    entries: tuple[EntryVerdict, ...]
+    failed: int
+    closed_loop: tuple[Any, ...] = ()
+
+    @property
+    def usable(self) -> bool:
+        """Whether any entry of the library was solved (each stored failure is ``skipped``)."""
+        return any(v.status != "skipped" for v in self.entries)
+
+    @property
+    def valid(self) -> bool:
+        """No entry failed a check (nor a closed-loop run), and some entry is usable."""
+        return not self.failed and self.usable and all(r.passed for r in self.closed_loop)
 
 
 def validate_library(path: Path | str, report: ReportFn) -> int:

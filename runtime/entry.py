@@ -19,9 +19,8 @@ from skatelib.runtime.blend import BlendCheck
 from skatelib.runtime.references import Channels, Sample, Window
 
 WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the entry's own knots)
-# The longest step of a window [s]: a minute, beyond any entry (seconds long; past its end the
-# reference holds its last state). Far larger steps overflowed the index arithmetic (dt = 1e308
-# made NaN indices and an IndexError).
+# The longest step of a window [s]: a minute, beyond any entry (seconds long; past its end the reference
+# holds its last state). Far larger steps overflow the index arithmetic (dt = 1e308: NaN indices).
 WINDOW_MAX_DT_S = 60.0
 
 
@@ -52,14 +51,17 @@ class Entry:
         self._last = max(self._n - 2, 0)  # interval index; the last knot is reached with fraction 1
         self._ready = False
 
-    def _prepare(self) -> None:
-        """Interpolation tables, built on first use so that opening a library stays cheap."""
+    def ready(self) -> Entry:
+        """Build the interpolation tables and run one window and one sample (numpy's first call of an operation is
+        slower than the next ones): a controller's first call costs what the later ones do. ``lib[key]``,
+        ``select``, ``route`` and ``blend`` call it."""
+        if self._ready:
+            return self
         dt = np.diff(self.t)
-        self._uniform = bool(len(dt) and np.allclose(dt, dt[0], rtol=1e-9, atol=1e-12))
+        self._uniform = bool(len(dt) and float(np.max(np.abs(dt - dt[0]))) <= 1e-12 + 1e-9 * abs(float(dt[0])))
         self._inv_dt = 1.0 / float(dt[0]) if len(dt) else 0.0
         self._tlist = self.t.tolist()
-        # Slopes between knots, so an interpolated sample is one multiply-add; per-row lists
-        # because indexing a list is cheaper than making an ndarray view.
+        # Slopes between knots (a sample is one multiply-add), per-row lists (cheaper to index than an array)
         self._dstate = _ro(np.diff(self.state, axis=0)) if self._n > 1 else _ro(np.zeros_like(self.state))
         self._rows = list(self.state)
         self._drows = list(self._dstate)
@@ -68,13 +70,15 @@ class Entry:
         self._ctable = np.ascontiguousarray(self.contact) if self.contact is not None else None
         self._ar = np.arange(1024, dtype=float)
         nx = self.state.shape[1]
-        # One table [state_k, slope_k, control_k] per interval: a window is a single take.
-        self._cols = (nx, 2 * nx)
+        self._cols = (nx, 2 * nx)  # one table [state_k, slope_k, control_k] per interval: a window is one take
         if self._n > 1:
             self._table = np.hstack([self.state[:-1], self._dstate, self.control])
         else:
             self._table = np.hstack([self.state, self._dstate, np.zeros((1, self.control.shape[-1]))])
         self._ready = True
+        self.window(self._t0, 2, 1.0)
+        self.sample(self._t0)
+        return self
 
     @property
     def target_velocity_mps(self) -> float:
@@ -152,8 +156,7 @@ class Entry:
 
     def _locate(self, t: float) -> tuple[int, float]:
         """Interval index i <= K-2 and fraction a in [0, 1] of ``t``, clamped to the entry."""
-        if not self._ready:
-            self._prepare()
+        self._ready or self.ready()
         if t <= self._t0 or self._n < 2:
             return 0, 0.0
         if t >= self._tend:
@@ -208,7 +211,7 @@ class Entry:
         if n < 1:
             raise ValueError(f"window(t0, n, dt): n must be at least 1, got {n!r}")
         if not self._ready:
-            self._prepare()
+            self.ready()
         if self._uniform and self._n >= 2:
             ar = self._ar[:n] if n <= len(self._ar) else np.arange(n, dtype=float)
             u = ar * (dt * self._inv_dt)

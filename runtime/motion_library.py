@@ -98,7 +98,7 @@ class MotionLibrary:
             EntryNotFound: Listing the keys that exist.
         """
         try:
-            return self._entries[key]
+            return self._entries[key].ready()
         except KeyError:
             raise EntryNotFound(f"{self.path}: no entry {key!r}; entries: {', '.join(self._entries)}") from None
 
@@ -160,7 +160,7 @@ class MotionLibrary:
             start = "" if not v0 else f" from {v0} m/s"
             raise EntryNotFound(f"{self.path}: {v} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
                                 "pass clamp=True for the nearest, or route() for a chain")
-        return min(c, key=lambda e: (abs(e.target_velocity_mps - v), e.n_strides))
+        return min(c, key=lambda e: (abs(e.target_velocity_mps - v), e.n_strides)).ready()
 
     @renamed(v_from="from_velocity_mps", v_to="target_velocity_mps")
     def route(self, from_velocity_mps: float, target_velocity_mps: float) -> list[Entry]:
@@ -172,7 +172,7 @@ class MotionLibrary:
             ValueError: When the speeds are equal or negative.
             EntryNotFound: When no chain gets there (the message lists what can be reached).
         """
-        return route(self, from_velocity_mps, target_velocity_mps, f"{self.path}: ")
+        return [e.ready() for e in route(self, from_velocity_mps, target_velocity_mps, f"{self.path}: ")]
 
     @renamed(velocity="target_velocity_mps")
     def blend(self, target_velocity_mps: float, strides: int | None = None, strict: bool = True,
@@ -197,7 +197,7 @@ class MotionLibrary:
         e = blend_pair(a, b, v, self._margin_check(margin))
         if strict and e.check is not None and not e.check.ok:
             raise SkatelibError(f"blend at {v} m/s misses its margins: {e.check}")
-        return e
+        return e.ready()
 
     def _bracket(self, target_velocity_mps: float, strides: int | None) -> tuple[Entry, Entry]:
         # The start-ups' stride counts only: a transition's count may be one no start-up has.

@@ -1,7 +1,8 @@
 """What a controller reads from an entry: a :class:`Sample` at one time, a :class:`Window` over an
 MPC horizon, and the :class:`Channels` that name their columns."""
 
-from __future__ import annotations
+# No postponed annotations here: pdoc (make docs) resolves a NamedTuple's field types only when
+# they are evaluated at class creation.
 
 from typing import Any, NamedTuple
 

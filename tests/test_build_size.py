@@ -102,7 +102,6 @@ def test_yes_goes_on_to_the_work(tmp_path, monkeypatch, command):
     """Without --yes the command refuses (BuildTooLarge); with --yes it reaches the point where the
     work starts (stopped there)."""
     from skatelib.pipeline.build import orchestrate
-    from skatelib.pipeline.cli import build_run
     from skatelib.pipeline.cli.app import app
     from skatelib.pipeline.quadruped import frontier
     from typer.testing import CliRunner
@@ -111,7 +110,6 @@ def test_yes_goes_on_to_the_work(tmp_path, monkeypatch, command):
         raise _WorkStarts
 
     monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setattr(build_run, "build_library", stop)
     monkeypatch.setattr(orchestrate, "build_library", stop)
     monkeypatch.setattr(frontier, "find_frontier", stop)
     config = str(_config(tmp_path, HUGE_SOLVE))

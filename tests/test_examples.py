@@ -1,8 +1,9 @@
 """The scripts of examples/ run as a user runs them (a subprocess), on small configs that really
-solve, and do what they say."""
+solve, and do what they say; they use the public API alone and no absolute path."""
 
 from __future__ import annotations
 
+import ast
 import os
 import subprocess
 import sys
@@ -14,6 +15,46 @@ from skatelib.runtime import MotionLibrary
 from tests.helpers import TINY
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+# What an example may import of skatelib: the Python API, the runtime and the robot's controller.
+PUBLIC = ("skatelib", "skatelib.runtime", "skatelib.control")
+# Each example -> the test that runs it (controller_tick.py: tests/test_controller_install.py).
+RUN_BY = {"custom_config.py": "test_custom_config_builds_validates_and_tracks",
+          "control_loop.py": "test_control_loop_ticks_at_500_hz",
+          "dask_build.py": "test_dask_build_on_a_local_cluster",
+          "controller_tick.py": "test_controller_install.test_the_controller_imports_no_harness"}
+
+
+def internal_imports(source: str) -> list[str]:
+    """The skatelib modules a script imports beyond :data:`PUBLIC`, and its absolute paths
+    (string literals that start with ``/``)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                 else [node.module] if isinstance(node, ast.ImportFrom) and node.module else [])
+        found += [n for n in names if n.split(".")[0] == "skatelib"
+                  and not any(n == p or (p != "skatelib" and n.startswith(p + ".")) for p in PUBLIC)]
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.startswith("/"):
+            found.append(f"absolute path {node.value!r}")
+    return found
+
+
+def test_examples_use_the_public_api_alone():
+    """No example imports skatelib's internals (pipeline, proving, sim, library) or names an
+    absolute path, and each is run by a test of the suite."""
+    scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
+    assert scripts == sorted(RUN_BY)
+    for name in scripts:
+        assert internal_imports((EXAMPLES / name).read_text()) == [], name
+
+
+def test_the_check_sees_internal_imports():
+    """Negative control: the build through its internal module, the config module and an absolute
+    ``extends`` path are each reported."""
+    doctored = ("from skatelib.pipeline.build.orchestrate import build_library\n"
+                "import skatelib.pipeline.config\nimport skatelib\nfrom skatelib.runtime import MotionLibrary\n"
+                "EXTENDS = '/work/configs/cyberdog2.toml'\n")
+    assert internal_imports(doctored) == ["skatelib.pipeline.build.orchestrate", "skatelib.pipeline.config",
+                                          "absolute path '/work/configs/cyberdog2.toml'"]
 
 
 def _run(args: list[str], tmp_path: Path, timeout: int = 600) -> subprocess.CompletedProcess[str]:
@@ -31,16 +72,21 @@ def custom(tmp_path_factory):
     return tmp, r
 
 
-def test_custom_config_builds_and_validates(custom):
-    """The script writes a config that extends the default, builds it, validates every entry: the
-    start-up and the stop from its speed (the fewest strides that pass)."""
+def test_custom_config_builds_validates_and_tracks(custom):
+    """The script writes a config that extends the shipped default by name, builds it with a line
+    per entry as it starts and finishes, validates every entry (the start-up and the stop from its
+    speed, the fewest strides that pass) and rides each on the model plant."""
     tmp, r = custom
     assert r.returncode == 0, r.stdout + r.stderr
     assert "validate v0.40_s1: ok" in r.stdout
-    assert 'extends = "' in (tmp / "custom.toml").read_text()
+    assert 'extends = "skatelib:cyberdog2.toml"' in (tmp / "custom.toml").read_text()
     lib = MotionLibrary.open(tmp / "custom.h5")
     assert lib.keys()[0] == "v0.40_s1" and lib.keys()[1].startswith("v0.40-0.00_s") and len(lib) == 2
     assert all(e.success for e in lib)
+    for e in lib:  # progress: each entry started, then finished, before the file was written
+        assert r.stdout.index(f"solving {e.key}") < r.stdout.index(f"  {e.key}: ok") < r.stdout.index("wrote ")
+    assert "ridden 2 of 2" in r.stdout
+    assert "track v0.40_s1 (model plant, default model errors): delivered" in r.stdout
 
 
 def test_control_loop_ticks_at_500_hz(custom):

@@ -38,6 +38,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/**/*.py", ("build",)),
     ("library/*.py", ()),
     ("runtime/*.py", ()),
+    ("api/*.py", ()),  # the package itself (import skatelib): the robot's base install
 ]
 
 
@@ -79,7 +80,7 @@ def _group(rel: str) -> tuple[str, ...]:
 
 
 def _modules() -> list[str]:
-    tops = ("pipeline", "library", "runtime", "control", "sim", "proving")
+    tops = ("api", "pipeline", "library", "runtime", "control", "sim", "proving")
     return sorted(p.relative_to(ROOT).as_posix() for t in tops for p in (ROOT / t).rglob("*.py"))
 
 

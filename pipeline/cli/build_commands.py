@@ -97,7 +97,6 @@ def build(
     (quadruped configs) or walking/skating step velocities through the GPM (humanoid configs)."""
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import default_output
-    from skatelib.pipeline.build.preflight import check_output
     from skatelib.pipeline.cli.build_run import run_build
     from skatelib.pipeline.config import load_config
 
@@ -108,9 +107,7 @@ def build(
             raise typer.BadParameter("--check compares with LIB and writes nothing: leave out -o", param_hint="-o")
         _build_and_check(cfg, opts, check, (atol, rtol), allow_failures)
         return
-    target = out or default_output(cfg)
-    check_output(target, [cfg.path], force)
-    run = run_build(cfg, target, opts)
+    run = run_build(cfg, out or default_output(cfg), opts, force)
     if run.failed and not allow_failures:
         console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")

@@ -1,70 +1,46 @@
-"""``skatelib build`` on the terminal: the options checked, the sweep of
-:func:`skatelib.pipeline.build.orchestrate.build_library` drawn as a progress bar from its entry
-events, the kind's table, the notes and the file written."""
+"""``skatelib build`` on the terminal: :func:`skatelib.build` (the Python API, which checks the
+output and the options and runs the sweep) drawn as a progress bar from its entry events, the
+kind's table, the notes and the file written."""
 
 from __future__ import annotations
 
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 from rich.markup import escape
 from skatelib.library.errors import Interrupted
-from skatelib.pipeline.build.contract import BuildOptions, BuildRun, EntryEvent
-from skatelib.pipeline.build.orchestrate import build_library, check_options
+from skatelib.pipeline.build.contract import BuildOptions, BuildRun
 from skatelib.pipeline.kinds import kind_of
 from skatelib.pipeline.views.console import console, count
+from skatelib.pipeline.views.progress import BuildBar, build_bar
 
 
-class _Progress:
-    """The progress bar's text: the entries being solved and the last one finished."""
-
-    def __init__(self, bar: Any, task: Any):
-        self.bar, self.task = bar, task
-        self.done: list[str] = []
-        self.flying: list[str] = []  # oldest first
-
-    def __call__(self, event: EntryEvent) -> None:
-        if not event.done:
-            self.flying.append(event.key)
-        else:
-            self.done.append(event.key)
-            if event.key in self.flying:
-                self.flying.remove(event.key)
-        text = f"solving {', '.join(self.flying)}" if self.flying else "solving"
-        if event.done:
-            status = "ok" if event.success else event.status.split(":")[0]
-            text += f" (last: {event.key} {'cached, ' if event.cached else ''}{status})"
-        self.bar.update(self.task, advance=1 if event.done else 0, description=escape(text))
-
-
-
-def run_build(cfg: Any, out: Path, opts: BuildOptions) -> BuildRun:
-    """``skatelib build``: check the options, sweep with a progress bar, print the kind's table.
+def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None) -> BuildRun:
+    """``skatelib build``: :func:`skatelib.build` (the output and the options checked, the sweep)
+    with the progress bar, drawn once the checks pass, then the kind's table. ``force``: overwrite a
+    file of another type.
 
     Raises:
         Interrupted: On Ctrl-C or SIGTERM (what is cached is kept; no library is written).
     """
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
+    from skatelib.pipeline import api
 
     kind = kind_of(cfg)
-    check_options(cfg, opts)
-    total = sum(t.n_entries for t in kind.tasks(cfg))
-    console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
-    kind.announce(cfg)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("eta"), TimeRemainingColumn(), console=console, disable=not opts.progress) as bar:
-        progress = _Progress(bar, bar.add_task("solving", total=total))
+    with ExitStack() as stack:
+        bars: list[BuildBar] = []
+
+        def start(total: int) -> None:  # the output and the options are checked: nothing is printed before
+            console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
+            kind.announce(cfg)
+            bars.append(stack.enter_context(build_bar(total, opts.progress)))
+
         try:
-            report = build_library(cfg, out, opts, on_entry=progress)
+            report = api.build(cfg, out, jobs=opts.jobs, progress=lambda event: bars[0](event), cache=opts.cache,
+                               frontier=opts.frontier, backend="dask" if opts.backend == "dask" else "loky",
+                               scheduler=opts.scheduler, force=bool(force), allow_large=opts.yes, on_start=start)
         except KeyboardInterrupt:
-            kept = (f"{len(progress.done)} of {total} entries are cached" if opts.cache
+            kept = (f"{len(bars[0].done) if bars else 0} entries are cached" if opts.cache
                     else "nothing is cached (--no-cache)")
             raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
     kind.summary(report.written)

@@ -11,7 +11,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
-from skatelib.library.perturb import BOUNDS, DEFAULT_SENSOR_PERTURBATION, bounds_text
+from skatelib.library.perturb import BOUNDS, DEFAULT_PLANT_PERTURBATION, DEFAULT_SENSOR_PERTURBATION, bounds_text
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, perturbation
 from skatelib.pipeline.views.console import (
     console,
@@ -72,7 +72,7 @@ PerturbOpt = Annotated[str, typer.Option(
          "accel_bias imu_noise encoder_offset imu_tilt sensor_delay (omitted: "
          f"{DEFAULT_SENSOR_PERTURBATION}). 'none' for the plant as planned. Ranges: "
          f"{bounds_text(BOUNDS)}.", callback=perturbation)]
-DEFAULT_PERTURB = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
+DEFAULT_PERTURB = DEFAULT_PLANT_PERTURBATION
 
 
 def validate(
@@ -89,19 +89,19 @@ def validate(
              "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
-    from skatelib.pipeline.validate import closed_loop_jobs, validate_library
+    from skatelib.pipeline.api import validate as validate_api
+    from skatelib.pipeline.validate import closed_loop_jobs
 
     # the rides made (the file writable, --perturb parsed) before any check or ride
     rides = closed_loop_jobs(library, perturb, plant.value) if closed_loop else []
-    verdicts: list[dict[str, Any]] = []
 
-    def report(key: str, status: str, message: str, figures: dict[str, float]) -> None:
-        verdicts.append({"key": key, "status": status, "message": message, **figures})
+    def show(v: Any) -> None:
         if not as_json:
-            console.print(escape(f"{key}: {message}"))
+            console.print(escape(f"{v.key}: {v.message}"))
 
-    problems = validate_library(library, report)
-    usable = any(v["status"] != "skipped" for v in verdicts)  # every kind skips the entries stored as failed
+    report = validate_api(library, on_entry=show)
+    problems, usable = report.failed, report.usable
+    verdicts = [{"key": v.key, "status": v.status, "message": v.message, **v.figures} for v in report.entries]
     if not as_json:
         console.print(f"[bold red]{count(problems, 'entry')} (or junction between entries) failed validation[/]"
                       if problems

@@ -9,8 +9,7 @@ import importlib.util
 import sys
 
 from skatelib.library.errors import EXIT_DEPENDENCY  # standard library only
-
-PIPELINE_MODULES = ("typer", "rich", "casadi", "pinocchio", "joblib")
+from skatelib.pipeline.api import PIPELINE_MODULES  # standard library only until a function runs
 
 
 def main() -> None:

@@ -10,11 +10,12 @@ import math
 from typing import Any
 
 import typer
+from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED
 
-MAX_JOBS = 256  # worker processes of one command (--jobs)
-MAX_SEED = 2**32 - 1  # --seed: numpy's seeds are non-negative; this many are plenty
 MAX_ATOL = 1e6  # --atol, in each channel's unit: beyond it every library equals every other
 MAX_RTOL = 1.0  # --rtol: 1 lets a value differ by its own size
+
+__all__ = ["MAX_ATOL", "MAX_JOBS", "MAX_RTOL", "MAX_SEED", "allowed", "finite", "perturbation"]
 
 
 def finite(param: typer.CallbackParam, value: Any) -> Any:

@@ -20,12 +20,12 @@ from skatelib.pipeline.cli.library_commands import (
 )
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
+from skatelib.pipeline.track_setup import run_jobs
 from skatelib.pipeline.views.console import (
     console,
     count,
     err_console,
     mesh_note,
-    run_with_progress,
     steer_table,
     track_table,
     twin_table,
@@ -105,12 +105,9 @@ def track(
 
 def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind) -> tuple[Any, Any]:
     """The MPC's and the run's settings (the controller's packages there, or the install hint)."""
-    try:
-        from skatelib.control.mpc import MpcConfig
-        from skatelib.control.settings import TrackSettings
-    except ImportError as e:
-        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
-    return MpcConfig(solver=solver.value, mu=mpc_mu), TrackSettings(seed=seed, state=state.value)
+    from skatelib.pipeline.track_setup import controller
+
+    return controller(solver.value, mpc_mu, seed, state.value)
 
 
 def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
@@ -192,8 +189,8 @@ def _track_model(library: Path, entry: list[str] | None, plant_error: str, pertu
 
     jobs, progress = runner
     save_closed_loop = _recording(library, save)
-    runs = run_with_progress(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None),
-                             jobs, "tracking", progress)
+    runs = run_jobs(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None),
+                    jobs, progress, "tracking")
     results = [r for r, _ in runs]
     if save is not None and save_closed_loop is not None:
         from skatelib.runtime import MotionLibrary
@@ -226,8 +223,8 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         from skatelib.pipeline.build.preflight import check_output
 
         check_output(video, [library], what="video")
-    runs = run_with_progress(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)),
-                             jobs, "riding on the twin", progress)
+    runs = run_jobs(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)),
+                    jobs, progress, "riding on the twin")
     results = [r for r, _, _ in runs]
     for _, written, _ in runs:
         if written:

@@ -1,0 +1,37 @@
+"""What ``track`` and its Python function share: the controller's settings from the command's
+options, and the closed-loop runner with its progress (a function of yours, or the command's bar)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+
+def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tuple[Any, Any]:
+    """The MPC's and the run's settings of ``track``, ``mpc_mu`` checked.
+
+    Raises:
+        ImportError: The controller's packages are missing, naming the extra.
+        ValueError: ``mpc_mu`` not a number from 0.05 to 2.
+    """
+    if mpc_mu is not None and not (isinstance(mpc_mu, int | float) and 0.05 <= mpc_mu <= 2.0):
+        raise ValueError(f"skatelib.track(mpc_mu={mpc_mu!r}): mpc_mu is a friction coefficient from 0.05 to 2")
+    try:
+        from skatelib.control.mpc import MpcConfig
+        from skatelib.control.settings import TrackSettings
+    except ImportError as e:
+        raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
+    return MpcConfig(solver=solver, mu=mpc_mu), TrackSettings(seed=seed, state=state)
+
+
+def run_jobs(calls: Sequence[Callable[[], Any]], jobs: int, progress: bool | Callable[[int, int], None],
+             label: str) -> list[Any]:
+    """Run the picklable ``calls`` on ``jobs`` workers (the build's runner); progress goes to a
+    function of (done, total), to the command's bar (True) or to nothing."""
+    if callable(progress):
+        from skatelib.pipeline.build.sweep import run_calls
+
+        return run_calls(calls, jobs, lambda n: progress(n, len(calls)))
+    from skatelib.pipeline.views.console import run_with_progress
+
+    return run_with_progress(calls, jobs, label, bool(progress))
