@@ -1,4 +1,4 @@
-"""Hold the repository to its layout rules (docs: README "Layout"); run by ``make lint``.
+"""Hold the repository to its layout rules (docs/layout.md); run by ``make lint``.
 
 * Modules of every package folder (``pipeline/``, ``library/``, ``runtime/``, ``control/``,
   ``sim/``, ``proving/``) at most 250 lines, functions at most 60.
