@@ -75,7 +75,7 @@ def custom(tmp_path_factory):
 def test_custom_config_builds_validates_and_tracks(custom):
     """The script writes a config that extends the shipped default by name, builds it with a line
     per entry as it starts and finishes, validates every entry (the start-up and the stop from its
-    speed, the fewest strides that pass) and rides each on the model plant."""
+    speed, the fewest strides that pass) and rides each on the model plant as planned, each passing."""
     tmp, r = custom
     assert r.returncode == 0, r.stdout + r.stderr
     assert "validate v0.40_s1: ok" in r.stdout
@@ -86,7 +86,7 @@ def test_custom_config_builds_validates_and_tracks(custom):
     for e in lib:  # progress: each entry started, then finished, before the file was written
         assert r.stdout.index(f"solving {e.key}") < r.stdout.index(f"  {e.key}: ok") < r.stdout.index("wrote ")
     assert "ridden 2 of 2" in r.stdout
-    assert "track v0.40_s1 (model plant, default model errors): delivered" in r.stdout
+    assert "track v0.40_s1 (model plant, errors: none): delivered" in r.stdout
 
 
 def test_control_loop_ticks_at_500_hz(custom):
