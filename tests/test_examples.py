@@ -86,7 +86,7 @@ def test_custom_config_builds_validates_and_tracks(custom):
     # progress: each entry started, then finished, before the file was written (a transition's task is
     # named without its stride count, which it chooses: v0.40-0.00 became v0.40-0.00_s1)
     started = [line.split("solving ")[1] for line in r.stdout.splitlines() if line.startswith("  solving ")]
-    assert len(started) == 2 and all(any(k.startswith(s) for k in lib.keys()) for s in started), started
+    assert len(started) == 2 and all(any(e.key.startswith(s) for e in lib) for s in started), started
     for s in started:
         assert r.stdout.index(f"solving {s}\n") < r.stdout.index(f"  {s}: ok") < r.stdout.index("wrote ")
     assert "ridden 2 of 2" in r.stdout
