@@ -4,12 +4,14 @@ between them and to rest). Any other key of the shipped ``cyberdog2.toml`` can b
 way; an unknown key or a value out of range is refused, naming the file and the key.
 
     python examples/custom_config.py [--out out/custom.h5] [--speeds 0.3 0.5] [--strides 2]
-                                     [--interpreted] [--plant model|mujoco]
+                                     [--interpreted] [--plant model|mujoco] [--perturb none]
 
 The config file is written next to the library (``extends = "skatelib:cyberdog2.toml"`` names the
 shipped default wherever skatelib is installed), so that you can edit and rebuild it with
 ``skatelib build out/custom.toml``. Each entry is printed as it starts and finishes; pass
-``progress=True`` to ``skatelib.build`` for the command line's progress bar instead.
+``progress=True`` to ``skatelib.build`` for the command line's progress bar instead. The entries
+are then ridden in closed loop on the plant as planned (``--perturb`` adds model errors, as
+``skatelib track`` does by default); the exit code is 1 when a build, a check or a ride failed.
 """
 
 from __future__ import annotations
@@ -59,6 +61,9 @@ def main() -> None:
     ap.add_argument("--strides", type=int, default=2)
     ap.add_argument("--interpreted", action="store_true", help="do not compile the stage functions")
     ap.add_argument("--plant", choices=["model", "mujoco"], default="model", help="where to ride the entries")
+    ap.add_argument("--perturb", default="none",
+                    help="the plant's model errors, KEY=VALUE,... (default: none, the plant as planned; "
+                         "skatelib track --help lists the keys)")
     args = ap.parse_args()
 
     config = write_config(args.out.with_suffix(".toml"), args.speeds, args.strides, not args.interpreted)
@@ -67,11 +72,11 @@ def main() -> None:
     print(f"wrote {report.path} in {report.wall_time_s:.1f} s; {len(report.failed)} entries failed")
 
     checked = skatelib.validate(report.path, on_entry=lambda v: print(f"validate {v.key}: {v.status}: {v.message}"))
-    runs = skatelib.track(report.path, plant=args.plant, jobs=2,
+    runs = skatelib.track(report.path, plant=args.plant, perturb=args.perturb, jobs=2,
                           progress=lambda done, total: print(f"  ridden {done} of {total}", flush=True))
     for r in runs:
         why = "" if r.passed else f": {r.reasons}"
-        print(f"track {r.key} ({args.plant} plant, default model errors): delivered {r.delivered_mps:.3f} m/s, "
+        print(f"track {r.key} ({args.plant} plant, errors: {args.perturb}): delivered {r.delivered_mps:.3f} m/s, "
               f"{'passed' if r.passed else 'FAILED'}{why}")
     ok = not report.failed and checked.valid and all(r.passed for r in runs)
     raise SystemExit(0 if ok else 1)
