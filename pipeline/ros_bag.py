@@ -105,8 +105,9 @@ def robot_motion(lib: MotionLibrary, e: EntryRecord) -> RobotMotion | None:
     pose = np.asarray(e.arrays[schema.D_BASE_POSE], dtype=np.float64)
     base[:, :3, :3] = msg.quaternion_matrices(pose[:, 3:7])
     base[:, :3, 3] = pose[:, 0:3]
+    rates = e.arrays.get(schema.D_JOINT_VELOCITIES)
     return RobotMotion(base, list(e.columns[schema.D_JOINTS]), np.asarray(e.arrays[schema.D_JOINTS], dtype=np.float64),
-                       None)
+                       None if rates is None else np.asarray(rates, dtype=np.float64))
 
 
 def _robot_messages(urdf: str, e: EntryRecord, lib: MotionLibrary,

@@ -317,3 +317,44 @@ def test_an_mcap_without_the_extension_is_refused(tmp_path):
     assert r.returncode == 2, r.stdout + r.stderr
     assert "exp_mcap" in r.stderr and "ending in .mcap" in r.stderr and "exp_mcap.mcap" in r.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def humanoid_bag_problems(library: Path, out: Path) -> tuple[list[str], float]:
+    """Export a humanoid library and return what is wrong with its bag (invalid topic names, URDF
+    joints missing) and the largest deviation of its soles, shanks, thighs and torso chained from
+    /tf from pinocchio's forward kinematics at the stored waist pose and joint angles."""
+    from skatelib.library import schema
+    from skatelib.pipeline.exports import export
+
+    export(library, "mcap", out)
+    got, channels, _ = read_bag(out)
+    problems = [f"{t}: {p}" for t in channels for p in ros2_topic_problems(t)]
+    data = read_library(library)
+    urdf = data.model_text["robot_urdf"]
+    children = {t.child_frame_id for _, m in got["/tf"] + got["/tf_static"] for t in m.transforms}
+    problems += joints_missing(urdf, children, {n for _, m in got["/joint_states"] for n in m.name})
+    model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+    pdata = model.createData()
+    tf = dict(got["/tf"])
+    static = got["/tf_static"][0][1].transforms
+    starts = {m.data: ns for ns, m in got["/skatelib/entry"]}
+    worst = 0.0
+    for key, e in data.entries.items():
+        base, angles, t = e.arrays[schema.D_BASE_POSE], e.arrays[schema.D_JOINTS], e.arrays["t"]
+        idx = [model.joints[model.getJointId(n)].idx_q for n in e.columns[schema.D_JOINTS]]
+        for k in range(0, len(t), max(1, len(t) // 25)):
+            q = pin.neutral(model)
+            q[:7], q[idx] = base[k], angles[k]  # position, quaternion x y z w: pinocchio's order
+            pin.framesForwardKinematics(model, pdata, q)
+            knot = tf[starts[key] + round((t[k] - t[0]) * 1e9)].transforms
+            for frame in ("L_sole", "R_sole", "L_shank", "R_thigh", "torso"):
+                want, M = pdata.oMf[model.getFrameId(frame)], chained(knot, static, frame)
+                worst = max(worst, float(np.abs(M[:3, 3] - want.translation).max()),
+                            float(np.abs(M[:3, :3] - want.rotation).max()))
+    return problems, worst
+
+
+def test_the_humanoids_bag(hrp2_walk_path, tmp_path):
+    """The HRP-2 walk's bag: valid names, every joint of its URDF, /tf on pinocchio to 1e-12."""
+    problems, worst = humanoid_bag_problems(hrp2_walk_path, tmp_path / "walk.mcap")
+    assert problems == [] and worst < 1e-12, (problems, worst)
