@@ -13,7 +13,7 @@ Topics, every name valid under ROS 2's rules (:func:`topic`):
 * ``/tf_static`` (latched): the URDF's fixed joints; ``/tf`` (``tf2_msgs/TFMessage``) at every
   knot: ``world`` -> the URDF's root link (the trunk), each moving joint's parent -> child link at
   the entry's joint angles (:mod:`.urdf_kinematics`), and for the quadruped ``world`` -> ``board``.
-* ``/joint_states`` (``sensor_msgs/JointState``): the URDF's joint names and angles.
+* ``/joint_states`` (``sensor_msgs/JointState``): the URDF's joint names, angles and rates.
 * ``/skatelib/arrays/<array>`` (``std_msgs/Float64MultiArray``): every per-knot array.
 * The quadruped's ``/skatelib/base_pose``, ``foot_force/<leg>``, ``board_pose``, ``board_twist``.
 """
@@ -57,7 +57,7 @@ def topic_token(name: str) -> str:
     """A ROS 2 name token for ``name``: characters other than letters, digits and ``_`` become
     ``_``, runs of ``_`` one, and a token starting with a digit gets a leading ``_``."""
     token = re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9_]", "_", name)) or "_"
-    return re.sub(r"_+", "_", "_" + token) if token[0].isdigit() else token
+    return "_" + token if token[0].isdigit() else token
 
 
 def topic(*parts: str) -> str:

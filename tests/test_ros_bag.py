@@ -67,7 +67,7 @@ def test_the_validator_refuses_what_ros2_refuses():
 
 @given(st.lists(st.text(max_size=12), min_size=1, max_size=3))
 def test_any_array_name_makes_a_valid_topic(parts):
-    """The exporter's topic of any array name (dots, digits first, dashes, unicode, empty) is valid."""
+    """The exporter's topic of any short array name (dots, digits first, dashes, unicode, empty) is valid."""
     from skatelib.pipeline.ros_bag import topic
 
     assert ros2_topic_problems(topic(*parts)) == []
