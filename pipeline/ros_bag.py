@@ -45,7 +45,11 @@ INDEX: Final = "skatelib.entries"  # the MCAP metadata record of the entries' ti
 BOARD_FRAME: Final = "board"
 # The QoS rosbag2 records for a topic (YAML, the integer enums of rmw): reliable, keep last; a
 # latched topic (transient local, depth 1) reaches a subscriber that joins after it was sent, as
-# /robot_description and /tf_static do from robot_state_publisher.
+# /robot_description and /tf_static do from robot_state_publisher. rosbag2's MCAP reader decodes
+# the integer form (Humble's) when the bag has a "rosbag2" metadata record without
+# "serialized_metadata" (it then reads the bag as metadata version 8); without that record it
+# expects the names of later distributions.
+ROSBAG2_RECORD: Final = ("rosbag2", {"ROS_DISTRO": "humble"})
 _QOS = ("- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
         "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
         "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false\n")
@@ -191,6 +195,7 @@ def write_bag(data: LibraryData, entries: dict[str, EntryRecord]) -> bytes:
         channel, _ = channels[topic_name]
         ns = round(t * 1e9)
         writer.add_message(channel, log_time=ns, publish_time=ns, data=schemas[kind][1](fields))
+    writer.add_metadata(*ROSBAG2_RECORD)
     writer.add_metadata(INDEX, {k: json.dumps({"start_s": round(a, 9), "end_s": round(b, 9)})
                                 for k, (a, b) in timeline(entries).items()})
     writer.finish()

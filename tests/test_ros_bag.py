@@ -172,7 +172,7 @@ def test_every_topic_and_schema_is_ros2s(bag):
 def test_the_robot_description_is_latched_and_the_librarys(bag):
     """``/robot_description`` (std_msgs/String) holds the library's URDF, sent once at the bag's
     start with a transient-local QoS (latched: a late subscriber and Foxglove get it), as is
-    ``/tf_static``; ``/tf`` is volatile."""
+    ``/tf_static``; ``/tf`` is volatile; the QoS in the form rosbag2's MCAP reader decodes."""
     got, channels, _ = bag
     urdf = read_library(REFERENCE).model_text["robot_urdf"]
     assert [m.data for _, m in got["/robot_description"]] == [urdf]
@@ -183,6 +183,10 @@ def test_the_robot_description_is_latched_and_the_librarys(bag):
         assert got[topic][0][0] == first
     assert channels["/robot_description"][1].name == "std_msgs/msg/String"
     assert "durability: 2" in channels["/tf"][0].metadata["offered_qos_profiles"]  # rmw: 2 volatile
+    # rosbag2 reads these integer QoS values only from a bag with a "rosbag2" record without
+    # serialized_metadata (metadata version 8); without it, Jazzy and later expect policy names.
+    _, _, metadata = bag
+    assert "ROS_DISTRO" in metadata["rosbag2"] and "serialized_metadata" not in metadata["rosbag2"]
 
 
 def test_entries_play_one_after_another(bag):
