@@ -122,7 +122,7 @@ def arrays(e: EntryRecord, times: np.ndarray) -> Iterator[tuple[str, float, dict
 def quadruped(e: EntryRecord, times: np.ndarray) -> Iterator[tuple[str, str, float, dict[str, Any]]]:
     """The quadruped's own messages, knot by knot: (topic under ``/skatelib/``, type, time [s],
     fields): ``base_pose``, ``foot_force/<leg>``, ``board_pose``, ``board_twist`` (module
-    docstring of :mod:`.exports`)."""
+    docstring of :mod:`.ros_bag`)."""
     x = np.asarray(e.arrays["state"], dtype=np.float64)
     u = np.asarray(e.arrays["control"], dtype=np.float64)
     board = np.asarray(e.arrays["board_pos"], dtype=np.float64)
