@@ -8,20 +8,16 @@ it leaves out).
 * ``csv``: a folder with one ``<key>.csv`` per entry: a row per knot, a column per channel headed
   ``array.column [unit]`` (trailing axes flattened: ``foot_pos.FL.x [m]``); a control holds on
   [t_k, t_{k+1}), so the last knot's control cells are empty.
-* ``mcap``: one ROS 2 bag (MCAP, CDR) for Foxglove and ``ros2 bag play``, stamped with the entries'
-  times, topics under ``/<key>/``. Every kind: each array per knot as ``std_msgs/Float64MultiArray``
-  (its dimension labelled with the column names). The quadruped also: ``base_pose``
-  (``geometry_msgs/PoseStamped``: the centre of mass and the trunk's orientation, world frame),
-  ``joint_states`` (``sensor_msgs/JointState``: the URDF's joint names, angles, velocities),
-  ``foot_force/<leg>`` (``geometry_msgs/WrenchStamped``: the force on the foot, world frame) and
-  ``board_pose`` / ``board_twist`` (its origin, yaw and roll; its planar velocity and roll rate).
+* ``mcap``: one ROS 2 bag (MCAP, CDR) for Foxglove and ``ros2 bag play``, a file whose name ends
+  in ``.mcap`` (the storage both pick by it; another name is refused): the entries one after
+  another in time, ``/robot_description``, ``/tf``, ``/joint_states`` and every array, topic
+  names valid under ROS 2's rules (:mod:`skatelib.pipeline.ros_bag`).
 """
 
 from __future__ import annotations
 
 import csv
 import io
-import json
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -30,10 +26,12 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_folder, confined, write_atomic
 from skatelib.library.compare import column_names
+from skatelib.library.errors import OutputError
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord
 
 FORMATS = ("npz", "csv", "mcap")
+MCAP_SUFFIX = ".mcap"
 
 
 def headers(e: EntryRecord) -> tuple[list[str], np.ndarray]:
@@ -101,26 +99,24 @@ def write_csv(path: Path, out: Path) -> list[Path]:
 
 
 def write_mcap(path: Path, out: Path) -> list[Path]:
-    """One MCAP file of every entry (module docstring)."""
+    """One ROS 2 bag of every solved entry (:mod:`skatelib.pipeline.ros_bag`) at ``out``.
+
+    Raises:
+        OutputError: ``out``'s name does not end in ``.mcap`` (nothing read, nothing written).
+        ImportError: mcap or mcap-ros2-support is not installed.
+    """
+    if out.suffix.lower() != MCAP_SUFFIX:
+        raise OutputError(out, f"a ROS 2 bag is a file ending in {MCAP_SUFFIX} (ros2 bag play and Foxglove "
+                               f"pick its storage by the name); give e.g. -o {out.with_name(out.name + MCAP_SUFFIX)}")
     try:
-        from mcap_ros2.writer import Writer
+        import mcap_ros2  # noqa: F401
     except ImportError as missing:
         raise ImportError(f"MCAP export needs mcap and mcap-ros2-support ({missing}); "
                           "pip install 'skatelib[export]'") from missing
-    from skatelib.pipeline import ros_messages as msg
+    from skatelib.pipeline.ros_bag import write_bag
 
     data = read_library(path)
-    kind = str(data.attrs.get("kind", ""))
-    joints = json.loads(str(data.attrs.get(schema.A_CONFIG_RESOLVED, "{}"))).get("robot", {}).get("joint_names", [])
-    buffer = io.BytesIO()
-    writer = Writer(buffer)
-    schemas = {name: writer.register_msgdef(name, text) for name, text in msg.DEFINITIONS.items()}
-    for key, e in solved(data).items():
-        for topic, name, t, message in msg.entry_messages(key, e, kind, joints):
-            ns = round(t * 1e9)
-            writer.write_message(topic, schemas[name], message, log_time=ns, publish_time=ns)
-    writer.finish()
-    return [write_atomic(out, buffer.getvalue())]
+    return [write_atomic(out, write_bag(data, solved(data)))]
 
 
 def export(path: Path, fmt: str, out: Path) -> list[Path]:

@@ -1,6 +1,6 @@
-"""The ROS 2 messages of an MCAP export (:mod:`skatelib.pipeline.exports`): their definitions (the
-concatenated ``.msg`` texts a ROS 2 bag stores, as ``ros2 bag record`` writes them) and one
-entry's messages as dictionaries for ``mcap_ros2``'s CDR writer."""
+"""The ROS 2 messages of an MCAP export (:mod:`skatelib.pipeline.ros_bag`): their definitions (the
+concatenated ``.msg`` texts a ROS 2 bag stores, named ``package/msg/Type`` as ``ros2 bag record``
+writes them) and messages as dictionaries for ``mcap_ros2``'s CDR writer."""
 
 from __future__ import annotations
 
@@ -26,30 +26,39 @@ def _definition(body: str, *deps: str) -> str:
     return body + "".join(_SEP + d for d in deps)
 
 
+_TRANSFORM = "MSG: geometry_msgs/Transform\ngeometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n"
+_TRANSFORM_STAMPED = ("MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\n"
+                      "geometry_msgs/Transform transform\n")
+
+POSE, JOINTS, WRENCH, TWIST, ARRAY = ("geometry_msgs/msg/PoseStamped", "sensor_msgs/msg/JointState",
+                                      "geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/TwistStamped",
+                                      "std_msgs/msg/Float64MultiArray")
+TF, STRING = "tf2_msgs/msg/TFMessage", "std_msgs/msg/String"
 DEFINITIONS = {
-    "geometry_msgs/PoseStamped": _definition("std_msgs/Header header\ngeometry_msgs/Pose pose\n", _HEADER, _TIME,
-                                             _POSE, _POINT, _QUAT),
-    "sensor_msgs/JointState": _definition(
+    POSE: _definition("std_msgs/Header header\ngeometry_msgs/Pose pose\n", _HEADER, _TIME, _POSE, _POINT, _QUAT),
+    JOINTS: _definition(
         "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
         _HEADER, _TIME),
-    "geometry_msgs/WrenchStamped": _definition(
+    WRENCH: _definition(
         "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n", _HEADER, _TIME,
         "MSG: geometry_msgs/Wrench\ngeometry_msgs/Vector3 force\ngeometry_msgs/Vector3 torque\n", _VECTOR3),
-    "geometry_msgs/TwistStamped": _definition(
+    TWIST: _definition(
         "std_msgs/Header header\ngeometry_msgs/Twist twist\n", _HEADER, _TIME,
         "MSG: geometry_msgs/Twist\ngeometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n", _VECTOR3),
-    "std_msgs/Float64MultiArray": _definition(
+    ARRAY: _definition(
         "std_msgs/MultiArrayLayout layout\nfloat64[] data\n",
         "MSG: std_msgs/MultiArrayLayout\nstd_msgs/MultiArrayDimension[] dim\nuint32 data_offset\n",
         "MSG: std_msgs/MultiArrayDimension\nstring label\nuint32 size\nuint32 stride\n"),
+    TF: _definition("geometry_msgs/TransformStamped[] transforms\n", _TRANSFORM_STAMPED, _HEADER, _TIME,
+                    _TRANSFORM, _VECTOR3, _QUAT),
+    STRING: "string data\n",
 }
 
-Message = tuple[str, str, float, dict[str, Any]]  # topic, message type, time [s], fields
+WORLD = "world"  # the fixed frame of every pose, force and transform
 
 
 def _header(t: float) -> dict[str, Any]:
-    sec, nanosec = divmod(round(t * 1e9), 1_000_000_000)
-    return {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": "world"}
+    return {"stamp": stamp(t), "frame_id": WORLD}
 
 
 def _xyz(v: Sequence[float] | np.ndarray) -> dict[str, float]:
@@ -73,8 +82,30 @@ def quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     return out if out[3] >= 0 else -out
 
 
-def entry_messages(key: str, e: EntryRecord, kind: str, joints: Sequence[str]) -> Iterator[Message]:
-    """Every message of one entry, knot by knot (module docstring of :mod:`.exports`)."""
+def quaternion_matrices(q_xyzw: np.ndarray) -> np.ndarray:
+    """Rotation matrices (K, 3, 3) of unit quaternions (K, 4) given as x, y, z, w."""
+    x, y, z, w = (np.asarray(q_xyzw, dtype=np.float64)[:, i] for i in range(4))
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def transform(stamp: dict[str, Any], parent: str, child: str, M: np.ndarray) -> dict[str, Any]:
+    """A ``geometry_msgs/TransformStamped``: the pose of ``child`` in ``parent`` (a 4x4 transform)."""
+    q = quaternion_xyzw(M[:3, :3])
+    return {"header": {"stamp": stamp, "frame_id": parent}, "child_frame_id": child,
+            "transform": {"translation": _xyz(M[:3, 3]), "rotation": dict(zip("xyzw", q.tolist(), strict=True))}}
+
+
+def stamp(t: float) -> dict[str, int]:
+    """A ``builtin_interfaces/Time`` of ``t`` [s] >= 0."""
+    sec, nanosec = divmod(round(t * 1e9), 1_000_000_000)
+    return {"sec": sec, "nanosec": nanosec}
+
+
+def arrays(e: EntryRecord, times: np.ndarray) -> Iterator[tuple[str, float, dict[str, Any]]]:
+    """Each per-knot array of the entry, knot by knot: (array name, time [s], a
+    ``std_msgs/Float64MultiArray`` with its dimension labelled by the column names)."""
     t = np.asarray(e.arrays["t"], dtype=np.float64)
     for name, a in sorted(e.arrays.items()):
         a = np.asarray(a, dtype=np.float64)
@@ -85,33 +116,29 @@ def entry_messages(key: str, e: EntryRecord, kind: str, joints: Sequence[str]) -
         layout = {"dim": [{"label": ",".join(labels), "size": flat.shape[1], "stride": flat.shape[1]}],
                   "data_offset": 0}
         for k, row in enumerate(flat):
-            yield f"/{key}/{name}", "std_msgs/Float64MultiArray", float(t[k]), {"layout": layout,
-                                                                                 "data": row.tolist()}
-    if kind == "quadruped":
-        yield from _quadruped(key, e, t, joints)
+            yield name, float(times[k]), {"layout": layout, "data": row.tolist()}
 
 
-def _quadruped(key: str, e: EntryRecord, t: np.ndarray, joints: Sequence[str]) -> Iterator[Message]:
+def quadruped(e: EntryRecord, times: np.ndarray) -> Iterator[tuple[str, str, float, dict[str, Any]]]:
+    """The quadruped's own messages, knot by knot: (topic under ``/skatelib/``, type, time [s],
+    fields): ``base_pose``, ``foot_force/<leg>``, ``board_pose``, ``board_twist`` (module
+    docstring of :mod:`.ros_bag`)."""
     x = np.asarray(e.arrays["state"], dtype=np.float64)
     u = np.asarray(e.arrays["control"], dtype=np.float64)
     board = np.asarray(e.arrays["board_pos"], dtype=np.float64)
-    names = list(joints) or list(e.columns["state"][12:24])
     trunk = rpy_matrices(x[:, 3:6])
-    for k, tk in enumerate(t.tolist()):
+    for k, tk in enumerate(times.tolist()):
         h = _header(tk)
         q = quaternion_xyzw(trunk[k])
-        yield f"/{key}/base_pose", "geometry_msgs/PoseStamped", tk, {"header": h, "pose": {
+        yield "base_pose", POSE, tk, {"header": h, "pose": {
             "position": _xyz(x[k, 0:3]), "orientation": dict(zip("xyzw", q.tolist(), strict=True))}}
         uk = u[min(k, len(u) - 1)]  # a control holds on [t_k, t_k+1): the last knot keeps the last one
-        yield f"/{key}/joint_states", "sensor_msgs/JointState", tk, {
-            "header": h, "name": names, "position": x[k, 12:24].tolist(), "velocity": uk[12:24].tolist(),
-            "effort": []}
         for i, leg in enumerate(LEGS):
-            yield f"/{key}/foot_force/{leg}", "geometry_msgs/WrenchStamped", tk, {
+            yield f"foot_force/{leg}", WRENCH, tk, {
                 "header": h, "wrench": {"force": _xyz(uk[3 * i:3 * i + 3]), "torque": _xyz((0.0, 0.0, 0.0))}}
         yaw, roll = board[k, 3], x[k, 26]
         qb = quaternion_xyzw(board_rotations(yaw, roll))
-        yield f"/{key}/board_pose", "geometry_msgs/PoseStamped", tk, {"header": h, "pose": {
+        yield "board_pose", POSE, tk, {"header": h, "pose": {
             "position": _xyz(board[k, 0:3]), "orientation": dict(zip("xyzw", qb.tolist(), strict=True))}}
-        yield f"/{key}/board_twist", "geometry_msgs/TwistStamped", tk, {"header": h, "twist": {
+        yield "board_twist", TWIST, tk, {"header": h, "twist": {
             "linear": _xyz((x[k, 24], x[k, 25], 0.0)), "angular": _xyz((x[k, 27], 0.0, 0.0))}}

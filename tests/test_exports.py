@@ -1,6 +1,7 @@
 """`skatelib export`: each format read back with its own reader (numpy, csv, the mcap package's
 ROS 2 decoder) equals the library: every array, column name and unit; the MCAP's poses, joint
-states and foot forces at the entry's times."""
+states and foot forces at the entry's times (the bag's ROS 2 rules, /tf and the entries' timeline:
+``test_ros_bag.py``)."""
 
 from __future__ import annotations
 
@@ -58,8 +59,8 @@ def test_csv_round_trips(lib, tmp_path):
 
 
 def test_mcap_round_trips(lib, tmp_path):
-    """The bag read with mcap's ROS 2 decoder: one message per knot and topic, stamped with the
-    knot's time; the base position, the orientation (as a rotation matrix) and the joint angles,
+    """The bag of one entry read with mcap's ROS 2 decoder: one message per knot and topic, stamped
+    with the knot's time; the base position, the orientation (as a rotation matrix) and the joint angles,
     velocities and foot forces equal the library's."""
     reader = pytest.importorskip("mcap.reader")
     decoder = pytest.importorskip("mcap_ros2.decoder")
@@ -67,14 +68,14 @@ def test_mcap_round_trips(lib, tmp_path):
     out = tmp_path / "lib.mcap"
     r = _cli(["export", str(lib), "-f", "mcap", "-o", str(out)])
     assert r.returncode == 0, r.stdout + r.stderr
-    key, e = next(iter(data.entries.items()))
+    e = next(iter(data.entries.values()))
     t, x, u = e.arrays["t"], e.arrays["state"], e.arrays["control"]
     got: dict[str, list] = {}
     with open(out, "rb") as f:
         for _, channel, message, m in reader.make_reader(f, decoder_factories=[decoder.DecoderFactory()]
                                                         ).iter_decoded_messages():
             got.setdefault(channel.topic, []).append((message.log_time, m))
-    poses = got[f"/{key}/base_pose"]
+    poses = got["/skatelib/base_pose"]
     assert [ns for ns, _ in poses] == [round(s * 1e9) for s in t]
     R = rpy_matrices(x[:, 3:6])
     for k, (_, m) in enumerate(poses):
@@ -82,14 +83,14 @@ def test_mcap_round_trips(lib, tmp_path):
         assert [p.x, p.y, p.z] == x[k, 0:3].tolist()
         o = m.pose.orientation
         np.testing.assert_allclose([o.x, o.y, o.z, o.w], quaternion_xyzw(R[k]), atol=1e-15)
-    joints = got[f"/{key}/joint_states"]
+    joints = got["/joint_states"]
     assert list(joints[3][1].name)[:3] == ["FL_abad", "FL_hip", "FL_knee"]
     np.testing.assert_array_equal([list(m.position) for _, m in joints], x[:, 12:24])
     np.testing.assert_array_equal([list(m.velocity) for _, m in joints][:-1], u[:, 12:24])
     for i, leg in enumerate(LEGS):
-        forces = [[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z] for _, m in got[f"/{key}/foot_force/{leg}"]]
+        forces = [[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z] for _, m in got[f"/skatelib/foot_force/{leg}"]]
         np.testing.assert_array_equal(forces[:-1], u[:, 3 * i:3 * i + 3])
-    assert len(got[f"/{key}/state"]) == len(t) and len(got[f"/{key}/board_twist"]) == len(t)
+    assert len(got["/skatelib/arrays/state"]) == len(t) and len(got["/skatelib/board_twist"]) == len(t)
 
 
 def test_quaternion_matches_the_rotation():

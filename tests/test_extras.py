@@ -35,6 +35,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
     ("pipeline/quadruped/transitions/twin_judge.py", ("build", "control", "sim")),  # [transitions] twin_judge
     ("pipeline/exports.py", ("build", "export")),  # export --format mcap
+    ("pipeline/ros_bag.py", ("build", "export")),  # export --format mcap
     ("pipeline/**/*.py", ("build",)),
     ("library/*.py", ()),
     ("runtime/*.py", ()),

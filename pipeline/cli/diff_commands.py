@@ -59,12 +59,12 @@ class ExportFormat(enum.StrEnum):
 def export(
     library: LibArg,
     fmt: Annotated[ExportFormat, typer.Option("--format", "-f", help="npz or csv (a file per entry in the folder "
-                                              "OUT), mcap (one ROS 2 bag file OUT).")],
+                                              "OUT), mcap (one ROS 2 bag, a file OUT ending in .mcap).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Folder (npz, csv) or file (mcap) to write.")],
 ) -> None:
     """Write a library in another tool's format: npz and csv per entry with column names and units;
-    MCAP (a ROS 2 bag: PoseStamped, JointState, WrenchStamped, the board) for Foxglove and
-    ros2 bag play (pip install 'skatelib[export]')."""
+    MCAP, a ROS 2 bag of the entries one after another (/robot_description, /tf, /joint_states,
+    the board, every array) for Foxglove's 3D panel and ros2 bag play (pip install 'skatelib[export]')."""
     from skatelib.pipeline.build.preflight import check_folder, check_output
     from skatelib.pipeline.exports import export as write
     from skatelib.pipeline.views.console import console, count, left_out
