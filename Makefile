@@ -22,7 +22,7 @@ help:
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make docs      the API reference from the docstrings (pdoc) -> build/docs/index.html; a warning fails it"
-	@echo "make figures   regenerate docs/figures (skatelib plot) and docs/inspect.png (Rerun) from the default library"
+	@echo "make figures   regenerate docs/figures (skatelib plot, the twin's videos and a still) and docs/inspect.png (Rerun) from the default library"
 	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
 	@echo "make check-default build the default library and validate it (physics checks, chain continuity)"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
@@ -103,8 +103,10 @@ docs: venv
 
 # The README's figures from the current code: the default library (built when missing), its
 # frontier for 1-4 strides, `skatelib plot`, a screenshot of `skatelib inspect` in the viewer, the
-# twin's GIF, and the humanoid walk's planned against multibody ZMP.
+# twin's video (MP4, a still of it at STILL_AT seconds, GIFs), and the humanoid walk's planned
+# against multibody ZMP.
 LIB := out/cyberdog2-default.h5
+STILL_AT ?= 1.5
 figures: venv
 	test -f $(LIB) || $(BIN)/skatelib build -o $(LIB)
 	$(BIN)/skatelib frontier -s 1 -s 2 -s 3 -s 4 -o docs/figures/frontier.json
@@ -112,6 +114,8 @@ figures: venv
 	mkdir -p build/figures
 	$(BIN)/skatelib inspect $(LIB) --entry v0.50_s2 --entry v1.00_s4 --save build/figures/inspect.rrd --force
 	tools/rrd-screenshot build/figures/inspect.rrd docs/inspect.png 1400x850
+	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.mp4
+	$(BIN)/python tools/video_still.py docs/figures/twin-v0.50_s2.mp4 docs/figures/twin-v0.50_s2.png $(STILL_AT)
 	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.gif
 	$(BIN)/skatelib track $(LIB) --plant mujoco --ride 0:0.5,0.5:0.8,0.8:0.3,0.3:0 --video docs/figures/twin-ride.gif
 	$(BIN)/skatelib build configs/hrp2_walk.toml -o out/hrp2-walk.h5 --no-progress

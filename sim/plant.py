@@ -17,7 +17,7 @@ from skatelib.sim.errors import TwinErrors
 from skatelib.sim.figures import TwinFigures
 from skatelib.sim.robot import JOINTS, LEGS
 from skatelib.sim.rolling import WHEELS, RollingResistance, step
-from skatelib.sim.scene import scene_spec
+from skatelib.sim.scene import pose_qpos, scene_spec
 
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
@@ -158,12 +158,10 @@ class TwinPlant:
         d = self.d
         mujoco.mj_resetDataKeyframe(self.m, d, self.m.key("stance").id)
         d.qvel[:] = 0.0
-        d.qpos[self.trunk_q:self.trunk_q + 3] = trunk_pos
-        d.qpos[self.trunk_q + 3:self.trunk_q + 7] = trunk_quat_wxyz
-        d.qpos[self.qadr] = q
         x, y, yaw = deck_pose
-        d.qpos[self.deck_q:self.deck_q + 2] = x, y
-        d.qpos[self.deck_q + 3:self.deck_q + 7] = np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)
+        deck_z = d.qpos[self.deck_q + 2]
+        d.qpos[:] = pose_qpos(self.m, (trunk_pos, trunk_quat_wxyz), q,
+                              (np.array([x, y, deck_z]), np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])))
         mujoco.mj_forward(self.m, d)
 
     def launch(self, speed_mps: float) -> None:

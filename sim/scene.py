@@ -14,6 +14,16 @@ from skatelib.sim.robot import JOINTS, robot_spec
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
 
+# The largest frame rendered offscreen (a video's, :mod:`skatelib.sim.video`) [px].
+OFFSCREEN_SIZE = (1280, 720)
+# Colours that tell robot, board and floor apart in the viewer and in videos (RGBA).
+ROBOT_RGBA = (0.93, 0.52, 0.13, 1.0)  # trunk, hip and thigh links
+CALF_RGBA = (0.22, 0.22, 0.25, 1.0)
+FOOT_RGBA = (0.08, 0.08, 0.08, 1.0)
+DECK_RGBA = (0.13, 0.33, 0.72, 1.0)
+FLOOR_RGB = ((0.80, 0.82, 0.84), (0.58, 0.61, 0.65))  # the checker's two squares
+SKY_RGB = ((0.62, 0.75, 0.92), (0.97, 0.98, 1.0))
+
 
 def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     """Floor, board and (``with_robot``) the robot, as an ``MjSpec``."""
@@ -26,8 +36,11 @@ def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = 10
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = OFFSCREEN_SIZE
     spec.add_texture(name="floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-                     rgb1=[0.3, 0.33, 0.38], rgb2=[0.42, 0.45, 0.5], width=256, height=256)
+                     rgb1=list(FLOOR_RGB[0]), rgb2=list(FLOOR_RGB[1]), width=256, height=256)
+    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX, builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+                     rgb1=list(SKY_RGB[0]), rgb2=list(SKY_RGB[1]), width=64, height=384)
     grid = spec.add_material(name="floor", texrepeat=[4, 4], texuniform=True)  # 0.5 m squares: the motion shows
     grid.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
@@ -37,9 +50,24 @@ def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]  # lit wherever the board rides
     spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
     add_board(spec, f.board, f.friction_mu)
+    spec.geom("deck").rgba = list(DECK_RGBA)
     if with_robot:
+        _paint_robot(spec)
         _place_robot(spec, f)
     return spec
+
+
+def _paint_robot(spec: mujoco.MjSpec) -> None:
+    """The robot's links in :data:`ROBOT_RGBA`, its calves and feet darker."""
+    import mujoco
+
+    for b in spec.body("trunk").find_all(mujoco.mjtObj.mjOBJ_BODY):
+        name = b.name
+        rgba = FOOT_RGBA if name.endswith("_foot") else CALF_RGBA if name.endswith("_calf") else ROBOT_RGBA
+        for g in b.geoms:
+            g.rgba = list(rgba)
+    for g in spec.body("trunk").geoms:
+        g.rgba = list(ROBOT_RGBA)
 
 
 def _place_robot(spec: mujoco.MjSpec, f: TwinFigures) -> None:
@@ -76,3 +104,16 @@ def twin_xml(f: TwinFigures, with_robot: bool = True) -> str:
     spec.compile()
     text: str = spec.to_xml()
     return text
+
+
+def pose_qpos(m: mujoco.MjModel, trunk: tuple[np.ndarray, np.ndarray], q: np.ndarray,
+              deck: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The twin's configuration with the trunk at ``trunk`` (position, quaternion w x y z), the
+    joints at ``q`` (12,) [rad] and the deck's top centre at ``deck`` (position, quaternion); the
+    rest (trucks, wheels) as the stance keyframe has it."""
+    qpos = np.array(m.key("stance").qpos, dtype=np.float64)
+    t, d = m.joint("trunk_free").qposadr[0], m.joint("deck_free").qposadr[0]
+    qpos[t:t + 3], qpos[t + 3:t + 7] = trunk
+    qpos[[m.joint(n).qposadr[0] for n in JOINTS]] = q
+    qpos[d:d + 3], qpos[d + 3:d + 7] = deck
+    return qpos

@@ -1,9 +1,8 @@
-"""A run on the twin as a video: the plant's configurations at the MPC's rate (30 per second)
-rendered offscreen by MuJoCo, a camera following the deck from the side and behind, written as
-an MP4 (``imageio-ffmpeg``) or an animated GIF (``pillow``): extra ``[video]``.
-
-Rendering needs an OpenGL context: with no display, ``MUJOCO_GL=egl`` renders through Mesa (the
-package sets it, :mod:`skatelib.sim`)."""
+"""A run on the twin as a video: frames rendered offscreen (:mod:`skatelib.sim.render`: the
+camera following from the side, the plan's pose as a ghost) with a caption drawn on each
+(:mod:`skatelib.sim.overlay`), written as an MP4 (``imageio-ffmpeg``) at 1280 x 720 and every
+frame, or an animated GIF (``pillow``, for a README) at 640 x 360 and every second frame: extra
+``[video]``. The last frame is held with the verdict."""
 
 from __future__ import annotations
 
@@ -11,43 +10,41 @@ import os
 import signal
 import subprocess
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, cast
 
 import numpy as np
 from skatelib.library.errors import OutputError
+from skatelib.sim.overlay import Caption, draw_caption
+from skatelib.sim.render import View, render_frames
 
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
 
 FORMATS = (".mp4", ".gif")
 CRF = 25  # x264's quality, as imageio-ffmpeg's default quality 5 sets it (0 lossless .. 51 worst)
+MP4_VIEW = View(1280, 720)
+GIF_VIEW = View(640, 360)
+GIF_STRIDE = 2  # a GIF shows every second frame: a README's file stays a few MB
 
 
-def render_frames(m: mujoco.MjModel, qpos: Sequence[np.ndarray], size: tuple[int, int] = (640, 360)
-                  ) -> list[np.ndarray]:
-    """One RGB frame per configuration, the camera 1.2 m from the deck, looking at it."""
-    import mujoco
+@dataclass(frozen=True)
+class Footage:
+    """A run to film: configurations (N, nq) at ``fps``, the plan's at the same times (the ghost;
+    None for none), a caption per frame; the last frame held ``hold_s`` [s] with ``ending``."""
 
-    d = mujoco.MjData(m)
-    deck = m.body("deck").id
-    cam = mujoco.MjvCamera()
-    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.distance, cam.azimuth, cam.elevation = 1.2, -125.0, -20.0
-    frames = []
-    with mujoco.Renderer(m, size[1], size[0]) as r:
-        for q in qpos:
-            d.qpos[:] = q
-            mujoco.mj_forward(m, d)
-            cam.lookat[:] = d.xpos[deck] + np.array([0.0, 0.0, 0.1])
-            r.update_scene(d, cam)
-            frames.append(r.render().copy())
-    return frames
+    qpos: np.ndarray
+    fps: float
+    captions: tuple[Caption, ...]
+    ghost: np.ndarray | None = None
+    ending: Caption | None = None
+    hold_s: float = 3.0
 
 
-def write_video(frames: Sequence[np.ndarray], out: Path, fps: float) -> Path:
+def write_video(frames: Iterable[np.ndarray], out: Path, fps: float) -> Path:
     """Write ``frames`` to ``out`` (.mp4 or .gif) through a temporary file in its folder, moved into
     place only when the encoder finished without error and the bytes are on the device.
 
@@ -73,7 +70,7 @@ def write_video(frames: Sequence[np.ndarray], out: Path, fps: float) -> Path:
     return out
 
 
-def encode_mp4(frames: Sequence[np.ndarray], path: Path, fps: float, named: Path) -> None:
+def encode_mp4(frames: Iterable[np.ndarray], path: Path, fps: float, named: Path) -> None:
     """H.264 in MP4 by imageio-ffmpeg's ffmpeg, the command ``imageio_ffmpeg.write_frames`` runs
     (whose writer never looks at ffmpeg's exit status: on a full device it left a truncated file).
 
@@ -82,14 +79,16 @@ def encode_mp4(frames: Sequence[np.ndarray], path: Path, fps: float, named: Path
     """
     import imageio_ffmpeg
 
-    h, w = frames[0].shape[:2]
+    frames = iter(frames)
+    first = next(frames)
+    h, w = first.shape[:2]
     cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo", "-s", f"{w}x{h}",
            "-pix_fmt", "rgb24", "-r", str(Fraction(fps).limit_denominator()), "-i", "-", "-an",
            "-vcodec", "libx264", "-pix_fmt", "yuv420p", "-crf", str(CRF), "-v", "error", "-f", "mp4", str(path)]
     with tempfile.TemporaryFile() as log:
         p = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log, bufsize=0)
         try:
-            _feed(cast("IO[bytes]", p.stdin), frames)
+            _feed(cast("IO[bytes]", p.stdin), _chain(first, frames))
         except BaseException:
             p.kill()  # an interrupt: the file is not finished
             p.wait()
@@ -103,7 +102,12 @@ def encode_mp4(frames: Sequence[np.ndarray], path: Path, fps: float, named: Path
                                      "was written and any old file is untouched")
 
 
-def _feed(stdin: IO[bytes], frames: Sequence[np.ndarray]) -> None:
+def _chain(first: np.ndarray, rest: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
+    yield first
+    yield from rest
+
+
+def _feed(stdin: IO[bytes], frames: Iterable[np.ndarray]) -> None:
     """Write the frames to ffmpeg and close its input; a closed pipe is left to its exit status."""
     try:
         for f in frames:
@@ -132,9 +136,23 @@ def _settled(path: Path, named: Path) -> None:
         raise OutputError(named, "the video encoder wrote an empty file; nothing was written")
 
 
-def write_run(m: mujoco.MjModel, qpos: Sequence[np.ndarray], out: Path, fps: float) -> Path:
-    """A run's configurations (at ``fps``) as ``out``: an MP4 at 640 x 360 and every frame, a GIF
-    (for a README) at 320 x 180 and every second frame."""
-    if out.suffix.lower() == ".gif":
-        return write_video(render_frames(m, qpos[::2], (320, 180)), out, fps / 2)
-    return write_video(render_frames(m, qpos), out, fps)
+def write_run(m: mujoco.MjModel, footage: Footage, out: Path) -> Path:
+    """``footage`` of the twin ``m`` as ``out``: an MP4 at :data:`MP4_VIEW` and every frame, a GIF
+    at :data:`GIF_VIEW` and every :data:`GIF_STRIDE`-th frame."""
+    gif = out.suffix.lower() == ".gif"
+    view, stride = (GIF_VIEW, GIF_STRIDE) if gif else (MP4_VIEW, 1)
+    return write_video(film(m, footage, view, stride), out, footage.fps / stride)
+
+
+def film(m: mujoco.MjModel, footage: Footage, view: View, stride: int = 1) -> Iterator[np.ndarray]:
+    """The captioned frames of ``footage`` (every ``stride``-th), then the last one held."""
+    fps = footage.fps / stride
+    ghost = None if footage.ghost is None else footage.ghost[::stride]
+    raw = None
+    captions = footage.captions[::stride]
+    for raw, caption in zip(render_frames(m, footage.qpos[::stride], view, fps, ghost), captions, strict=True):
+        yield draw_caption(raw, caption)
+    if raw is not None and footage.ending is not None:
+        held = draw_caption(raw, footage.ending)
+        for _ in range(round(footage.hold_s * fps)):
+            yield held

@@ -26,6 +26,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("proving/humanoid/*.py", ("control", "sim")),  # the humanoid's rides on its twin
     ("proving/*.py", ("control",)),  # track on the model plant, rides, the steering experiment
     ("sim/video.py", ("sim", "video")),
+    ("sim/overlay.py", ("sim", "video")),
     ("sim/*.py", ("sim",)),
     ("sim/humanoid/*.py", ("sim",)),
     ("pipeline/views/rerun_*.py", ("build", "viz")),

@@ -149,9 +149,9 @@ def test_the_steering_maneuver_in_physics(libs):
 
 def test_video_and_stored_verdicts(libs, tmp_path):
     """`track --plant mujoco --video OUT.gif --save OUT.rrd` renders the run (one frame per two MPC
-    updates) and records it beside the plan in Rerun; `validate --closed-loop --plant mujoco`
-    stores the verdict in the file (checksum still valid); --video without the twin, or of an
-    unknown format, is refused before any run."""
+    updates, then the verdict, one frame held 3 s) and records it beside the plan in Rerun;
+    `validate --closed-loop --plant mujoco` stores the verdict in the file (checksum still valid);
+    --video without the twin, or of an unknown format, is refused before any run."""
     from PIL import Image
     from skatelib.pipeline.build.preflight import is_rerun_recording
 
@@ -163,7 +163,7 @@ def test_video_and_stored_verdicts(libs, tmp_path):
     assert is_rerun_recording(rrd) and rrd.stat().st_size > 10_000
     lib = MotionLibrary.open(libs["one"])
     ref_duration = float(lib[lib.keys()[0]].t[-1]) + 0.4 + 1.5
-    assert Image.open(gif).n_frames == pytest.approx(ref_duration * 30 / 2, abs=2)
+    assert Image.open(gif).n_frames == pytest.approx(ref_duration * 30 / 2 + 1, abs=2)  # + the verdict, held 3 s
     for args, message in ((["--video", str(tmp_path / "a.gif")], "--plant mujoco"),
                           (["--plant", "mujoco", "--video", str(tmp_path / "a.avi")], ".mp4 or .gif")):
         bad = subprocess.run([*CLI, "track", str(libs["one"]), *args], capture_output=True, text=True, env=env,

@@ -12,7 +12,9 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
+import skatelib.sim  # noqa: F401  (before MuJoCo: with no display it renders through EGL)
 
 from tests.helpers import CLI
 
@@ -91,3 +93,46 @@ def test_track_says_the_video_failed_and_exits_2(tmp_path):
     assert str(out) in r.stderr and "video encoder" in r.stderr and "Traceback" not in r.stderr
     assert "wrote" not in r.stdout and not out.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ffmpeg"]
+
+
+def _footage(frames: int):
+    """A few frames of the tiny library's twin rolling forward, the ghost 0.2 m ahead, a caption
+    each and a verdict."""
+    from skatelib.runtime import MotionLibrary
+    from skatelib.sim.figures import TwinFigures
+    from skatelib.sim.overlay import Caption
+    from skatelib.sim.plant import TwinPlant
+    from skatelib.sim.video import Footage
+
+    m = TwinPlant(TwinFigures.from_library(MotionLibrary.open(REFERENCE))).m
+    qpos = np.tile(np.array(m.key("stance").qpos), (frames, 1))
+    for joint in ("trunk_free", "deck_free"):
+        qpos[:, m.joint(joint).qposadr[0]] += 0.02 * np.arange(frames)
+    ghost = qpos.copy()
+    for joint in ("trunk_free", "deck_free"):
+        ghost[:, m.joint(joint).qposadr[0]] += 0.2
+    captions = tuple(Caption((f"t = {k / 30:.2f} s",)) for k in range(frames))
+    return m, Footage(qpos, 30.0, captions, ghost, Caption(("end",), "PASS: as planned", True), hold_s=1.0)
+
+
+@pytest.mark.parametrize(("name", "size", "frames"), [("run.mp4", (1280, 720), 4 + 30), ("run.gif", (640, 360), 2 + 1)])
+def test_a_run_is_filmed_at_its_size(tmp_path, name, size, frames):
+    """A run of 4 frames read back: the MP4 (imageio-ffmpeg) 1280 x 720 with every frame and the
+    verdict held 1 s at 30 fps; the GIF (pillow) 640 x 360 with every second frame and the verdict
+    as one frame shown 1 s."""
+    pytest.importorskip("mujoco")
+    from PIL import Image
+    from skatelib.sim.video import write_run
+
+    m, footage = _footage(4)
+    out = write_run(m, footage, tmp_path / name)
+    if name.endswith(".gif"):
+        gif = Image.open(out)
+        assert gif.size == size and gif.n_frames == frames
+        gif.seek(frames - 1)
+        assert gif.info["duration"] == pytest.approx(1000, abs=70)
+        return
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(out))
+    assert tuple(next(reader)["size"]) == size and sum(1 for _ in reader) == frames

@@ -21,10 +21,15 @@ def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: 
     from skatelib.proving.twin.track import check_twin, ride_twin
     from skatelib.proving.twin.verdict import twin_result
 
+    keep, video = outputs
     lib = check_twin(path, perturb)
     plan = plan_ride(lib, stages)
-    run, _ = ride_twin(lib, plan.entry, perturb, (mpc, settings), outputs)
+    run, plant = ride_twin(lib, plan.entry, perturb, (mpc, settings), keep=keep or video is not None)
     target_velocity_mps = stages[-1][1]
-    kept = run.record.as_entry(plan.key, target_velocity_mps) if outputs[0] and len(run.record.forces) > 1 else None
+    kept = run.record.as_entry(plan.key, target_velocity_mps) if keep and len(run.record.forces) > 1 else None
     verdict = twin_result(plan.key, target_velocity_mps, run)
+    if video is not None:
+        from skatelib.proving.twin.footage import film_run
+
+        film_run(lib, plan.entry, (run, plant.m), verdict, (perturb, settings.transfer_s), video)
     return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), verdict, kept, plan.entry)

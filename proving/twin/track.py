@@ -45,39 +45,41 @@ class TwinJob:
 
         lib = MotionLibrary.open(self.path)
         label = float(lib[self.key].attrs[schema.A_TARGET_VELOCITY])
-        run, written = ride_twin(lib, self.key, self.perturb, (self.mpc, self.settings),
-                                 (self.keep_run, None if self.video is None else Path(self.video)))
+        run, plant = ride_twin(lib, self.key, self.perturb, (self.mpc, self.settings),
+                               keep=self.keep_run or self.video is not None)
         entry = run.record.as_entry(self.key, label) if self.keep_run and len(run.record.forces) > 1 else None
-        return twin_result(self.key, label, run), written, entry
+        result = twin_result(self.key, label, run)
+        written = None
+        if self.video is not None:
+            from skatelib.proving.twin.footage import film_run
+
+            written = film_run(lib, lib[self.key], (run, plant.m), result, (self.perturb, self.settings.transfer_s),
+                               Path(self.video))
+        return result, written, entry
 
 
 def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: tuple[MpcConfig, TrackSettings],
-              outputs: tuple[bool, Path | None] = (False, None)) -> tuple[TwinRun, str | None]:
+              keep: bool = False) -> tuple[TwinRun, TwinPlant]:
     """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
-    with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread.
-    ``outputs``: whether to keep the run's record, and a video to render it to. Returns the run
-    (:class:`skatelib.proving.twin.loop.TwinRun`) and the video's path or None."""
+    with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread;
+    ``keep``: keep the run's configurations and record (for a recording or a video). Returns the
+    run (:class:`skatelib.proving.twin.loop.TwinRun`) and the plant it rode."""
     from skatelib.control.params import SkateParams
     from skatelib.proving.setup import ClosedLoop
     from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
     from skatelib.proving.twin.sensors import Sensors
     from threadpoolctl import threadpool_limits
 
-    keep, video = outputs
     mpc, settings = controller
     nominal = SkateParams.from_library(lib)
     plant, errors = _plant(lib, perturb, nominal.mu)
     loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
                     TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
                                      sensor_errors=errors.sensors),
-                    keep=keep or video is not None)
+                    keep=keep)
     with threadpool_limits(limits=1, user_api="blas"):
         run = loop.ride()
-    if video is None:
-        return run, None
-    from skatelib.sim.video import write_run
-
-    return run, str(write_run(plant.m, run.qpos, video, fps=1.0 / loop.dt))
+    return run, plant
 
 
 @dataclass(frozen=True)
