@@ -26,10 +26,10 @@ def track_table(results: list[Any], perturb: str) -> int:
              f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f}", str(r.slips), f"{r.max_joint_torque_Nm:.1f}",
              f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}", verdict(r.passed)] for r in results]
     print_table(console, f"closed loop, plant: {perturb}",
-                ("entry", "label [m/s]", "p/m end [m/s]", "v +1 s [m/s]", "delivered [m/s]", "error [%]",
+                ("entry", "label [m/s]", "p/m end [m/s]", "v+1s [m/s]", "delivered [m/s]", "error [%]",
                  "roll max [rad]", "pos err [mm]", "att err [rad]", "min f_n [N]", "fric margin [N]", "slips [steps]",
                  "tau max [Nm]", "MPC med/max [ms]", "verdict"), rows,
-                "p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends; v +1 s: the board's "
+                "p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends; v+1s: the board's "
                 "speed 1 s later; delivered: the momentum speed 1 s later plus what rolling friction took meanwhile; "
                 "error: delivered against the label (a stop's, label 0: see delivered); roll max: the deck's; pos "
                 "err, att err: the trunk against the reference; min f_n: the smallest normal force of a stance foot; "
