@@ -19,6 +19,9 @@ CLOSED_LOOP = (("closed_loop", schema.A_CLOSED_LOOP, "the model plant"),
                ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN, "the twin"))
 
 
+MOVES = ("start-up", "speed-up", "slow-down", "stop")  # a quadruped's entries, in this order
+
+
 def entry_kind(lib: Any, e: Any) -> str:
     """A quadruped entry's move (start-up, speed-up, slow-down, stop); a humanoid's motion."""
     if lib.kind == "humanoid":
@@ -46,15 +49,23 @@ def summary_json(lib: Any) -> dict[str, Any]:
         if stored:
             verdicts[name] = {"passed": sum(stored.values()), "stored": len(stored),
                               "plant": lib.attrs.get(f"{name}_plant", "?"), "utc": lib.attrs.get(f"{name}_utc", "?")}
-    return {"robot": robot_name(lib), "entries": len(lib), "kinds": dict(Counter(entry_kind(lib, e) for e in lib)),
+    kinds = Counter(entry_kind(lib, e) for e in lib)
+    order = [k for k in MOVES if k in kinds] + sorted(k for k in kinds if k not in MOVES)
+    return {"robot": robot_name(lib), "entries": len(lib), "kinds": {k: kinds[k] for k in order},
             "solved": len(lib) - len(failed), "failed": failed,
             "target_speeds_mps": sorted({e.target_velocity_mps for e in lib}),
             "start_speeds_mps": sorted({e.from_velocity_mps for e in lib}),
             "strides": sorted({e.n_strides for e in lib}), "verdicts": verdicts}
 
 
+def speed(v: float) -> str:
+    """A speed [m/s] with 2 decimals, 3 where the third is not 0 (0.375)."""
+    text = f"{v:.3f}"
+    return text[:-1] if text.endswith("0") else text
+
+
 def _speeds(values: list[float]) -> str:
-    return ", ".join(f"{v:.2f}" for v in values)
+    return ", ".join(speed(v) for v in values)
 
 
 def summary_lines(lib: Any, path: Any) -> list[str]:
@@ -71,6 +82,8 @@ def summary_lines(lib: Any, path: Any) -> list[str]:
              + f"; strides: {', '.join(str(n) for n in s['strides'])}"]
     for name, _, where in CLOSED_LOOP:
         v = s["verdicts"].get(name)
+        if v is None and lib.kind != "quadruped":
+            continue  # validate --closed-loop rides a quadruped's entries
         lines.append(f"closed loop on {where}: {v['passed']} of {count(v['stored'], 'stored verdict')} pass "
                      f"(plant errors {v['plant']}, {v['utc']})" if v else
                      f"closed loop on {where}: no verdict stored (skatelib validate LIB --closed-loop"
@@ -96,8 +109,8 @@ def compact_table(lib: Any) -> None:
             body = json.loads(str(e.attrs.get(schema.A_WHOLEBODY, "{}")))
             figures = [f"{100 * body[k]:.2f}" if k in body else "-" for k in ("zmp_rms_m", "com_shift_max_m")]
         passed = ["-" if e.key not in v else "[green]pass[/]" if v[e.key] else "[red]FAIL[/]" for _, v in stored]
-        rows.append([escape(e.key), *([f"{e.from_velocity_mps:.2f}"] if quadruped else []),
-                     f"{e.target_velocity_mps:.2f}", str(e.n_strides), "yes" if e.success else "[red]no[/]",
+        rows.append([escape(e.key), *([speed(e.from_velocity_mps)] if quadruped else []),
+                     speed(e.target_velocity_mps), str(e.n_strides), "yes" if e.success else "[red]no[/]",
                      *figures, *passed])
     legend = ("momentum: the speed robot and board ride at together when the entry ends; off label: it against "
               "the label (a stop's: see momentum)" if quadruped else
