@@ -63,15 +63,26 @@ def _widths(natural: Sequence[int], narrowest: Sequence[int], width: int) -> lis
     return out
 
 
-def _parts(narrowest: Sequence[int], width: int) -> list[list[int]]:
+def _packed(narrowest: Sequence[int], width: int) -> list[list[int]]:
     """The columns in order, in parts that each start with column 0 and fit ``width`` at their
-    narrowest (a column too wide alone gets a part of its own)."""
+    narrowest, each part filled before the next (a column too wide alone gets a part of its own)."""
     parts: list[list[int]] = [[0]]
     for i in range(1, len(narrowest)):
         if len(parts[-1]) > 1 and table_width([narrowest[j] for j in [*parts[-1], i]]) > width:
             parts.append([0])
         parts[-1].append(i)
     return parts
+
+
+def _parts(narrowest: Sequence[int], width: int) -> list[list[int]]:
+    """As few parts as :func:`_packed` makes, as even as they go: each packed to the smallest width
+    that still needs no more parts (no last part holding one column under a wrapped title)."""
+    n = len(_packed(narrowest, width))
+    low, high = 0, width  # the smallest width in (low, high] that packs into n parts
+    while high - low > 1:
+        mid = (low + high) // 2
+        low, high = (low, mid) if len(_packed(narrowest, mid)) <= n else (mid, high)
+    return _packed(narrowest, high)
 
 
 def fitted_tables(title: str, columns: Sequence[str | Col], rows: Sequence[Sequence[str]],
