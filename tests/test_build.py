@@ -64,13 +64,17 @@ def test_info_and_validate_commands(built):
     out, _ = built
     env = {**os.environ, "COLUMNS": "200"}
     info = subprocess.run([*CLI, "info", str(out)], capture_output=True, text=True, env=env, check=True).stdout
-    assert "v0.30_s1" in info and "board_roll_stiffness_Nm_per_rad" in info
-    # the figures a user checks, from the stored physics: momentum speed and how far off the label
+    wide = subprocess.run([*CLI, "info", str(out), "--wide"], capture_output=True, text=True, env=env,
+                          check=True).stdout
+    assert "v0.30_s1" in info and "board_roll_stiffness_Nm_per_rad" in wide  # the model: --wide's
+    # the figures a user checks, from the stored physics: momentum speed and how far off the label [%]
     from skatelib.runtime import MotionLibrary
 
     e = MotionLibrary.open(out)["v0.30_s1"]
     momentum = json.loads(e.attrs["physics_json"])["momentum_speed_mps"]
-    assert "2 entries" in info and f"{momentum:.3f}" in info and f"{(momentum - 0.3) / 0.3:+.2%}" in info
+    for shown in (info, wide):
+        row = next(line for line in shown.splitlines() if "v0.30_s1" in line)
+        assert "2 entries" in shown and f"{momentum:.3f}" in row and f"{100 * (momentum - 0.3) / 0.3:+.2f}" in row
     val = subprocess.run([*CLI, "validate", str(out)], capture_output=True, text=True, env=env)
     assert val.returncode == 0, val.stdout
     assert "all entries valid" in val.stdout
@@ -153,7 +157,8 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     assert r.returncode == 1, r.stdout + r.stderr
     assert "failed" in r.stdout
     row = next(line for line in r.stdout.splitlines() if "v0.30_s1" in line and "Maximum" in line)
-    assert "%" not in row  # a failed row shows its status, not speeds or an off-label figure
+    cells = [c.strip() for c in row.split("│")[1:-1]]
+    assert cells[-6:] == ["-"] * 6  # a failed row shows its status, not speeds or an off-label figure
     e = MotionLibrary.open(out)["v0.30_s1"]
     assert not e.success and e.attrs["status"] == "Maximum_Iterations_Exceeded"
     assert e.attrs["attempts"] == 3

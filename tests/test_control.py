@@ -297,12 +297,15 @@ def test_validate_closed_loop_stores_each_verdict(lib, tmp_path):
     assert after.attrs["git_commit"] == lib.attrs["git_commit"]
     # info shows the stored verdicts, as a table and in --json
     env = {**os.environ, "COLUMNS": "200"}
-    shown = subprocess.run([*CLI, "info", str(path)], capture_output=True, text=True, env=env, timeout=120)
+    shown = subprocess.run([*CLI, "info", str(path), "--wide"], capture_output=True, text=True, env=env, timeout=120)
     assert "closed loop on the model plant, plant errors none" in shown.stdout and "pass" in shown.stdout
+    summary = subprocess.run([*CLI, "info", str(path)], capture_output=True, text=True, env=env, timeout=120)
+    assert "closed loop on the model plant: 1 of 1 stored verdict pass (plant errors none" in summary.stdout
     doc = json.loads(subprocess.run([*CLI, "info", str(path), "--json"], capture_output=True, text=True, env=env,
                                     timeout=120).stdout)
     assert doc["closed_loop_plant"] == "none" and doc["entries"][0]["closed_loop"]["passed"] is True
-    plain = subprocess.run([*CLI, "info", str(lib.path)], capture_output=True, text=True, env=env, timeout=120)
+    plain = subprocess.run([*CLI, "info", str(lib.path), "--wide"], capture_output=True, text=True, env=env,
+                           timeout=120)
     assert "closed loop on" not in plain.stdout  # negative control: nothing stored, nothing shown
 
 

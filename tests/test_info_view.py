@@ -22,16 +22,21 @@ class _Library(list):
     attrs: ClassVar[dict[str, str]] = {"closed_loop_plant": "none"}
 
 
+def _row(out: str) -> list[str]:
+    line = next(x for x in out.splitlines() if "v0.30_s1" in x)
+    return [c.strip() for c in line.split("│")[1:-1]]
+
+
 @pytest.mark.parametrize("name", [schema.A_TARGET_VELOCITY, "label_mps"])
 def test_a_stored_verdict_shows_its_target_under_either_name(name):
     """A verdict with its target stored as ``name`` shows the target (0.30) and the delivered speed's
-    error against it (-1.0 %); negative control: without a target the error is taken against 0 (a
-    stop's figure in m/s), so the table would show no percentage."""
+    error against it (-1.0, in the "[%]" column); negative control: without a target the label is
+    taken as 0 (a stop's), whose error has no percentage ("-"; the speed left is the delivered one)."""
     verdict = {name: 0.3, "delivered_mps": 0.297, "passed": True, "reasons": ""}
     with console.capture() as cap:
         info_view._closed_loop_summary(_Library([_Entry(verdict)]))
     out = cap.get()
-    assert "0.30" in out and "-1.0%" in out, out
+    assert "error [%]" in out and _row(out)[1:4] == ["0.30", "0.297", "-1.0"], out
     with console.capture() as cap:
         info_view._closed_loop_summary(_Library([_Entry({"delivered_mps": 0.297, "passed": True})]))
-    assert "%" not in cap.get() and "+0.297 m/s" in cap.get()
+    assert _row(cap.get())[1:4] == ["-", "0.297", "-"], cap.get()

@@ -19,10 +19,9 @@ from skatelib.pipeline.views.console import (
     jsonable,
     left_out,
     mesh_note,
-    track_table,
-    twin_table,
     viewer_hint,
 )
+from skatelib.pipeline.views.verdict_tables import track_table, twin_table
 
 LibArg = Annotated[Path, typer.Argument(help="Motion library file (.h5).")]
 
@@ -52,15 +51,20 @@ class QpSolver(enum.StrEnum):
 
 def info(
     library: LibArg,
-    as_json: Annotated[bool, typer.Option("--json", help="Print it as one JSON document instead.")] = False,
+    wide: Annotated[bool, typer.Option("--wide", help="Full tables: provenance, the model's parameters, every "
+                                                     "entry's figures, the stored verdicts' figures.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print all of it as one JSON document instead.")] = False,
 ) -> None:
-    """Summarize a motion library: provenance, model and entries."""
-    from skatelib.pipeline.views.info_view import library_json, library_summary
+    """Summarize a motion library: what it holds and one row per entry (fits 100 columns)."""
+    from skatelib.pipeline.views.info_summary import library_summary
+    from skatelib.pipeline.views.info_view import library_json, library_wide
     from skatelib.runtime import MotionLibrary
 
     lib = MotionLibrary.open(library)  # verifies the checksum first
     if as_json:
         print(json.dumps(library_json(lib, library), indent=1, default=jsonable))
+    elif wide:
+        library_wide(lib, library)
     else:
         library_summary(lib, library)
 

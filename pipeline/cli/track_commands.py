@@ -26,11 +26,10 @@ from skatelib.pipeline.views.console import (
     count,
     err_console,
     mesh_note,
-    steer_table,
-    track_table,
-    twin_table,
+    run_with_progress,
     viewer_hint,
 )
+from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twin_table
 
 STATE_HELP = ("With --plant mujoco: what the controller is fed: true (the twin's state) or estimate (the robot's "
               "estimator on the twin's IMU and joint encoders; the verdict adds its error).")
@@ -149,7 +148,7 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
     if video is not None and not on_twin:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     (plant_error, perturb), (mpc, settings) = errors, controller
-    from skatelib.pipeline.views.console import ride_table
+    from skatelib.pipeline.views.verdict_tables import ride_table
     from skatelib.proving.ride import parse_ride, ride
     from skatelib.proving.track import JobSpec, _quadruped
 

@@ -93,8 +93,8 @@ def summary(written: Written) -> None:
     outcomes = cast("list[EntryOutcome]", list(written.outcomes))
     t = entry_table("entries (time: the entry's solves, every attempt; c = from the cache; momentum: the speed "
                     "robot and board ride at together)",
-                    ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]", "off label",
-                     "Coulomb margin [N]", "torque [N m]", "defect"))
+                    ("entry", "status", "iter", "tries", "time [s]", "board end [m/s]", "momentum [m/s]",
+                     "off label [%]", "Coulomb margin [N]", "torque [N m]", "defect [SI]"))
     for o in outcomes:
         r, ph = o.result, o.physics
         status = r.status.replace("Solve_Succeeded", "ok")

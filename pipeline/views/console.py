@@ -124,110 +124,11 @@ def frontier_table(points: list[Any]) -> None:
 
 
 def label_error(label: float, speed: float | None, digits: int = 1) -> str:
-    """How far ``speed`` ends from its ``label``: in % of the label, or for a stop (label 0) the speed
-    left [m/s]; "-" when there is no speed."""
-    if speed is None:
+    """How far ``speed`` ends from its ``label`` in % of the label (a "[%]" column); "-" when there
+    is no speed or the label is 0 (a stop: the speed it leaves is the speed column's)."""
+    if speed is None or not label:
         return "-"
-    return f"{(speed - label) / label:+.{digits}%}" if label else f"{speed:+.3f} m/s"
-
-
-def track_table(results: list[Any], perturb: str) -> int:
-    """Print the closed-loop verdicts; returns how many failed."""
-    t = Table(title=escape(f"closed loop, plant: {perturb}"))
-    for col in ("entry", "label", "p/m end", "v +1 s", "delivered", "error", "roll max", "pos err", "att err",
-                "min f_n", "fric margin", "slips", "tau max", "MPC ms med/max", "verdict"):
-        t.add_column(escape(col), justify="right")
-    for r in results:
-        v = r.target_velocity_mps
-        t.add_row(r.key, f"{v:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.speed_after_1s_mps:.3f}",
-                  f"{r.delivered_mps:.3f}", label_error(v, r.delivered_mps), f"{r.max_deck_roll_rad:.3f}",
-                  f"{1e3 * r.max_position_error_m:.1f} mm", f"{r.max_attitude_error_rad:.3f}",
-                  f"{r.min_normal_N:.1f}", f"{r.min_friction_margin_N:.2f} N", str(r.slips),
-                  f"{r.max_joint_torque_Nm:.1f}", f"{r.mpc_median_ms:.1f}/{r.mpc_max_ms:.1f}",
-                  "[green]pass[/]" if r.passed else "[red]FAIL[/]")
-    console.print(t)
-    console.print(escape("p/m end: momentum speed (m_R v_R + m_B v_B) / (m_R + m_B) when the entry ends [m/s]; "
-                         "delivered: the momentum speed 1 s later plus what rolling friction took meanwhile; "
-                         "fric margin: the smallest mu f_n - |f_t| of a commanded foot force in the plant's cone "
-                         "(< 0: clipped, a slip); tau max: the largest stance-joint torque at the "
-                         "inverse-kinematics angles [N m]"))
-    return print_failures(results, lambda r: str(r.reasons))
-
-
-def ride_table(result: Any, perturb: str) -> bool:
-    """Print a ride's stages and its verdict; returns whether it passed."""
-    t = Table(title=escape(f"ride in closed loop, plant: {perturb}"))
-    for col in ("stage", "entries", "ends at [s]", "momentum speed [m/s]", "verdict"):
-        t.add_column(escape(col), justify="right")
-    for s in result.stages:
-        t.add_row(f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}", escape(", ".join(s.keys)),
-                  f"{s.t_end_s:.2f}", f"{s.momentum_at_end_mps:.3f}", "[green]pass[/]" if s.passed else "[red]FAIL[/]")
-    console.print(t)
-    r = result.run
-    late = [f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}" for s in result.stages if not s.passed]
-    verdict = "pass" if result.passed else "FAIL: " + "; ".join(
-        ([f"stage {', '.join(late)} off its target"] if late else []) + ([r.reasons] if r.reasons else []))
-    console.print(escape(f"{r.key}: {verdict} (each stage within 5 % of its target at its end, a stop below "
-                         f"0.05 m/s); after the last: delivered {r.delivered_mps:.3f} m/s, deck roll max "
-                         f"{r.max_deck_roll_rad:.3f} rad"))
-    return bool(result.passed)
-
-
-def _estimator_table(results: list[Any]) -> None:
-    """The estimator's error against the twin's truth, for the runs fed the estimate."""
-    estimated = [r for r in results if r.est_trunk_v_rms == r.est_trunk_v_rms]  # not NaN: fed the estimate
-    if not estimated:
-        return
-    e = Table(title="the estimator against the twin's truth (RMS / worst)")
-    for col in ("entry", "trunk v [m/s]", "board speed [m/s]", "board roll [rad]"):
-        e.add_column(escape(col), justify="right")
-    for r in estimated:
-        e.add_row(r.key, f"{r.est_trunk_v_rms:.4f} / {r.est_trunk_v_worst:.3f}",
-                  f"{r.est_board_speed_rms:.4f} / {r.est_board_speed_worst:.3f}",
-                  f"{r.est_board_roll_rms:.4f} / {r.est_board_roll_worst:.3f}")
-    console.print(e)
-
-
-def twin_table(results: list[Any], perturb: str) -> int:
-    """Print the verdicts of the runs on the twin; returns how many failed."""
-    t = Table(title=escape(f"full physics (MuJoCo twin, MPC 30 Hz + whole-body 510 Hz), errors: {perturb}"))
-    for col in ("entry", "label", "p/m end", "delivered", "error", "slip max", "floor", "wheel lift",
-                "heading err", "lateral", "crab max", "roll max", "tau max", "sat", "WBC/MPC ms", "verdict"):
-        t.add_column(escape(col), justify="right")
-    for r in results:
-        v = r.target_velocity_mps
-        t.add_row(r.key, f"{v:.2f}", f"{r.momentum_at_end_mps:.3f}", f"{r.delivered_mps:.3f}",
-                  label_error(v, r.delivered_mps), f"{100 * r.max_slip_m:.2f} cm", str(r.floor_touch_ticks),
-                  str(r.wheel_lift_ticks), f"{r.heading_error_rad:+.3f}", f"{100 * r.lateral_drift_m:+.1f} cm",
-                  f"{r.max_crab_rad:.3f}", f"{r.max_deck_roll_rad:.3f}", f"{r.max_torque_Nm:.1f}",
-                  f"{100 * r.saturated_share:.1f}%", f"{r.wbc_median_ms:.2f}/{r.mpc_median_ms:.1f}",
-                  "[green]pass[/]" if r.passed else "[red]FAIL[/]")
-    console.print(t)
-    console.print(escape("p/m end, delivered: the momentum speed of robot and board when the entry ends, and 1 s "
-                         "later plus what the floor's force on the wheels took [m/s]; slip max: the largest slip "
-                         "of a stance at its contact point; floor, wheel lift: ticks (2 ms) of unplanned floor "
-                         "contact and with a wheel off the floor; heading err, lateral: the board against the "
-                         "plan when the entry ends; crab max: the deck's velocity from its heading [rad]; sat: the "
-                         "share of ticks with a joint at its torque limit"))
-    _estimator_table(results)
-    return print_failures(results, lambda r: str(r.reasons))
-
-
-def steer_table(results: list[Any], perturb: str) -> int:
-    """Print the steering verdicts; returns how many failed."""
-    t = Table(title=escape(f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}"))
-    for col in ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
-                "unloaded", "slips", "MPC ms", "verdict"):
-        t.add_column(escape(col), justify="right")
-    for r in results:
-        t.add_row(f"{r.target_velocity_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
-                  f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
-                  f"{r.mpc_median_ms:.1f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
-    console.print(t)
-    failed = [r for r in results if not r.passed]
-    for r in failed:
-        console.print(escape(f"{r.target_velocity_mps:.2f} m/s: {r.reasons}"))
-    return len(failed)
+    return f"{100 * (speed - label) / label:+.{digits}f}"
 
 
 def jsonable(v: Any) -> Any:

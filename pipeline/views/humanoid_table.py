@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from rich.markup import escape
-from skatelib.pipeline.views.console import console, entry_table, print_failures
+from skatelib.pipeline.views.console import console, print_failures
+from skatelib.pipeline.views.fitted import Col, print_table
 
 
 def _cm(x: float) -> str:
@@ -14,20 +15,21 @@ def _cm(x: float) -> str:
 
 def humanoid_table(results: list[Any], perturb: str) -> int:
     """Print one row per entry (fall, ZMP, COM, slips, board speed, torque); returns how many failed."""
-    t = entry_table(escape(f"humanoid on the MuJoCo twin (stabilizer 500 Hz, servos 1 kHz), errors: {perturb}"),
-                    ("entry", "fell", "ZMP out (clock) [cm]", "ZMP err RMS/max [cm]", "COM err RMS/max [cm]",
-                     "slip [cm]", "yaw slip [rad]", "board at push end [m/s]", "tau/limit", "verdict"))
+    rows = []
     for r in results:
         v = r.verdict
-        board = "-" if v.board_mps is None else f"{v.board_mps:.3f} / {r.label_mps:.2f}"
-        out = f"{_cm(v.zmp_outside_m)} ({_cm(v.zmp_outside_clock_m)})"
-        t.add_row(r.key, escape(v.fell) or "no", out, f"{_cm(v.zmp_rms_m)} / {_cm(v.zmp_max_m)}",
-                  f"{_cm(v.com_rms_m)} / {_cm(v.com_max_m)}", _cm(v.slip_m), f"{v.yaw_slip_rad:.3f}", board,
-                  f"{v.torque_ratio:.2f}", "[green]pass[/]" if r.passed else "[red]FAIL[/]")
-    console.print(t)
-    console.print(escape("ZMP: the soles' contact forces' against the plan's; out: the most it left the support "
-                         "polygon (the planned places of the soles down: the plan's, and any landed early within 1 cm "
-                         "of its touchdown; in brackets: of the soles the plan's clock alone has down); slip, yaw "
-                         "slip: a support sole's motion over the floor from 50 ms after it landed; board: its speed "
-                         "when the push ends against the entry's label"))
+        board = "-" if v.board_mps is None else f"{v.board_mps:.3f}/{r.label_mps:.2f}"
+        rows.append([escape(r.key), escape(v.fell) or "no", f"{_cm(v.zmp_outside_m)} ({_cm(v.zmp_outside_clock_m)})",
+                     f"{_cm(v.zmp_rms_m)}/{_cm(v.zmp_max_m)}", f"{_cm(v.com_rms_m)}/{_cm(v.com_max_m)}",
+                     _cm(v.slip_m), f"{v.yaw_slip_rad:.3f}", board, f"{100 * v.torque_ratio:.0f}",
+                     "[green]pass[/]" if r.passed else "[red]FAIL[/]"])
+    print_table(console, f"humanoid on the MuJoCo twin (stabilizer 500 Hz, servos 1 kHz), errors: {perturb}",
+                ("entry", Col("fell", text=True), "ZMP out (clock) [cm]", "ZMP err RMS/max [cm]",
+                 "COM err RMS/max [cm]", "slip [cm]", "yaw slip [rad]", "board/label [m/s]",
+                 "tau/limit [%]", "verdict"), rows,
+                "ZMP: the soles' contact forces' against the plan's; out: the most it left the support polygon (the "
+                "planned places of the soles down: the plan's, and any landed early within 1 cm of its touchdown; "
+                "in brackets: of the soles the plan's clock alone has down); slip, yaw slip: a support sole's motion "
+                "over the floor from 50 ms after it landed; board/label: the board's speed when the push ends and the "
+                "entry's label; tau/limit: the largest joint torque in % of the joint's limit")
     return print_failures(results, lambda r: "; ".join(r.failures))

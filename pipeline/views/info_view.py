@@ -1,5 +1,6 @@
-"""``skatelib info``: a library's provenance, model and entries, with the figures stored beside
-them (closed-loop verdicts, a humanoid's whole body), as tables or one JSON document."""
+"""``skatelib info``: the compact summary by default (:mod:`.info_summary`); ``--wide``: the
+library's provenance, model and entries with the figures stored beside them (closed-loop verdicts,
+a humanoid's whole body) in full tables; ``--json``: all of it as one JSON document."""
 
 from __future__ import annotations
 
@@ -8,16 +9,15 @@ from typing import Any
 
 from rich.markup import escape
 from skatelib.library import schema
-from skatelib.pipeline.views.console import console, count, entry_table, fmt, label_error, parameter_table
+from skatelib.pipeline.views.console import console, count, fmt, label_error
+from skatelib.pipeline.views.fitted import Col, print_table
+from skatelib.pipeline.views.info_summary import CLOSED_LOOP, summary_json
 from skatelib.pipeline.views.transitions_view import transitions_json, transitions_summary
 
 PROVENANCE = ("name", "format_version", "skatelib_version", "created_utc", "git_commit", "git_dirty",
               "casadi_version", "ipopt_version", "pinocchio_version")
-
-
-# The closed-loop verdicts `validate --closed-loop` stores: (name in `info`, entry attribute).
-CLOSED_LOOP = (("closed_loop", schema.A_CLOSED_LOOP), ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN))
-STORED_FIGURES = (*CLOSED_LOOP, ("wholebody", schema.A_WHOLEBODY))  # JSON attributes `info --json` opens
+# The JSON attributes `info --json` opens: the closed-loop verdicts and a humanoid's whole body.
+STORED_FIGURES = (*((name, attr) for name, attr, _ in CLOSED_LOOP), ("wholebody", schema.A_WHOLEBODY))
 
 
 def library_json(lib: Any, path: Any) -> dict[str, Any]:
@@ -31,35 +31,43 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
                 **{name: json.loads(str(e.attrs[attr])) for name, attr in STORED_FIGURES if attr in e.attrs}}
                for e in lib]
     provenance = {k: lib.attrs[k] for k in PROVENANCE if k in lib.attrs}
-    provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _ in CLOSED_LOOP for k in ("plant", "utc")
+    provenance |= {f"{name}_{k}": lib.attrs[f"{name}_{k}"] for name, _, _ in CLOSED_LOOP for k in ("plant", "utc")
                    if f"{name}_{k}" in lib.attrs}
     transitions = transitions_json(lib) if lib.kind == "quadruped" else {}
     return {"library": str(path), schema.A_KIND: lib.kind, **provenance, schema.A_CHECKSUM: lib.content_sha256,
-            "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
+            "summary": summary_json(lib), "model": dict(lib.model), "entries": entries,
+            **({"transitions": transitions} if transitions else {})}
 
 
-def library_summary(lib: Any, path: Any) -> None:
-    """``skatelib info``: provenance, the model's parameters and the entry table."""
+def library_wide(lib: Any, path: Any) -> None:
+    """``skatelib info --wide``: provenance, the model's parameters, every entry's figures, the
+    transitions and stops, a humanoid's whole body, the stored closed-loop verdicts."""
     a = lib.attrs
     console.print(escape(f"{path}: {a.get('name', '?')} ({lib.kind}), format {a[schema.A_FORMAT_VERSION]}, "
                          f"skatelib {a[schema.A_SKATELIB_VERSION]}, created {a[schema.A_CREATED]}"))
     console.print(escape(f"git {a[schema.A_GIT_COMMIT][:12]}{' (dirty)' if a[schema.A_GIT_DIRTY] else ''}; casadi "
                          f"{a[schema.A_CASADI]}, ipopt {a[schema.A_IPOPT]}, pinocchio {a[schema.A_PINOCCHIO]}"))
     console.print(escape(f"content sha256 {lib.content_sha256}"))
-    parameter_table("model", [(str(k), v) for k, v in sorted(lib.model.items()) if not str(k).endswith("_source")],
-                    number="{:.6g}")
-    t = entry_table(count(len(lib), "entry"), ("entry", "v [m/s]", "strides", "success", "status", "iter", "knots",
-                                                "duration [s]", "solve [s]", "momentum [m/s]", "off label",
-                                                "Coulomb margin [N]", "defect"))
+    print_table(console, "model (each parameter's unit ends its name: _kg, _m, _rad, _N, _s...)",
+                ("parameter", "value"),
+                [[escape(str(k)), f"{v:.6g}" if isinstance(v, float) else escape(str(v))]
+                 for k, v in sorted(lib.model.items()) if not str(k).endswith("_source")])
+    rows = []
     for e in lib:
         ph = json.loads(str(e.attrs.get(schema.A_PHYSICS, "{}")))
-        off = label_error(e.target_velocity_mps, ph.get("momentum_speed_mps"), 2)
-        t.add_row(e.key, f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
-                  escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
-                  f"{e.duration_s:.2f}",
-                  fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"), fmt(ph, "momentum_speed_mps", "{:.3f}"),
-                  off, fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}"))
-    console.print(t)
+        rows.append([escape(e.key), f"{e.target_velocity_mps:.2f}", str(e.n_strides), str(e.success),
+                     escape(str(e.attrs[schema.A_STATUS])), str(e.attrs[schema.A_ITERATIONS]), str(len(e.t)),
+                     f"{e.duration_s:.2f}", fmt(e.attrs, schema.A_SOLVE_TIME, "{:.2f}"),
+                     fmt(ph, "momentum_speed_mps", "{:.3f}"),
+                     label_error(e.target_velocity_mps, ph.get("momentum_speed_mps"), 2),
+                     fmt(ph, "min_friction_margin_N", "{:.3f}"), fmt(ph, "max_defect", "{:.1e}")])
+    print_table(console, count(len(lib), "entry"),
+                ("entry", "v [m/s]", "strides", "success", Col("status", text=True), "iter", "knots", "duration [s]",
+                 "solve [s]", "momentum [m/s]", "off label [%]", "Coulomb margin [N]", "defect [SI]"), rows,
+                "momentum: the speed robot and board ride at together when the entry ends; off label: it against the "
+                "label (a stop's: see momentum); Coulomb margin: the smallest mu f_n - |f_t| over the feet in contact; "
+                "defect: the largest mismatch between a knot and a fine re-integration from the one before, in the "
+                "state's SI units (m, rad, m/s, rad/s)")
     if lib.kind == "quadruped":
         transitions_summary(lib)
     _wholebody_summary(lib)
@@ -72,30 +80,27 @@ def _wholebody_summary(lib: Any) -> None:
     rows = [(e.key, json.loads(str(e.attrs[schema.A_WHOLEBODY]))) for e in lib if schema.A_WHOLEBODY in e.attrs]
     if not rows:
         return
-    t = entry_table("whole body (multibody ZMP against the planned ZMP)", (
-        "entry", "ZMP RMS unfiltered [cm]", "ZMP RMS [cm]", "ZMP max [cm]", "COM moved [cm]", "IK COM [m]",
-        "IK soles [m]", "IK + filter [s]"))
-    for key, f in rows:
-        t.add_row(key, f"{f['zmp_rms_unfiltered_m'] * 100:.2f}", f"{f['zmp_rms_m'] * 100:.2f}",
+    print_table(console, "whole body (multibody ZMP against the planned ZMP)",
+                ("entry", "ZMP RMS unfiltered [cm]", "ZMP RMS [cm]", "ZMP max [cm]", "COM moved [cm]", "IK COM [m]",
+                 "IK soles [m]", "IK + filter [s]"),
+                [[escape(key), f"{f['zmp_rms_unfiltered_m'] * 100:.2f}", f"{f['zmp_rms_m'] * 100:.2f}",
                   f"{f['zmp_max_m'] * 100:.2f}", f"{f['com_shift_max_m'] * 100:.2f}", f"{f['com_error_max_m']:.1e}",
-                  f"{f['feet_error_max_m']:.1e}", f"{f['ik_and_filter_s']:.2f}")
-    console.print(t)
+                  f"{f['feet_error_max_m']:.1e}", f"{f['ik_and_filter_s']:.2f}"] for key, f in rows])
 
 
 def _closed_loop_summary(lib: Any) -> None:
     """The closed-loop verdicts stored by ``validate --closed-loop`` (model plant, twin), if any."""
-    for name, attr in CLOSED_LOOP:
+    for name, attr, _ in CLOSED_LOOP:
         stored = {e.key: json.loads(str(e.attrs[attr])) for e in lib if attr in e.attrs}
         if not stored:
             continue
         where = "the twin (MuJoCo, whole-body controller)" if name.endswith("twin") else "the model plant"
         plant, when = lib.attrs.get(f"{name}_plant", "?"), lib.attrs.get(f"{name}_utc", "?")
-        t = entry_table(f"closed loop on {where}, plant errors {plant} ({when})",
-                        ("entry", "label [m/s]", "delivered [m/s]", "speed error", "verdict", "why"))
+        rows = []
         for key, v in stored.items():
             target = schema.A_TARGET_VELOCITY if schema.A_TARGET_VELOCITY in v else "label_mps"  # (older files)
-            error = label_error(v.get(target, 0.0), v.get("delivered_mps"))
-            t.add_row(key, fmt(v, target, "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
-                      error, "pass" if v.get("passed") else "FAIL",
-                      escape(str(v.get("reasons") or "")))
-        console.print(t)
+            rows.append([escape(key), fmt(v, target, "{:.2f}"), fmt(v, "delivered_mps", "{:.3f}"),
+                         label_error(v.get(target, 0.0), v.get("delivered_mps")),
+                         "[green]pass[/]" if v.get("passed") else "[red]FAIL[/]", escape(str(v.get("reasons") or ""))])
+        print_table(console, f"closed loop on {where}, plant errors {plant} ({when})",
+                    ("entry", "label [m/s]", "delivered [m/s]", "error [%]", "verdict", Col("why", text=True)), rows)

@@ -9,7 +9,8 @@ import numpy as np
 from rich.markup import escape
 from skatelib.library import schema
 from skatelib.library.margins import momentum_speed
-from skatelib.pipeline.views.console import console, entry_table
+from skatelib.pipeline.views.console import console
+from skatelib.pipeline.views.fitted import print_table
 
 STOPPED_MPS = 0.05  # a stop counts as done below this momentum speed
 
@@ -47,23 +48,23 @@ def transitions_json(lib: Any) -> dict[str, Any]:
     return {"cells": cells, "fastest_speed_up": fastest, "stops": stops}
 
 
-def transitions_summary(lib: Any) -> None:
+def transitions_summary(lib: Any, stops: bool = True) -> None:
     """The transition table (rows: from, columns: to; strides of the stored entry, FAIL for a cell
-    stored as failed) and the stops' times and distances."""
+    stored as failed) and, with ``stops``, the stops' times and distances."""
     data = transitions_json(lib)
     if not data:
         return
     targets = sorted({c["to_mps"] for c in data["cells"]}, reverse=True)
-    t = entry_table(escape("transitions (strides of each entry; rows: from, columns: to [m/s])"),
-                    ("from \\ to", *(f"{v:.2f}" for v in targets)))
+    rows = []
     for v0 in sorted({c["from_mps"] for c in data["cells"]}):
         row = {c["to_mps"]: c for c in data["cells"] if c["from_mps"] == v0}
         cell = {v: str(c[schema.A_N_STRIDES]) if c[schema.A_SUCCESS] else "FAIL" for v, c in row.items()}
-        t.add_row(f"{v0:.2f}", *(cell.get(v, "-") for v in targets))
-    console.print(t)
-    s = entry_table(f"stops (until robot and board ride slower than {STOPPED_MPS} m/s together)",
-                    ("entry", "from [m/s]", "strides", "time [s]", "distance [m]"))
-    for key, f in data["stops"].items():
-        s.add_row(escape(key), f"{f[schema.A_FROM_VELOCITY]:.2f}", str(f[schema.A_N_STRIDES]),
-                  f"{f['stop_time_s']:.2f}", f"{f['stop_distance_m']:.2f}")
-    console.print(s)
+        rows.append([f"{v0:.2f}", *(cell.get(v, "-") for v in targets)])
+    print_table(console, "transitions (strides of each entry; rows: from, columns: to)",
+                ("from \\ to [m/s]", *(f"{v:.2f}" for v in targets)), rows)
+    if not stops or not data["stops"]:
+        return
+    print_table(console, f"stops (until robot and board ride slower than {STOPPED_MPS} m/s together)",
+                ("entry", "from [m/s]", "strides", "time [s]", "distance [m]"),
+                [[escape(key), f"{f[schema.A_FROM_VELOCITY]:.2f}", str(f[schema.A_N_STRIDES]),
+                  f"{f['stop_time_s']:.2f}", f"{f['stop_distance_m']:.2f}"] for key, f in data["stops"].items()])
