@@ -26,7 +26,6 @@ from skatelib.pipeline.views.console import (
     count,
     err_console,
     mesh_note,
-    run_with_progress,
     viewer_hint,
 )
 from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twin_table
