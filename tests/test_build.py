@@ -23,11 +23,11 @@ from tests.helpers import CLI, TINY
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    d = tmp_path_factory.mktemp("cache")
+def cache(tiny_build):
+    """The entry cache the session's tiny build filled, the cache of this module's builds."""
     old = os.environ.get("SKATELIB_CACHE_DIR")
-    os.environ["SKATELIB_CACHE_DIR"] = str(d)
-    yield d
+    os.environ["SKATELIB_CACHE_DIR"] = str(tiny_build.cache)
+    yield tiny_build.cache
     if old is None:
         os.environ.pop("SKATELIB_CACHE_DIR")
     else:
@@ -35,13 +35,9 @@ def cache(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def built(cache, tmp_path_factory):
-    out = tmp_path_factory.mktemp("lib") / "tiny.h5"
-    env = {**os.environ, "COLUMNS": "200"}
-    r = subprocess.run([*CLI, "build", str(TINY), "-o", str(out), "--no-progress", "--jobs", "2"],
-                       capture_output=True, text=True, env=env)
-    assert r.returncode == 0, r.stdout + r.stderr
-    return out, r.stdout
+def built(tiny_build):
+    """`skatelib build tests/configs/tiny.toml --jobs 2`: the library and what the command printed."""
+    return tiny_build.path, tiny_build.stdout
 
 
 def test_build_writes_a_complete_library(built):
