@@ -136,6 +136,7 @@ def test_interrupted_build_leaves_no_file(cache, tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     """An unreachable target is stored with success=false and its status; the command exits 1,
     or 0 with --allow-failures."""
@@ -172,6 +173,7 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     assert b"**FAILED**" in rrd.read_bytes()
 
 
+@pytest.mark.slow
 def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
     """The sweep on a dask LocalCluster (loopback) writes the same trajectories as loky."""
     distributed = pytest.importorskip("distributed")
@@ -211,6 +213,7 @@ def test_solve_command_writes_a_one_entry_library(cache, tmp_path):
     assert lib["v0.35_s1"].channel("board_vx")[-1] == pytest.approx(0.35, rel=0.02)
 
 
+@pytest.mark.slow
 def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
     """No C compiler on PATH ($CC pointing nowhere): the build says so on stderr, solves with the
     interpreted stage functions and writes the library."""
@@ -224,6 +227,7 @@ def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
     assert "no C compiler found" in r.stderr and MotionLibrary.open(tmp_path / "a.h5")["v0.30_s1"].success
 
 
+@pytest.mark.slow
 def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     """`build --frontier` (BuildOptions.frontier) searches each stride count's fastest passing label
     and stores it: the fastest is a probe that passed, the first failure one that did not, and they

@@ -19,6 +19,8 @@ from skatelib.library.writer import write_library
 
 from tests.helpers import CLI, TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 def _cli(args: list[str]) -> subprocess.CompletedProcess:
     return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=600,

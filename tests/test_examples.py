@@ -13,6 +13,8 @@ from skatelib.runtime import MotionLibrary
 
 from tests.helpers import TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 

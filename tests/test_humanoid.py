@@ -126,6 +126,7 @@ def test_library_round_trip_and_cli(hrp2_skate_build, tmp_path):
     assert v.returncode == 0 and "all entries valid" in v.stdout
 
 
+@pytest.mark.slow
 def test_a_motion_that_fails_before_its_whole_body_is_stored_as_failed(tmp_path):
     """A reach limit the 1.0 m/s push cannot keep (the COM within 0.82 m of the feet): its GPM step
     fails, so it has no whole body while the 0.5 m/s entry has one; the library is still written,

@@ -34,6 +34,8 @@ from skatelib.sim.plant import TwinPlant
 
 from tests.test_twin_loop import _solve
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 @pytest.fixture(scope="module")
 def lib_path(tiny_v04) -> Path:

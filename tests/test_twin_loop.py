@@ -29,6 +29,8 @@ from skatelib.sim.plant import TwinPlant
 
 from tests.helpers import CLI, TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 def _solve(tmp: Path, cache: Path, name: str, velocity: float, strides: int, extra: str = "") -> Path:
     cfg = tmp / f"{name}.toml"
