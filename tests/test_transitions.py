@@ -33,7 +33,7 @@ TINY_RIDE = Path(__file__).parent / "configs" / "tiny_ride.toml"
 @pytest.fixture(scope="module")
 def ride_path(tmp_path_factory):
     out = tmp_path_factory.mktemp("ride") / "ride.h5"
-    build_library(load_config(TINY_RIDE), out, BuildOptions(jobs=1, cache=False, progress=False))
+    build_library(load_config(TINY_RIDE), out, BuildOptions(jobs=2, cache=False, progress=False))
     return out
 
 
