@@ -13,12 +13,13 @@ OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
 CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library test lint bench clean help cpp figures reference check-library check-default docs
+.PHONY: all venv venv-build relink library test test-fast lint bench clean help cpp figures reference check-library check-default docs
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build], [control] and [sim] extras (the twin judges the transitions)"
 	@echo "make venv      install every extra into .venv (viewer, plots, controller, twin, videos, dask, dev tools)"
-	@echo "make test      run the test suite (installs every extra)"
+	@echo "make test      run the whole test suite (installs every extra)"
+	@echo "make test-fast the suite without the tests marked slow: the inner loop while editing"
 	@echo "make lint      ruff + mypy"
 	@echo "make bench     speed benchmarks (ratios against baselines in the same run)"
 	@echo "make docs      the API reference from the docstrings (pdoc) -> build/docs/index.html; a warning fails it"
@@ -68,6 +69,11 @@ library: venv-build
 
 test: venv
 	$(BIN)/python -m pytest
+
+# Everything but the tests marked slow (pyproject.toml names the marker; docs/benchmarks.md what
+# each part takes). make test runs them all.
+test-fast: venv
+	$(BIN)/python -m pytest -m "not slow"
 
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
 PACKAGES := pipeline library runtime control sim proving

@@ -1,9 +1,10 @@
-"""What several test modules share: the tiny config that really solves, and the command line as a
-user runs it (a subprocess of this interpreter)."""
+"""What several test modules share: the tiny config that really solves, the command line as a user
+runs it (a subprocess of this interpreter), and a copy of a shared library to write into."""
 
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -12,15 +13,14 @@ TINY = Path(__file__).parent / "configs" / "tiny.toml"  # 2 entries, 1 stride, i
 CLI = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
 
 
-def run_cli(args: list[str], timeout: float = 300, **kw: object) -> subprocess.CompletedProcess:
+def run_cli(args: list[str], timeout: float = 300, env: dict[str, str] | None = None,
+            **kw: object) -> subprocess.CompletedProcess:
     """The command line in a subprocess, output captured, tables 200 columns wide."""
     return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout,
-                          env={**os.environ, "COLUMNS": "200"}, **kw)  # type: ignore[call-overload]
+                          env=env or {**os.environ, "COLUMNS": "200"}, **kw)  # type: ignore[call-overload]
 
 
-def one_entry_library(folder: Path) -> Path:
-    """``skatelib solve`` of the tiny config at 0.3 m/s and one stride: a library of one solved entry."""
-    out = folder / "lib.h5"
-    r = run_cli(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(out)])
-    assert r.returncode == 0, r.stdout + r.stderr
-    return out
+def copy_of(path: Path, folder: Path, name: str = "lib.h5") -> Path:
+    """A copy of a shared library, for a test that writes into it or beside it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    return Path(shutil.copy(path, folder / name))

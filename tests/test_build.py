@@ -23,11 +23,11 @@ from tests.helpers import CLI, TINY
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    d = tmp_path_factory.mktemp("cache")
+def cache(tiny_build):
+    """The entry cache the session's tiny build filled, the cache of this module's builds."""
     old = os.environ.get("SKATELIB_CACHE_DIR")
-    os.environ["SKATELIB_CACHE_DIR"] = str(d)
-    yield d
+    os.environ["SKATELIB_CACHE_DIR"] = str(tiny_build.cache)
+    yield tiny_build.cache
     if old is None:
         os.environ.pop("SKATELIB_CACHE_DIR")
     else:
@@ -35,13 +35,9 @@ def cache(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def built(cache, tmp_path_factory):
-    out = tmp_path_factory.mktemp("lib") / "tiny.h5"
-    env = {**os.environ, "COLUMNS": "200"}
-    r = subprocess.run([*CLI, "build", str(TINY), "-o", str(out), "--no-progress", "--jobs", "2"],
-                       capture_output=True, text=True, env=env)
-    assert r.returncode == 0, r.stdout + r.stderr
-    return out, r.stdout
+def built(tiny_build):
+    """`skatelib build tests/configs/tiny.toml --jobs 2`: the library and what the command printed."""
+    return tiny_build.path, tiny_build.stdout
 
 
 def test_build_writes_a_complete_library(built):
@@ -144,6 +140,7 @@ def test_interrupted_build_leaves_no_file(cache, tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     """An unreachable target is stored with success=false and its status; the command exits 1,
     or 0 with --allow-failures."""
@@ -181,6 +178,7 @@ def test_failed_entry_is_recorded_and_exit_code_is_nonzero(cache, tmp_path):
     assert b"**FAILED**" in rrd.read_bytes()
 
 
+@pytest.mark.slow
 def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
     """The sweep on a dask LocalCluster (loopback) writes the same trajectories as loky."""
     distributed = pytest.importorskip("distributed")
@@ -220,6 +218,7 @@ def test_solve_command_writes_a_one_entry_library(cache, tmp_path):
     assert lib["v0.35_s1"].channel("board_vx")[-1] == pytest.approx(0.35, rel=0.02)
 
 
+@pytest.mark.slow
 def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
     """No C compiler on PATH ($CC pointing nowhere): the build says so on stderr, solves with the
     interpreted stage functions and writes the library."""
@@ -233,6 +232,7 @@ def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
     assert "no C compiler found" in r.stderr and MotionLibrary.open(tmp_path / "a.h5")["v0.30_s1"].success
 
 
+@pytest.mark.slow
 def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     """`build --frontier` (BuildOptions.frontier) searches each stride count's fastest passing label
     and stores it: the fastest is a probe that passed, the first failure one that did not, and they

@@ -58,6 +58,7 @@ def _framed(payload: bytes) -> bytes:
     return entry_cache._MAGIC + hashlib.sha256(payload).hexdigest().encode() + b"\n" + b"-" * 8 + b"\n" + payload
 
 
+@pytest.mark.slow
 def test_a_planted_pickle_is_neither_run_nor_trusted(cache, tmp_path):
     """A payload whose unpickling would write a marker file sits where the entry's cache file goes,
     with a valid checksum, and as an old-style ``.pkl`` beside it: the build solves the entry
@@ -75,6 +76,7 @@ def test_a_planted_pickle_is_neither_run_nor_trusted(cache, tmp_path):
     assert sweep.run_task(_chain())[0].cached  # repaired
 
 
+@pytest.mark.slow
 def test_an_entry_served_from_the_cache_equals_the_solved_one(cache):
     """Every array and figure of an entry read back from the new cache format is bit-identical
     with the one the solve returned."""

@@ -53,6 +53,7 @@ def test_version_prints_the_installed_version():
     assert out.strip() == f"skatelib {metadata.version('skatelib')}"
 
 
+@pytest.mark.slow
 def test_solve_verbose_prints_the_ipopt_log(tmp_path: Path):
     """`solve -v` shows IPOPT's iteration log (one line per iteration); without it there is none.
     The config is given as an option or, as for `build`, as the argument."""

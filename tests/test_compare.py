@@ -19,6 +19,8 @@ from skatelib.library.writer import write_library
 
 from tests.helpers import CLI, TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 def _cli(args: list[str]) -> subprocess.CompletedProcess:
     return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=600,
@@ -26,15 +28,18 @@ def _cli(args: list[str]) -> subprocess.CompletedProcess:
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    """The tiny library, and the same built with the force-rate weight doubled."""
+def pair(tmp_path_factory, tiny_build):
+    """The tiny library (a.h5, the session's build), and the same built with the force-rate weight
+    doubled (b.h5); the module's commands use the session build's entry cache."""
     d = tmp_path_factory.mktemp("diff")
+    shutil.copy(tiny_build.path, d / "a.h5")
     heavier = d / "heavier.toml"
     heavier.write_text(f'extends = "{TINY.as_posix()}"\n[optimization.weights]\nforce_rate = 2e-3\n')
-    for cfg, out in ((TINY, d / "a.h5"), (heavier, d / "b.h5")):
-        r = _cli(["build", str(cfg), "-o", str(out), "--no-progress"])
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SKATELIB_CACHE_DIR", str(tiny_build.cache))
+        r = _cli(["build", str(heavier), "-o", str(d / "b.h5"), "--no-progress"])
         assert r.returncode == 0, r.stdout + r.stderr
-    return d, heavier
+        yield d, heavier
 
 
 def test_a_copy_is_equal(pair, tmp_path):
@@ -103,14 +108,12 @@ def test_build_check_passes_unchanged_and_fails_changed(pair):
     assert r.returncode == 3, r.stdout + r.stderr
 
 
-def test_humanoid_libraries_compare_too(tmp_path):
+def test_humanoid_libraries_compare_too(hrp2_walk_path, tmp_path):
     """A humanoid library equals its copy, and a rebuild of it (its stage times differ: reported as
     effort, not counted); with its COM height moved 2 mm at one knot it differs, naming the entry,
     com_z, its unit and that knot's time."""
     root = TINY.parents[2]
-    lib = tmp_path / "walk.h5"
-    r = _cli(["build", str(root / "configs" / "hrp2_walk.toml"), "-o", str(lib), "--no-progress"])
-    assert r.returncode == 0, r.stdout + r.stderr
+    lib = hrp2_walk_path
     shutil.copy(lib, tmp_path / "copy.h5")
     assert _cli(["diff", str(lib), str(tmp_path / "copy.h5")]).returncode == 0
     again = tmp_path / "again.h5"

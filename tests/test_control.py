@@ -29,18 +29,13 @@ from skatelib.proving.plant import NB, Plant
 from skatelib.proving.setup import ClosedLoop
 from skatelib.runtime import MotionLibrary
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI
 
 
 @pytest.fixture(scope="module")
-def lib(tmp_path_factory):
-    """One really solved push-off (0.4 m/s, one stride) of the tiny config."""
-    out = tmp_path_factory.mktemp("ctl") / "one.h5"
-    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path_factory.mktemp("cache"))}
-    r = subprocess.run([*CLI, "solve", "--config", str(TINY), "--velocity", "0.4", "--strides", "1", "-o", str(out)],
-                       capture_output=True, text=True, env=env, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
-    return MotionLibrary.open(out)
+def lib(tiny_v04):
+    """One really solved push-off (0.4 m/s, one stride) of the tiny config (the session's)."""
+    return MotionLibrary.open(tiny_v04.path)
 
 
 def _params() -> SkateParams:

@@ -22,6 +22,8 @@ from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
 from skatelib.runtime import MotionLibrary
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 SOURCE = Path(__file__).resolve().parent.parent / "runtime" / "cpp"
 
 

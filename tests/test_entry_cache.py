@@ -42,6 +42,7 @@ def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
     assert relocated.problem_json() != cfg.problem_json()  # the URDF's bytes count
 
 
+@pytest.mark.slow
 def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
     """A second run is served from the cache; after a cost weight changes in code it is solved again."""
     first = sweep.run_task(_chain())
@@ -57,6 +58,7 @@ def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
     assert changed[0].cache_key != first[0].cache_key
 
 
+@pytest.mark.slow
 def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
     """One flipped bit in a cached entry's payload is caught by its checksum: the entry is solved
     again, the user is told, and the cache is repaired."""

@@ -14,6 +14,8 @@ from skatelib.runtime import MotionLibrary
 
 from tests.helpers import TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 # What an example may import of skatelib: the Python API, the runtime and the robot's controller.
 PUBLIC = ("skatelib", "skatelib.runtime", "skatelib.control")

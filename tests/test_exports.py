@@ -17,14 +17,15 @@ from skatelib.library.reader import read_library
 from skatelib.library.rotations import rpy_matrices
 from skatelib.pipeline.ros_messages import quaternion_xyzw
 
-from tests.helpers import one_entry_library, run_cli
+from tests.helpers import run_cli
 
 _cli = run_cli
 
 
 @pytest.fixture(scope="module")
-def lib(tmp_path_factory):
-    return one_entry_library(tmp_path_factory.mktemp("export"))
+def lib(tiny_v03):
+    """A library of one solved entry (0.3 m/s, one stride; the session's)."""
+    return tiny_v03.path
 
 
 def test_npz_round_trips(lib, tmp_path):

@@ -17,12 +17,11 @@ from tests.helpers import TINY
 
 
 @pytest.fixture(scope="module")
-def solved():
+def solved(pushoff_0p3):
+    """The 0.3 m/s one-stride push-off of tests/configs/tiny.toml (the session's solve) and its config."""
     cfg = load_config(TINY)
     cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
-    r = pushoff.solve(pushoff.PushoffSpec(cfg, 0.3, 1))
-    assert r.success
-    return cfg, r
+    return cfg, pushoff_0p3
 
 
 def _evaluate(lifted, w):

@@ -13,7 +13,6 @@ import tomllib
 import pytest
 from skatelib.pipeline.cli.app import EXTRA_OF, install_hint
 
-from tests.helpers import one_entry_library
 from tests.test_extras import ROOT, _names
 
 EXTRAS = {  # extra -> the import names of its packages that the [build] extra does not bring
@@ -40,8 +39,9 @@ def _cli(args: list[str], hidden: tuple[str, ...] = ()) -> subprocess.CompletedP
 
 
 @pytest.fixture(scope="module")
-def lib(tmp_path_factory):
-    return one_entry_library(tmp_path_factory.mktemp("contact"))
+def lib(tiny_v03):
+    """A library of one solved entry (0.3 m/s, one stride; the session's)."""
+    return tiny_v03.path
 
 
 @pytest.mark.parametrize(("args", "extra"), [

@@ -15,7 +15,7 @@ import pytest
 from skatelib.library import atomic
 from skatelib.library.errors import OutputError
 
-from tests.helpers import CLI, TINY, one_entry_library
+from tests.helpers import CLI, TINY, copy_of
 
 LIMIT_BYTES = 8_000  # smaller than any library, figure or recording written here
 
@@ -35,13 +35,16 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 
 
 @pytest.fixture(scope="module")
-def solved(tmp_path_factory):
-    """A one-entry library of the tiny config, its figures and its recording, written with room."""
+def solved(tmp_path_factory, tiny_v03):
+    """A one-entry library of the tiny config (a copy of the session's) and its figures, written with
+    room; the module's commands use the entry cache it was solved with."""
     d = tmp_path_factory.mktemp("disk")
-    lib = one_entry_library(d)
-    r = _run(["plot", str(lib), "-o", str(d / "fig"), "-f", "png"])
-    assert r.returncode == 0, r.stdout + r.stderr
-    return d, lib
+    lib = copy_of(tiny_v03.path, d)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SKATELIB_CACHE_DIR", str(tiny_v03.cache))
+        r = _run(["plot", str(lib), "-o", str(d / "fig"), "-f", "png"])
+        assert r.returncode == 0, r.stdout + r.stderr
+        yield d, lib
 
 
 def test_a_library_that_does_not_fit_leaves_the_old_one(solved):

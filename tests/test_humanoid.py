@@ -19,13 +19,14 @@ from skatelib.pipeline.humanoid.motion import skating_steps, solve_motion, step_
 from skatelib.pipeline.humanoid.verify import check_steps, failures
 from skatelib.runtime import MotionLibrary
 
+from tests.helpers import copy_of
+
 WALK, SKATE = CONFIG_DIR / "hrp2_walk.toml", CONFIG_DIR / "hrp2_skate.toml"
 
 
 @pytest.fixture(scope="module")
-def walk():
-    c = load_config(WALK)
-    return c, solve_motion(c, 0.375)
+def walk(hrp2_walk_motion):
+    return hrp2_walk_motion
 
 
 @pytest.fixture(scope="module")
@@ -85,25 +86,22 @@ def test_checker_catches_a_perturbed_node(skate):
     assert any("dynamics_velocity" in f for f in failures(check_steps(plan, nt, nx, nu, model)))
 
 
-def test_sqp_and_ipopt_reach_the_same_optimum():
+def test_sqp_and_ipopt_reach_the_same_optimum(skate):
     """Both NLP solvers give the same cost per step of the 1.0 m/s skate."""
-    c = load_config(SKATE)
-    a = solve_motion(c, 1.0)
+    c, a = skate
     b = solve_motion(dataclasses.replace(c, gpm=dataclasses.replace(c.gpm, solver="ipopt")), 1.0)
     for x, y in zip(a.steps, b.steps, strict=True):
         assert x.objective == pytest.approx(y.objective, rel=1e-6)
 
 
-def test_library_round_trip_and_cli(tmp_path):
-    """`skatelib build` on the skating config writes a humanoid library that validates, every push
-    with its whole body; with the pushing foot flat beside the board foot (no toe-off) the 0.75 and
-    1.0 m/s pushes end beyond the legs' reach (hip extension and knee at their limits): stored as
-    failed, so that build exits 1 unless --allow-failures."""
-    out = tmp_path / "skate.h5"
+def test_library_round_trip_and_cli(hrp2_skate_build, tmp_path):
+    """`skatelib build` on the skating config (the session's, exit 0) writes a humanoid library that
+    validates, every push with its whole body; with the pushing foot flat beside the board foot (no
+    toe-off) the 0.75 and 1.0 m/s pushes end beyond the legs' reach (hip extension and knee at their
+    limits): stored as failed, so that build exits 1 unless --allow-failures."""
+    out = hrp2_skate_build.path
     env = {**os.environ, "COLUMNS": "200"}
     cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
-    r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out)], capture_output=True, text=True, env=env)
-    assert r.returncode == 0, r.stdout + r.stderr
     lib = MotionLibrary.open(out)
     assert lib.kind == "humanoid" and lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"]
     assert [e.success for e in lib] == [True, True, True]
@@ -128,6 +126,7 @@ def test_library_round_trip_and_cli(tmp_path):
     assert v.returncode == 0 and "all entries valid" in v.stdout
 
 
+@pytest.mark.slow
 def test_a_motion_that_fails_before_its_whole_body_is_stored_as_failed(tmp_path):
     """A reach limit the 1.0 m/s push cannot keep (the COM within 0.82 m of the feet): its GPM step
     fails, so it has no whole body while the 0.5 m/s entry has one; the library is still written,
@@ -147,12 +146,13 @@ def test_a_motion_that_fails_before_its_whole_body_is_stored_as_failed(tmp_path)
     assert v.returncode == 0 and "skate_v1.00: stored as failed" in v.stdout, v.stdout + v.stderr
 
 
-def test_build_report_marks_all_entries(tmp_path):
-    """The walking build writes one successful entry: six walking steps between start and stop
-    (eight GPM phases), named for what it is."""
-    rep = build_library(load_config(WALK), tmp_path / "w.h5", BuildOptions(jobs=1, cache=False))
-    e = MotionLibrary.open(rep.path).select(0.375)
-    assert not rep.failed and e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
+def test_build_report_marks_all_entries(hrp2_walk_path):
+    """The walking build (the session's, its report without a failure) writes one successful entry:
+    six walking steps between start and stop (eight GPM phases), named for what it is."""
+    lib = MotionLibrary.open(hrp2_walk_path)
+    e = lib.select(0.375)
+    assert lib.keys() == ["walk_v0.375_n6"] and e.success
+    assert e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
 
 
 def test_unknown_motion_is_a_config_error(tmp_path):
@@ -171,22 +171,27 @@ def test_a_toe_off_longer_than_the_push_is_a_config_error(tmp_path):
         load_config(p)
 
 
-def test_humanoid_build_goes_the_one_build_path(tmp_path):
+def test_humanoid_build_goes_the_one_build_path(hrp2_skate_build, tmp_path):
     """`skatelib build` of a humanoid config runs through the same sweep as a quadruped's: its motions
-    solve as tasks in worker processes (-j 2), a second build is served from the entry cache
-    (every step marked c) with the same arrays, and --frontier is refused (exit 2, nothing written)."""
-    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
+    solve as tasks in worker processes (-j 2, the session's build from an empty cache), a second
+    build is served from the entry cache (every step marked c) with the same arrays, and --frontier
+    is refused (exit 2, nothing written)."""
+    env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(hrp2_skate_build.cache)}
     cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     out = tmp_path / "s.h5"
     r = subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "--frontier"], capture_output=True, text=True,
                        env=env)
     assert r.returncode == 2 and "--frontier" in r.stderr and "humanoid" in r.stderr and not out.exists()
-    runs = [subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "-j", "2", "--no-progress", "--allow-failures"],
-                           capture_output=True, text=True, env=env) for _ in range(2)]
-    assert all(r.returncode == 0 for r in runs), runs[0].stderr + runs[1].stderr
-    cached = [sum(" c " in line for line in r.stdout.splitlines() if line.startswith("│ skate_")) for r in runs]
+    again = subprocess.run([*cli, "build", str(SKATE), "-o", str(out), "-j", "2", "--no-progress", "--allow-failures"],
+                           capture_output=True, text=True, env=env)
+    assert again.returncode == 0, again.stdout + again.stderr
+    cached = [sum(" c " in line for line in stdout.splitlines() if line.startswith("│ skate_"))
+              for stdout in (hrp2_skate_build.stdout, again.stdout)]
     assert cached == [0, 9]  # three motions of three steps each
+    first = MotionLibrary.open(hrp2_skate_build.path)
     lib = MotionLibrary.open(out)
+    for e in first:  # served from the cache: the same arrays
+        assert np.array_equal(e.state, lib[e.key].state)
     assert lib.keys() == ["skate_v0.50", "skate_v0.75", "skate_v1.00"] and lib["skate_v0.50"].success
     assert all(len(e.attrs["cache_key"]) == 32 for e in lib)
 
@@ -232,7 +237,7 @@ def test_build_judges_each_motion_with_the_independent_checks(walk):
     assert record.attrs["success"] is False and record.attrs["status"].startswith("Physics_Check_Failed")
 
 
-def test_each_entry_stores_its_plan_and_validate_checks_against_it(tmp_path):
+def test_each_entry_stores_its_plan_and_validate_checks_against_it(hrp2_walk_path, tmp_path):
     """The plan an entry was solved for is stored with it (``plan_json``, exact round trip) and
     `validate` checks the nodes against that plan, not one rebuilt with today's code: a stored plan
     whose first step lasts 10 % longer fails the check."""
@@ -243,7 +248,7 @@ def test_each_entry_stores_its_plan_and_validate_checks_against_it(tmp_path):
     from skatelib.pipeline.validate import validate_library
 
     cfg = load_config(WALK)
-    path = build_library(cfg, tmp_path / "w.h5", BuildOptions(jobs=1, cache=False)).path
+    path = copy_of(hrp2_walk_path, tmp_path, "w.h5")
     e = MotionLibrary.open(path)["walk_v0.375_n6"]
     assert plan_from_json(e.attrs["plan_json"]) == walking_steps(cfg, 0.375)[1]
     verdicts: list[str] = []

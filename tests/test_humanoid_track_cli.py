@@ -17,6 +17,7 @@ def _row(out: str, key: str) -> list[str]:
     return [c.strip() for c in line.split("│")[1:-1]]
 
 
+@pytest.mark.slow
 def test_the_walk_as_planned_passes_with_its_figures(hrp2_walk_path):
     """As planned the walk does not fall, its contact ZMP never leaves the planned polygon, its
     COM stays within 2 cm and its ZMP within 5 cm RMS of the plan, and no sole slips 1 cm."""
@@ -39,6 +40,7 @@ def test_the_humanoid_keys_are_checked_and_the_quadrupeds_refused(hrp2_walk_path
     assert r.returncode != 0 and re.search(r"--ride", r.stdout + r.stderr)
 
 
+@pytest.mark.slow
 def test_by_default_the_walk_runs_under_the_humanoid_error_set_and_stands(hrp2_walk_path):
     """Without --perturb the run takes mass +5 %, the COM 2 cm off, mu 0.4 and sensor noise (named
     in the title), does not fall and keeps its ZMP within 2 cm of the soles down (measured 0.0 cm;

@@ -79,6 +79,7 @@ def test_a_stand_without_its_servos_falls(walk):
     assert plant.truth().base_pos[2] < 0.5
 
 
+@pytest.mark.slow
 def test_the_walk_under_the_default_errors_stands_with_the_stabilizer_and_leaves_its_polygon_without(walk):
     """Under mass +5 %, the COM 2 cm off, mu 0.4 and sensor noise the stabilized walk stands, its
     contact ZMP within 2 cm of the support polygon (the soles down at their planned places) and
@@ -119,6 +120,7 @@ def _unfiltered(lib, key):
     return _Replaced(lib, Entry(key, e.attrs, arrays, e.columns))
 
 
+@pytest.mark.slow
 def test_the_walk_without_the_dynamics_filter_tracks_its_zmp_worse_on_the_twin(walk):
     """The negative control of the dynamics filter: the same walk's inverse kinematics on the GPM's
     COM (no filter), executed as planned with the stabilizer, tracks the plan's ZMP at least twice

@@ -9,9 +9,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from skatelib.pipeline.config import load_config
 from skatelib.pipeline.humanoid.feet import walking_feet
-from skatelib.pipeline.humanoid.motion import solve_motion
 from skatelib.pipeline.humanoid.wholebody import Humanoid, dynamics_filter
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -23,9 +21,8 @@ def robot():
 
 
 @pytest.fixture(scope="module")
-def walk():
-    cfg = load_config(CONFIGS / "hrp2_walk.toml")
-    m = solve_motion(cfg, 0.375)
+def walk(hrp2_walk_motion):
+    cfg, m = hrp2_walk_motion
     return cfg, m, walking_feet(m.plan, m.t, 0.05, cfg.humanoid.step_width_m)
 
 

@@ -13,13 +13,8 @@ import pytest
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
-from skatelib.pipeline.build.contract import BuildOptions  # noqa: E402
-from skatelib.pipeline.build.orchestrate import build_library  # noqa: E402
-from skatelib.pipeline.config import CONFIG_DIR, load_config  # noqa: E402
 from skatelib.pipeline.views.rerun_inspect import inspect_library  # noqa: E402
 from skatelib.runtime import MotionLibrary  # noqa: E402
-
-from tests.helpers import TINY  # noqa: E402
 
 
 def _columns(rrd: Path) -> dict[str, dict[str, list]]:
@@ -38,9 +33,8 @@ def _columns(rrd: Path) -> dict[str, dict[str, list]]:
 
 
 @pytest.fixture(scope="module")
-def quad_lib(tmp_path_factory):
-    cfg = load_config(TINY)
-    return build_library(cfg, tmp_path_factory.mktemp("q") / "tiny.h5", BuildOptions(jobs=1, cache=False)).path
+def quad_lib(tiny_build):
+    return tiny_build.path
 
 
 def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path):
@@ -80,10 +74,9 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
                      "normal_force/RL": "RL normal force [N]"}
 
 
-def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
+def test_humanoid_recording_has_com_zmp_and_soles(hrp2_skate_build, tmp_path):
     """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
-    cfg = load_config(CONFIG_DIR / "hrp2_skate.toml")
-    lib_path = build_library(cfg, tmp_path / "s.h5", BuildOptions(jobs=1, cache=False)).path
+    lib_path = hrp2_skate_build.path
     out = tmp_path / "h.rrd"
     inspect_library(lib_path, ["skate_v1.00"], out, spawn=False, overlay=False)
     cols = _columns(out)

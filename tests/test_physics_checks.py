@@ -11,22 +11,12 @@ from skatelib.library.channels import BOARD
 from skatelib.library.margins import friction_margins
 from skatelib.library.rotations import board_rotations
 from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory, judge
-from skatelib.pipeline.quadruped.problem import problem, pushoff
-from skatelib.pipeline.quadruped.problem.bounds import bound_terms
-from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
-from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, solve
 
 
 @pytest.fixture(scope="module")
-def small_cfg(cfg):
-    return dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
-
-
-@pytest.fixture(scope="module")
-def honest(small_cfg):
-    r = solve(PushoffSpec(small_cfg, 0.3, 1))
-    assert r.success, r.status
-    return r
+def honest(pushoff_0p3):
+    """The 0.3 m/s one-stride push-off of ``small_cfg``, solved cold (the session's solve)."""
+    return pushoff_0p3
 
 
 def _check(system, r, **arrays):
@@ -43,23 +33,9 @@ def test_honest_entry_rides_at_its_label(honest, system):
 
 
 @pytest.fixture(scope="module")
-def shove(small_cfg):
-    """Solved the old way: only the board's final speed constrained, no riding end state."""
-    def board_only(self, n):
-        lo, hi = np.full((n, 4), -np.inf), np.full((n, 4), np.inf)
-        lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
-        return lo, hi
-
-    mp = pytest.MonkeyPatch()
-    try:
-        mp.setattr(FinalSpeed, "bounds", board_only)
-        mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
-        mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
-        mp.setattr(pushoff, "_PROBLEMS", {})
-        shove = solve(PushoffSpec(small_cfg, 0.3, 1))
-    finally:
-        mp.undo()
-    return shove
+def shove(shove_0p3):
+    """Solved the old way: only the board's final speed constrained, no riding end state (the session's)."""
+    return shove_0p3
 
 
 def test_old_terminal_shove_is_refused(small_cfg, system, shove):

@@ -12,20 +12,16 @@ import pytest
 
 pytest.importorskip("matplotlib")
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.build.contract import BuildOptions
-from skatelib.pipeline.build.orchestrate import build_library
-from skatelib.pipeline.config import load_config
 from skatelib.pipeline.quadruped.plots import push_foot_forces
 from skatelib.pipeline.views.figures import write_figures
 from skatelib.runtime import MotionLibrary
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI
 
 
 @pytest.fixture(scope="module")
-def lib_path(tmp_path_factory):
-    out = tmp_path_factory.mktemp("p") / "tiny.h5"
-    return build_library(load_config(TINY), out, BuildOptions(jobs=1, cache=False)).path
+def lib_path(tiny_build):
+    return tiny_build.path
 
 
 def test_plot_writes_every_figure(lib_path, tmp_path):
@@ -77,7 +73,7 @@ def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path):
         write_figures(lib_path, tmp_path / "figs", bad)
 
 
-def test_humanoid_figures_draw_the_library(tmp_path):
+def test_humanoid_figures_draw_the_library(hrp2_walk_path, tmp_path):
     """A humanoid library gets its own figures (through the kind table): COM speed and height, the
     top view whose COM line is the stored com_x, com_y and whose polygons are the stored plan's,
     and the planned against the whole body's multibody ZMP."""
@@ -85,9 +81,7 @@ def test_humanoid_figures_draw_the_library(tmp_path):
     from skatelib.pipeline.humanoid.motion import stored_plan
     from skatelib.pipeline.humanoid.plots import plot_footprints
 
-    from tests.test_humanoid import WALK
-
-    path = build_library(load_config(WALK), tmp_path / "w.h5", BuildOptions(jobs=1, cache=False)).path
+    path = hrp2_walk_path
     written = write_figures(path, tmp_path / "figs", None, ("png",))
     assert sorted(p.name for p in written) == ["com.png", "footprints.png", "zmp_wholebody.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in written)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from skatelib.library.channels import CONTROL_NAMES, GROUND, LEGS, STATE_NAMES
@@ -15,14 +13,9 @@ from tests import reference_model as ref
 
 
 @pytest.fixture(scope="module")
-def small_cfg(cfg):
-    # One stride at the default step; C compilation off so the test needs no cache warm-up.
-    return dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
-
-
-@pytest.fixture(scope="module")
-def solved(small_cfg):
-    return solve(PushoffSpec(small_cfg, 0.3, 1))
+def solved(pushoff_0p3):
+    """The 0.3 m/s one-stride push-off of ``small_cfg``, solved cold (the session's solve)."""
+    return pushoff_0p3
 
 
 def test_solve_converges_to_target_speed(solved):

@@ -33,7 +33,7 @@ TINY_RIDE = Path(__file__).parent / "configs" / "tiny_ride.toml"
 @pytest.fixture(scope="module")
 def ride_path(tmp_path_factory):
     out = tmp_path_factory.mktemp("ride") / "ride.h5"
-    build_library(load_config(TINY_RIDE), out, BuildOptions(jobs=1, cache=False, progress=False))
+    build_library(load_config(TINY_RIDE), out, BuildOptions(jobs=2, cache=False, progress=False))
     return out
 
 
@@ -86,6 +86,7 @@ def test_the_riding_stance_loads_every_deck_foot_by_statics_and_pinocchio(cfg, s
     assert np.allclose(barycentric(feet[deck, 0:2], com[0:2]), loads, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_every_transition_validates_and_starts_where_it_says(ride_lib, system):
     """Every entry solved and passes the independent checks; a transition starts riding at its start
     speed (momentum), ends at its target; the stops brake with the foot planted and end below 0.02 m/s."""
@@ -109,6 +110,7 @@ def test_every_transition_validates_and_starts_where_it_says(ride_lib, system):
         assert abs(momentum_speed(np.asarray(e.state[-1]), m, mb)) < 0.02
 
 
+@pytest.mark.slow
 def test_chain_continuity_of_every_junction(ride_lib):
     """Every end at 0.3 or 0.4 m/s meets every transition from that speed within the end's tolerances."""
     gaps = chain_gaps(ride_lib)
@@ -121,6 +123,7 @@ def _doctored(e, **change):
     return dataclasses.replace(Trajectory.of(e), **{k: np.array(getattr(e, k)) for k in change} | change)
 
 
+@pytest.mark.slow
 def test_negative_controls_refuse_doctored_transitions(ride_lib, system):
     """A braking force outside the Coulomb cone, a braking foot that pushes, a transition that starts at
     another speed, and a stop that still rolls at its end: each refused."""
@@ -145,6 +148,7 @@ def test_negative_controls_refuse_doctored_transitions(ride_lib, system):
     assert honest.failures(system) == []
 
 
+@pytest.mark.slow
 def test_chain_check_refuses_an_end_off_the_riding_stance(ride_path, tmp_path):
     """An end moved 3 cm over the deck no longer meets the transitions from its speed: validate fails,
     naming the junctions."""
@@ -172,6 +176,7 @@ def test_chain_check_refuses_an_end_off_the_riding_stance(ride_path, tmp_path):
     assert out.returncode == 1 and "com_xy_m" in out.stdout
 
 
+@pytest.mark.slow
 def test_select_and_route(ride_lib):
     """select by start speed; route chains entries where no single one gets there, in the least time."""
     assert ride_lib.select(0.3, from_velocity_mps=0.4).key == "v0.40-0.30_s1"
@@ -186,6 +191,7 @@ def test_select_and_route(ride_lib):
         ride_lib.route(0.0, 0.5)
 
 
+@pytest.mark.slow
 def test_route_takes_the_fastest_chain(ride_lib):
     """Without a direct entry the route goes through another speed: 0 -> 0.4 -> 0.3 when 0.3 has no start-up."""
     from skatelib.runtime.routes import route
@@ -194,6 +200,7 @@ def test_route_takes_the_fastest_chain(ride_lib):
     assert [e.key for e in route(entries, 0.0, 0.3)] == ["v0.40_s1", "v0.40-0.30_s1"]
 
 
+@pytest.mark.slow
 def test_a_chained_ride_passes_in_closed_loop(ride_path, tmp_path):
     """0 -> 0.4 -> 0.3 -> 0 on the model plant with the default model errors: each stage within 5 % of
     its target, the stop below 0.05 m/s, no fall, no slip (the command's exit code and table); the
@@ -207,6 +214,7 @@ def test_a_chained_ride_passes_in_closed_loop(ride_path, tmp_path):
     assert rrd.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_ride_arguments_are_checked(ride_path):
     """A malformed stage is a usage error (exit 2); a stage the library cannot ride names what it reaches."""
     bad = subprocess.run([*CLI, "track", str(ride_path), "--ride", "0:0.4,0.3:0"], capture_output=True, text=True)
@@ -215,6 +223,7 @@ def test_ride_arguments_are_checked(ride_path):
     assert far.returncode != 0 and "reaches" in (far.stdout + far.stderr).replace("\n", " ")
 
 
+@pytest.mark.slow
 def test_a_chained_ride_passes_on_the_twin(ride_path):
     """The same ride in full physics (MuJoCo twin, whole-body controller, the default model errors):
     each stage within 5 % of its target at its end, the stop below 0.05 m/s, the twin's verdict
@@ -226,6 +235,7 @@ def test_a_chained_ride_passes_on_the_twin(ride_path):
     assert "MuJoCo" in out.stdout and out.stdout.count("pass") >= 4
 
 
+@pytest.mark.slow
 def test_the_frontier_of_speed_ups_brackets_the_fastest_and_agrees_with_the_build(ride_lib):
     """The fastest speed-up from 0.3 m/s in one stride (a coarse search, cold solves): the fastest is
     a probe that passed and the first failure one that did not, within the resolution; the build's

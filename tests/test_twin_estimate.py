@@ -34,10 +34,13 @@ from skatelib.sim.plant import TwinPlant
 
 from tests.test_twin_loop import _solve
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 @pytest.fixture(scope="module")
-def lib_path(tmp_path_factory) -> Path:
-    return _solve(tmp_path_factory.mktemp("est"), tmp_path_factory.mktemp("cache"), "one", 0.4, 1)
+def lib_path(tiny_v04) -> Path:
+    """The tiny config's 0.4 m/s one-stride start-up (the session's)."""
+    return tiny_v04.path
 
 
 @pytest.fixture(scope="module")

@@ -46,6 +46,7 @@ def test_an_empty_or_out_of_range_error_set_is_refused(tmp_path, judge, says):
         check_twin_judge(cfg)
 
 
+@pytest.mark.slow
 def test_the_twin_keeps_what_it_rides_and_refuses_what_it_cannot(tmp_path, monkeypatch):
     monkeypatch.setenv("SKATELIB_CACHE_DIR", str(tmp_path / "cache"))  # the second build reuses the solves
     opts = BuildOptions(jobs=1, cache=True, progress=False)

@@ -29,6 +29,8 @@ from skatelib.sim.plant import TwinPlant
 
 from tests.helpers import CLI, TINY
 
+pytestmark = pytest.mark.slow  # make test-fast leaves this module out
+
 
 def _solve(tmp: Path, cache: Path, name: str, velocity: float, strides: int, extra: str = "") -> Path:
     cfg = tmp / f"{name}.toml"
@@ -42,10 +44,10 @@ def _solve(tmp: Path, cache: Path, name: str, velocity: float, strides: int, ext
 
 
 @pytest.fixture(scope="module")
-def libs(tmp_path_factory):
+def libs(tmp_path_factory, tiny_v04):
     tmp, cache = tmp_path_factory.mktemp("twin"), tmp_path_factory.mktemp("cache")
     return {
-        "one": _solve(tmp, cache, "one", 0.4, 1),
+        "one": tiny_v04.path,  # the tiny config's 0.4 m/s one-stride start-up (the session's)
         "margin": _solve(tmp, cache, "margin", 0.7, 2),
         "edge": _solve(tmp, cache, "edge", 0.7, 2,
                        "[contact]\nmin_deck_load_fraction = 0.0\n[stance]\nride_load_fraction = 0.0\n"),
@@ -66,14 +68,24 @@ def _ride(path: Path, perturb: str = "", wbc: WbcSettings | None = None, figures
     return twin_result(key, float(lib[key].attrs[schema.A_TARGET_VELOCITY]), run)
 
 
-def test_track_plant_mujoco_rides_an_entry(libs):
+@pytest.fixture(scope="module")
+def tracked(libs, tmp_path_factory):
+    """`skatelib track ONE --plant mujoco --perturb none --video OUT.gif --save OUT.rrd`: the
+    command's output, the GIF and the recording (one ride serves the table and the files)."""
+    d = tmp_path_factory.mktemp("tracked")
+    gif, rrd = d / "run.gif", d / "run.rrd"
+    r = subprocess.run([*CLI, "track", str(libs["one"]), "--plant", "mujoco", "--perturb", "none", "--jobs", "1",
+                        "--video", str(gif), "--save", str(rrd)], capture_output=True, text=True,
+                       env={**os.environ, "COLUMNS": "250"}, timeout=600)
+    return r, gif, rrd
+
+
+def test_track_plant_mujoco_rides_an_entry(libs, tracked):
     """`skatelib track --plant mujoco` rides an entry, the transfer and the ride in physics and
     passes; a two-stride entry passes with the default model errors too (robot 10 % heavier, floor
     mu 0.5, trucks 20 % softer, rolling resistance doubled): speed within 5 %, no fall, slip under
     1 cm per stance, no unplanned floor contact, no wheel off the floor, heading within 0.1 rad."""
-    env = {**os.environ, "COLUMNS": "250"}
-    r = subprocess.run([*CLI, "track", str(libs["one"]), "--plant", "mujoco", "--perturb", "none", "--jobs", "1"],
-                       capture_output=True, text=True, env=env, timeout=600)
+    r, _, _ = tracked
     assert r.returncode == 0, r.stdout + r.stderr
     assert "v0.40_s1" in r.stdout and "pass" in r.stdout and "full physics" in r.stdout
     res = _ride(libs["margin"], DEFAULT_TWIN_PERTURBATION)
@@ -147,7 +159,7 @@ def test_the_steering_maneuver_in_physics(libs):
     assert adapted.roll_rms_error_rad < 0.5 * fixed.roll_rms_error_rad
 
 
-def test_video_and_stored_verdicts(libs, tmp_path):
+def test_video_and_stored_verdicts(libs, tracked, tmp_path):
     """`track --plant mujoco --video OUT.gif --save OUT.rrd` renders the run (one frame per two MPC
     updates, then the verdict, one frame held 3 s) and records it beside the plan in Rerun;
     `validate --closed-loop --plant mujoco` stores the verdict in the file (checksum still valid);
@@ -156,9 +168,7 @@ def test_video_and_stored_verdicts(libs, tmp_path):
     from skatelib.pipeline.build.preflight import is_rerun_recording
 
     env = {**os.environ, "COLUMNS": "250"}
-    gif, rrd = tmp_path / "run.gif", tmp_path / "run.rrd"
-    r = subprocess.run([*CLI, "track", str(libs["one"]), "--plant", "mujoco", "--perturb", "none", "--video", str(gif),
-                        "--save", str(rrd)], capture_output=True, text=True, env=env, timeout=600)
+    r, gif, rrd = tracked
     assert r.returncode == 0, r.stdout + r.stderr
     assert is_rerun_recording(rrd) and rrd.stat().st_size > 10_000
     lib = MotionLibrary.open(libs["one"])
@@ -180,35 +190,16 @@ def test_video_and_stored_verdicts(libs, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def shove_lib(tmp_path_factory):
+def shove_lib(tmp_path_factory, small_cfg, system, shove_0p3):
     """The old terminal shove (only the board's final speed constrained, no riding end state; see
-    tests/test_physics_checks.py) solved and written as a library, in this process."""
-    import numpy as np
-    from skatelib.pipeline.build.contract import BuildOptions
-    from skatelib.pipeline.build.orchestrate import build_library
-    from skatelib.pipeline.config import load_config
-    from skatelib.pipeline.quadruped.problem import problem, pushoff
-    from skatelib.pipeline.quadruped.problem.bounds import bound_terms
-    from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
+    tests/test_physics_checks.py) judged by the physics checks as a build judges it and written as a
+    library."""
+    from skatelib.pipeline.quadruped.checks.verify import judge
+    from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 
-    def board_only(self, n):
-        lo, hi = np.full((n, 4), -np.inf), np.full((n, 4), np.inf)
-        lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
-        return lo, hi
-
-    cfg = load_config(TINY)
-    cfg = dataclasses.replace(cfg, sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.3,), strides=(1,)))
+    judged, physics = judge(small_cfg, shove_0p3)
     out = tmp_path_factory.mktemp("shove") / "shove.h5"
-    mp = pytest.MonkeyPatch()
-    try:
-        mp.setattr(FinalSpeed, "bounds", board_only)
-        mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
-        mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
-        mp.setattr(pushoff, "_PROBLEMS", {})
-        build_library(cfg, out, BuildOptions(jobs=1, cache=False, progress=False))
-    finally:
-        mp.undo()
-    return out
+    return write_quadruped_library(out, small_cfg, system, [entry_from_result(judged, physics=physics)], {})
 
 
 def test_the_terminal_shove_fails_in_physics(shove_lib):

@@ -56,6 +56,7 @@ def _write(out: Path, limited: bool, env: dict[str, str] | None = None) -> subpr
 
 
 @pytest.mark.parametrize("name", ["run.mp4", "run.gif"])
+@pytest.mark.slow
 def test_a_video_that_does_not_fit_is_not_left(tmp_path, name):
     """The real encoders against a 20 kB file-size limit: OutputError naming the video, no file and
     no temporary; an old video of that name is untouched. Negative control: with room it is written."""
@@ -80,6 +81,7 @@ def test_an_encoder_that_fails_part_way_leaves_nothing(tmp_path):
     assert list(out.parent.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_track_says_the_video_failed_and_exits_2(tmp_path):
     """`track --plant mujoco --video` with a failing encoder: exit 2, one message naming the video
     and the encoder, no traceback, no 'wrote', no file (the old code printed 'wrote run.mp4' over a
