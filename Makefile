@@ -67,13 +67,16 @@ endif
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
 
+# The suite in TEST_WORKERS processes (pytest-xdist), a test file's tests in one process so that
+# each file's shared libraries are made once per process (docs/benchmarks.md, "The test suite").
+TEST_WORKERS ?= 2
 test: venv
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 # Everything but the tests marked slow (pyproject.toml names the marker; docs/benchmarks.md what
 # each part takes). make test runs them all.
 test-fast: venv
-	$(BIN)/python -m pytest -m "not slow"
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile -m "not slow"
 
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
 PACKAGES := pipeline library runtime control sim proving
