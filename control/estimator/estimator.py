@@ -63,7 +63,9 @@ class EstimatorSettings:
     ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
-    the trunk's)."""
+    the trunk's); ``sink_from_floor``: the deck feet's compression measured against the floor
+    while a foot stands on it (False: a deck foot's centre taken a radius above the deck's top);
+    ``sink_tau_s``: that measurement's low-pass time constant [s]."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -71,6 +73,8 @@ class EstimatorSettings:
     touch_m: float = 0.005
     settle_s: float = 0.02
     mount_from_legs: bool = True
+    sink_from_floor: bool = True
+    sink_tau_s: float = 0.05
 
 
 @dataclass
@@ -168,6 +172,7 @@ class StateEstimator:
         self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
+        self.sink = 0.0  # how far a loaded deck foot's centre sits below a radius over the deck's top [m]
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -196,8 +201,28 @@ class StateEstimator:
         rel -= cross(spin, self.rho * normals)
         centres = odo.p[:, None] + R @ r
         self.deck = update_deck(self.deck, board & self.stance, centres, odo.v[:, None] + rel, dt, self.s.deck)
+        if self.s.sink_from_floor:
+            self._measure_sink(plan, centres, dt)
         self.used = self._correct(plan, centres, rel, r, R)
         return self._state(reading, R, omega, r, plan)
+
+    def _measure_sink(self, plan: np.ndarray, centres: np.ndarray, dt: float) -> None:
+        """The deck feet's compression from a foot settled on the floor and three or more on the deck:
+        the deck's top is the board's height above the floor under that foot, so the deck feet's
+        centres sit that much less than a radius over it (the feet and the deck give under load;
+        the floor foot's own give is left in, a fraction of a millimetre of clearance). The deck's
+        top and the trunk's height follow the footholds' heights."""
+        deck = self.deck
+        settled = self.stance & (self.now - self.down_since >= self.s.settle_s)
+        floor = np.flatnonzero(settled & (plan == GROUND))
+        if not len(floor) or int((settled & (plan == BOARD)).sum()) < 3 or dt <= 0:
+            return
+        floor_z = float(np.mean(centres[2, floor])) - self.rho  # the floor under the foot (world)
+        over = float(deck.pos[2]) - floor_z  # the deck's top above it as the feet now place it
+        sample = self.sink + self.board.deck_height_m - over
+        self.sink += min(dt / self.s.sink_tau_s, 1.0) * (sample - self.sink)
+        deck.footholds[2] = self.rho - self.sink
+        deck.pos = deck.pos + (self.board.deck_height_m - over) * min(dt / self.s.sink_tau_s, 1.0) * deck.R[:, 2]
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
                  R: np.ndarray) -> np.ndarray:
@@ -234,7 +259,7 @@ class StateEstimator:
         newly = touching & deck_side & ~self.stance & (plan == BOARD)
         if newly.any():  # a foot lands on the deck: where it stands on it
             hold = deck.R.T @ (centres[:, newly] - deck.pos[:, None])
-            hold[2] = self.rho
+            hold[2] = self.rho - self.sink
             deck.footholds[:, newly] = hold
         stance = touching & (plan != 0)
         self.down_since = np.where(stance & ~self.stance, self.now, np.where(stance, self.down_since, np.inf))
