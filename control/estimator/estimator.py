@@ -220,9 +220,12 @@ class StateEstimator:
         floor_z = float(np.mean(centres[2, floor])) - self.rho  # the floor under the foot (world)
         over = float(deck.pos[2]) - floor_z  # the deck's top above it as the feet now place it
         sample = self.sink + self.board.deck_height_m - over
-        self.sink += min(dt / self.s.sink_tau_s, 1.0) * (sample - self.sink)
+        last = self.sink
+        # A loaded foot's centre does not sit above a radius over the deck: a sample above is the
+        # floor foot's own give under a hard push or the deck's roll error over its lever.
+        self.sink = max(0.0, last + min(dt / self.s.sink_tau_s, 1.0) * (sample - last))
         deck.footholds[2] = self.rho - self.sink
-        deck.pos = deck.pos + (self.board.deck_height_m - over) * min(dt / self.s.sink_tau_s, 1.0) * deck.R[:, 2]
+        deck.pos = deck.pos + (self.sink - last) * deck.R[:, 2]
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
                  R: np.ndarray) -> np.ndarray:
@@ -253,7 +256,7 @@ class StateEstimator:
         over_deck = deck_n @ (centres - deck.pos[:, None]) - self.rho
         over_floor = centres[2] - self.rho
         deck_side = (plan == BOARD) | ((plan != GROUND) & (np.abs(over_deck) < np.abs(over_floor)))
-        gap = np.where(deck_side, over_deck, over_floor)
+        gap = np.where(deck_side, over_deck + self.sink, over_floor)  # from where a loaded foot's centre sits
         touching = gap < self.s.touch_m
         touch = np.where(touching, np.where(deck_side, ON_DECK, ON_FLOOR), 0).astype(np.int8)
         newly = touching & deck_side & ~self.stance & (plan == BOARD)
