@@ -65,7 +65,9 @@ class EstimatorSettings:
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
     the trunk's); ``sink_from_floor``: the deck feet's compression measured against the floor
     while a foot stands on it (False: a deck foot's centre taken a radius above the deck's top);
-    ``sink_tau_s``: that measurement's low-pass time constant [s]."""
+    ``sink_tau_s``: that measurement's low-pass time constant [s]; ``sink_window_s``: it is taken
+    this long after the floor foot settles (then the foot is near under its hip and lightly
+    loaded; later in a push its own give and the attitude's error over its growing lever enter) [s]."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -75,6 +77,7 @@ class EstimatorSettings:
     mount_from_legs: bool = True
     sink_from_floor: bool = True
     sink_tau_s: float = 0.05
+    sink_window_s: float = 0.1
 
 
 @dataclass
@@ -213,8 +216,9 @@ class StateEstimator:
         the floor foot's own give is left in, a fraction of a millimetre of clearance). The deck's
         top and the trunk's height follow the footholds' heights."""
         deck = self.deck
-        settled = self.stance & (self.now - self.down_since >= self.s.settle_s)
-        floor = np.flatnonzero(settled & (plan == GROUND))
+        since = self.now - self.down_since
+        settled = self.stance & (since >= self.s.settle_s)
+        floor = np.flatnonzero(settled & (plan == GROUND) & (since < self.s.settle_s + self.s.sink_window_s))
         if not len(floor) or int((settled & (plan == BOARD)).sum()) < 3 or dt <= 0:
             return
         floor_z = float(np.mean(centres[2, floor])) - self.rho  # the floor under the foot (world)
