@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 from skatelib.control.estimator.attitude import AttitudeFilter, AttitudeSettings
 from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, plane_normal, update_deck
+from skatelib.control.estimator.loads import BodyFigures, compressions
 from skatelib.control.estimator.odometry import LegOdometry, OdometrySettings
 from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
@@ -78,6 +79,7 @@ class EstimatorSettings:
     sink_from_floor: bool = True
     sink_tau_s: float = 0.05
     sink_window_s: float = 0.1
+    liftoff_s: float = 0.1
 
 
 @dataclass
@@ -145,12 +147,14 @@ class StateEstimator:
             touch codes say which stand on the deck).
         settings: The parts' settings.
         gravity_mps2: g.
+        body: The robot's mass, centre of mass and feet's compliance (None: rigid feet).
     """
 
     def __init__(self, kin: LegKinematics, board: BoardGeometry, schedule: Callable[[float], np.ndarray],  # noqa: PLR0913
                  start: RobotState, settings: EstimatorSettings | None = None, gravity_mps2: float = 9.81,
-                 imu_mount: np.ndarray | None = None):
+                 imu_mount: np.ndarray | None = None, body: BodyFigures | None = None):
         self.kin, self.board, self.schedule = kin, board, schedule
+        self.body = body
         self.s = settings or EstimatorSettings()
         self.g = gravity_mps2
         self.attitude = AttitudeFilter(start.trunk_R, self.s.attitude, imu_mount)
@@ -175,7 +179,8 @@ class StateEstimator:
         self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
-        self.sink = 0.0  # how far a loaded deck foot's centre sits below a radius over the deck's top [m]
+        self.sink = 0.0  # how far the deck feet's centres sit below where their give puts them [m]
+        self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -203,9 +208,13 @@ class StateEstimator:
         normals = np.where(board, self.deck.R[:, 2:3], UP[:, None])
         rel -= cross(spin, self.rho * normals)
         centres = odo.p[:, None] + R @ r
-        self.deck = update_deck(self.deck, board & self.stance, centres, odo.v[:, None] + rel, dt, self.s.deck)
+        if self.body is not None:
+            self.give = compressions(centres, self.stance & (plan != 0), odo.p + R @ self.body.com_offset_m, self.body,
+                                     self.g)
+        rigid = centres + self.give * normals  # where the centres would be on rigid feet
+        self.deck = update_deck(self.deck, board & self.stance, rigid, odo.v[:, None] + rel, dt, self.s.deck)
         if self.s.sink_from_floor:
-            self._measure_sink(plan, centres, dt)
+            self._measure_sink(plan, rigid, dt)
         self.used = self._correct(plan, centres, rel, r, R)
         return self._state(reading, R, omega, r, plan)
 
@@ -237,7 +246,10 @@ class StateEstimator:
         ``settle_s`` past): returns which were used."""
         used = np.zeros(4, dtype=bool)
         board = plan == BOARD
-        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s))
+        # a floor foot about to lift off pushes with its load going: it slips back, as a stance
+        # foot's row assumes it does not
+        lifting = (plan == GROUND) & (self.schedule(self.now + self.s.liftoff_s) != GROUND)
+        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s) & ~lifting)
         if not len(idx):
             return used
         deck, b = self.deck, self.board
@@ -249,6 +261,7 @@ class StateEstimator:
         held = deck.footholds[:, idx].copy()
         held[2] += b.axis_depth_m
         target = np.where(on_deck, b.deck_height_m - b.axis_depth_m + deck.R[2] @ held, self.rho)
+        target = target - self.give[idx]
         used[idx] = self.odometry.correct_feet(on_deck, rel[:, idx], surface, deck.R[:, 0], target - R[2] @ r[:, idx])
         return used
 
@@ -260,12 +273,12 @@ class StateEstimator:
         over_deck = deck_n @ (centres - deck.pos[:, None]) - self.rho
         over_floor = centres[2] - self.rho
         deck_side = (plan == BOARD) | ((plan != GROUND) & (np.abs(over_deck) < np.abs(over_floor)))
-        gap = np.where(deck_side, over_deck + self.sink, over_floor)  # from where a loaded foot's centre sits
+        gap = np.where(deck_side, over_deck + self.sink, over_floor) + self.give  # from a loaded foot's centre
         touching = gap < self.s.touch_m
         touch = np.where(touching, np.where(deck_side, ON_DECK, ON_FLOOR), 0).astype(np.int8)
         newly = touching & deck_side & ~self.stance & (plan == BOARD)
         if newly.any():  # a foot lands on the deck: where it stands on it
-            hold = deck.R.T @ (centres[:, newly] - deck.pos[:, None])
+            hold = deck.R.T @ (centres[:, newly] + self.give[newly] * deck_n[:, None] - deck.pos[:, None])
             hold[2] = self.rho - self.sink
             deck.footholds[:, newly] = hold
         stance = touching & (plan != 0)
