@@ -5,6 +5,8 @@ CyberDog2 has no foot force sensors: a foot planned on the deck or the ground th
 ``touch_m`` of its surface (its centre's height over the ground, or over the deck's plane) counts
 as touching; one whose velocity disagrees with its surface's is left out of the velocity
 correction (:mod:`.odometry`), so a foot that lands late or early does not pull the estimate.
+A loaded foot gives (:mod:`.loads`): its centre sits that much less than its radius over its
+surface, in the deck's plane, the deck's top, the trunk's height and the touch test alike.
 
 The world frame is the one the robot starts in: the ride's first planned pose (position, heading)
 and speed, standing on a level deck of the board's known height.
@@ -64,11 +66,8 @@ class EstimatorSettings:
     ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
-    the trunk's); ``sink_from_floor``: the deck feet's compression measured against the floor
-    while a foot stands on it (False: a deck foot's centre taken a radius above the deck's top);
-    ``sink_tau_s``: that measurement's low-pass time constant [s]; ``sink_window_s``: it is taken
-    this long after the floor foot settles (then the foot is near under its hip and lightly
-    loaded; later in a push its own give and the attitude's error over its growing lever enter) [s]."""
+    the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
+    lift-off (its load going, it slips back) [s]."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -76,9 +75,6 @@ class EstimatorSettings:
     touch_m: float = 0.005
     settle_s: float = 0.02
     mount_from_legs: bool = True
-    sink_from_floor: bool = True
-    sink_tau_s: float = 0.05
-    sink_window_s: float = 0.1
     liftoff_s: float = 0.1
 
 
@@ -179,7 +175,6 @@ class StateEstimator:
         self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
-        self.sink = 0.0  # how far the deck feet's centres sit below where their give puts them [m]
         self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
@@ -213,32 +208,8 @@ class StateEstimator:
                                      self.g)
         rigid = centres + self.give * normals  # where the centres would be on rigid feet
         self.deck = update_deck(self.deck, board & self.stance, rigid, odo.v[:, None] + rel, dt, self.s.deck)
-        if self.s.sink_from_floor:
-            self._measure_sink(plan, rigid, dt)
         self.used = self._correct(plan, centres, rel, r, R)
         return self._state(reading, R, omega, r, plan)
-
-    def _measure_sink(self, plan: np.ndarray, centres: np.ndarray, dt: float) -> None:
-        """The deck feet's compression from a foot settled on the floor and three or more on the deck:
-        the deck's top is the board's height above the floor under that foot, so the deck feet's
-        centres sit that much less than a radius over it (the feet and the deck give under load;
-        the floor foot's own give is left in, a fraction of a millimetre of clearance). The deck's
-        top and the trunk's height follow the footholds' heights."""
-        deck = self.deck
-        since = self.now - self.down_since
-        settled = self.stance & (since >= self.s.settle_s)
-        floor = np.flatnonzero(settled & (plan == GROUND) & (since < self.s.settle_s + self.s.sink_window_s))
-        if not len(floor) or int((settled & (plan == BOARD)).sum()) < 3 or dt <= 0:
-            return
-        floor_z = float(np.mean(centres[2, floor])) - self.rho  # the floor under the foot (world)
-        over = float(deck.pos[2]) - floor_z  # the deck's top above it as the feet now place it
-        sample = self.sink + self.board.deck_height_m - over
-        last = self.sink
-        # A loaded foot's centre does not sit above a radius over the deck: a sample above is the
-        # floor foot's own give under a hard push or the deck's roll error over its lever.
-        self.sink = max(0.0, last + min(dt / self.s.sink_tau_s, 1.0) * (sample - last))
-        deck.footholds[2] = self.rho - self.sink
-        deck.pos = deck.pos + (self.sink - last) * deck.R[:, 2]
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
                  R: np.ndarray) -> np.ndarray:
@@ -246,8 +217,8 @@ class StateEstimator:
         ``settle_s`` past): returns which were used."""
         used = np.zeros(4, dtype=bool)
         board = plan == BOARD
-        # a floor foot about to lift off pushes with its load going: it slips back, as a stance
-        # foot's row assumes it does not
+        # a floor foot about to lift off pushes with its load going: it slips back, where its row
+        # has it stay put
         lifting = (plan == GROUND) & (self.schedule(self.now + self.s.liftoff_s) != GROUND)
         idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s) & ~lifting)
         if not len(idx):
@@ -273,13 +244,13 @@ class StateEstimator:
         over_deck = deck_n @ (centres - deck.pos[:, None]) - self.rho
         over_floor = centres[2] - self.rho
         deck_side = (plan == BOARD) | ((plan != GROUND) & (np.abs(over_deck) < np.abs(over_floor)))
-        gap = np.where(deck_side, over_deck + self.sink, over_floor) + self.give  # from a loaded foot's centre
+        gap = np.where(deck_side, over_deck, over_floor) + self.give  # from where a loaded foot's centre sits
         touching = gap < self.s.touch_m
         touch = np.where(touching, np.where(deck_side, ON_DECK, ON_FLOOR), 0).astype(np.int8)
         newly = touching & deck_side & ~self.stance & (plan == BOARD)
         if newly.any():  # a foot lands on the deck: where it stands on it
             hold = deck.R.T @ (centres[:, newly] + self.give[newly] * deck_n[:, None] - deck.pos[:, None])
-            hold[2] = self.rho - self.sink
+            hold[2] = self.rho
             deck.footholds[:, newly] = hold
         stance = touching & (plan != 0)
         self.down_since = np.where(stance & ~self.stance, self.now, np.where(stance, self.down_since, np.inf))
