@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control.body_plan import Plan
-from skatelib.control.feedback import MultibodyState, mpc_state
+from skatelib.control.feedback import ON_FLOOR, MultibodyState, mpc_state
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Feedback
 from skatelib.control.mpc import MpcConfig
@@ -113,7 +113,8 @@ class SkateController:
         if self.keeper is not None:
             self.keeper.update(t, st.deck_pos[0:2], st.deck_yaw, float(forward_speed(x)), self.rates.update_s)
         self._applied, self._ticks = np.zeros((3, 4)), 0
-        step = self.mpc_update(t, fb, st.deck_pos[0:2], None if applied is None else applied.T.reshape(-1))
+        step = self.mpc_update(t, fb, st.deck_pos[0:2], None if applied is None else applied.T.reshape(-1),
+                               bool(np.any(st.foot_touch == ON_FLOOR)))
         self.solve_s = step.solve_s
         self.forces = step.forces
         return x

@@ -52,9 +52,13 @@ class MpcUpdate:
         self.qp: MpcProblem | None = None  # the last update's
         self.keeper: LineKeeper | None = None  # steers the board onto the plan's line (the controller updates it)
 
-    def __call__(self, t: float, fb: Feedback, board_xy: np.ndarray, applied: np.ndarray | None) -> MpcStep:
+    def __call__(self, t: float, fb: Feedback, board_xy: np.ndarray, applied: np.ndarray | None,
+                 on_floor: bool = False) -> MpcStep:
         """The update at ``t`` on the feedback ``fb`` (the board's origin at ``board_xy``), after the
-        forces ``applied`` since the last update (12 values, foot by foot; None: none to compare).
+        forces ``applied`` since the last update (12 values, foot by foot; None: none to compare);
+        ``on_floor``: a foot is sensed on the floor (the plan's coast or not, the coast observer
+        then takes no sample: a foot landing early brakes robot and board, which is no rolling
+        friction).
 
         Raises:
             QpSolveFailed: The QP has no solution.
@@ -65,8 +69,8 @@ class MpcUpdate:
             self.observer.predict(self.qp, applied)
         bias = self.observer.update(v_ride, self.dt, float(x[8]))
         ref.observe(t, x, board_xy)
-        measured = self.coast.update(ref.coasting(t), float(momentum_speed(x, self.p.mass_kg, self.p.board_mass_kg)),
-                                     self.dt)
+        speed = float(momentum_speed(x, self.p.mass_kg, self.p.board_mass_kg))
+        measured = self.coast.update(ref.coasting(t) and not on_floor, speed, self.dt)
         coast = ref.prior_coast_mps2(t) if measured is None else measured
         horizon = ref.horizon(t, cfg.horizon, self.dt, board_xy, v_ride, coast if cfg.coast_compensation else None)
         if self.keeper is not None:

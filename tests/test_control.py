@@ -396,3 +396,43 @@ def test_coast_observer_measures_a_constant_deceleration():
     for k in range(20):
         slow.update(True, 0.01 - 0.001 * k, dt)  # below the floor: tanh(k v) is not 1 there
     assert slow.estimate_mps2 is None
+
+
+def test_a_foot_on_the_floor_is_no_coast_sample(lib):
+    """While the plan coasts, a foot sensed on the floor (one landing early) brakes robot and board:
+    the coast observer takes no sample from that update (nor from the next, which has no coasting
+    update before it). Taken (the negative control), a landing's 0.02 m/s of braking over one
+    update (1/30 s) reads as 0.6 m/s^2 of rolling deceleration on top of the board's."""
+    from skatelib.control.reference import EntryReference
+    from skatelib.control.update import MpcUpdate
+    from skatelib.library.channels import S_BOARD_V, S_VEL
+    from skatelib.library.margins import forward_speed
+
+    e = lib[lib.keys()[0]]
+    p = SkateParams.from_library(lib)
+    cfg = MpcConfig()
+    ref = EntryReference(lib, e, p, TrackSettings())
+    dt = cfg.dt
+    t = next(float(tk) for tk in e.t if ref.coasting(float(tk)) and ref.coasting(float(tk) + dt)
+             and forward_speed(np.asarray(e.sample(float(tk)).state)) > 0.1)
+
+    def feedback(tk: float, brake_mps: float) -> Feedback:
+        x = np.asarray(e.sample(tk).state, float).copy()
+        heading = np.array([np.cos(x[5]), np.sin(x[5])])
+        x[S_VEL][0:2] -= brake_mps * heading
+        x[S_BOARD_V] -= brake_mps * heading
+        pts = np.asarray(e.foot_pos[int(np.searchsorted(e.t, tk))], float).T
+        return Feedback(x=x, r_robot=pts - x[0:3, None], r_board=p.moment_arms(board_rotations(x[5], x[26])))
+
+    rolling = p.rolling_N / (p.mass_kg + p.board_mass_kg)
+    estimates = {}
+    for on_floor in (True, False):
+        update = MpcUpdate(EntryReference(lib, e, p, TrackSettings()), p, cfg, dt)
+        board = np.asarray(e.board_pos[int(np.searchsorted(e.t, t))], float)[0:2]
+        update(t, feedback(t, 0.0), board, None)
+        drop = rolling * dt  # the coast's own deceleration over the update
+        update(t + dt, feedback(t + dt, 0.02), board, None, on_floor=on_floor)
+        update(t + 2 * dt, feedback(t + 2 * dt, 0.02 + drop), board, None, on_floor=False)
+        estimates[on_floor] = update.coast.estimate_mps2
+    assert estimates[True] is None, estimates
+    assert estimates[False] is not None and estimates[False] > rolling + 0.3, (estimates, rolling)

@@ -127,3 +127,22 @@ def test_calibration_levels_the_filter_on_the_accelerometer():
     f.calibrate([np.zeros(3)], [R_true.T @ np.array([0.0, 0.0, G])])
     assert np.allclose(f.R[2], R_true[2], atol=1e-12)
     assert abs(yaw_of(f.R) - 0.4) < 2e-3
+
+
+def test_static_loads_by_the_lever_rule():
+    """Three feet carry the weight with no moment about the centre of mass (the lever rule, solved
+    by hand): at the triangle's centroid a third each; moved halfway to one foot, that foot carries
+    two thirds; four feet's least-squares loads still sum to the weight with no moment."""
+    from skatelib.control.estimator.loads import static_loads
+
+    feet = np.array([[0.2, 0.2, -0.2], [0.1, -0.1, 0.0]])
+    centroid = feet.mean(axis=1)
+    assert np.allclose(static_loads(feet, centroid, 150.0), 50.0)
+    toward = centroid + 0.5 * (feet[:, 2] - centroid)
+    f = static_loads(feet, toward, 150.0)
+    assert f[2] == pytest.approx(100.0) and f[0] == pytest.approx(25.0) and f[1] == pytest.approx(25.0)
+    four = np.array([[0.2, 0.2, -0.2, -0.2], [0.1, -0.1, 0.1, -0.1]])
+    com = np.array([0.03, -0.02])
+    f4 = static_loads(four, com, 150.0)
+    assert f4.sum() == pytest.approx(150.0)
+    assert np.allclose((four - com[:, None]) @ f4, 0.0, atol=1e-9)

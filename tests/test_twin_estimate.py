@@ -119,7 +119,7 @@ class _Side:
     errors (:class:`EstimatorErrors`) and the trunk's attitude error, tilt and heading [rad]."""
 
     def __init__(self, feedback: EstimatedFeedback):
-        self.fb, self.tilt, self.yaw, self.over_deck = feedback, [], [], []
+        self.fb, self.tilt, self.yaw, self.over_deck, self.height = feedback, [], [], [], []
 
     def __call__(self, true) -> None:
         est = self.fb(true)
@@ -128,10 +128,14 @@ class _Side:
         # the trunk's place on the deck (deck frame): what the feet's kinematics carry
         self.over_deck.append(float(np.linalg.norm(est.deck_R.T @ (est.trunk_pos - est.deck_pos)
                                                    - true.deck_R.T @ (true.trunk_pos - true.deck_pos))))
+        # the trunk's height over the deck's top (what places the body and the push foot over the floor)
+        self.height.append(float(est.deck_R[:, 2] @ (est.trunk_pos - est.deck_pos)
+                                 - true.deck_R[:, 2] @ (true.trunk_pos - true.deck_pos)))
 
     def summary(self) -> dict[str, float]:
         return {**self.fb.errors.summary(), "tilt_mean": float(np.mean(self.tilt)),
-                "yaw_end": abs(self.yaw[-1]), "on_deck_mean": float(np.mean(self.over_deck))}
+                "yaw_end": abs(self.yaw[-1]), "on_deck_mean": float(np.mean(self.over_deck)),
+                "height_mean": float(np.mean(self.height))}
 
 
 SENSOR_CASES = {
@@ -169,6 +173,8 @@ def sensor_runs(lib_path):
     unaligned = EstimatorSettings(mount_from_legs=False)
     for name in ("clean", "imu_tilt", "accel_bias"):
         sides[f"{name}_unaligned"] = side(SENSOR_CASES[name], unaligned)
+    sides["default_rigid_feet"] = side(SENSOR_CASES["default"])
+    sides["default_rigid_feet"].fb.estimator.body = None  # no give of the feet under load
     sides["gyro_bias_unestimated"] = side(SENSOR_CASES["gyro_bias"])
     sides["gyro_bias_unestimated"].fb.estimator.attitude.gyro_bias = np.zeros(3)
     truth = loop.feedback
@@ -214,6 +220,19 @@ def test_the_imu_mounting_from_the_legs(sensor_runs):
     for name in ("imu_tilt", "accel_bias"):
         assert r[name]["tilt_mean"] < 0.005, (name, r[name])
     assert r["imu_tilt"]["board_roll_rms"] < r["clean"]["board_roll_rms"] + 0.002, (r["imu_tilt"], r["clean"])
+
+
+def test_the_feet_give_under_load(sensor_runs):
+    """Against the twin's truth on the same ride: with each stance foot's give under its static
+    share of the weight taken out, the trunk's height over the deck is within 1 mm and the deck's
+    roll within 0.005 rad RMS. Negative control: the feet taken for rigid spheres read the height
+    more than 2 mm high (the twin's loaded feet sink 1.4-3.6 mm) and the roll more than 0.007 rad
+    RMS off (three deck feet loaded unequally give unequally and tilt the plane through them)."""
+    given, rigid = sensor_runs["default"], sensor_runs["default_rigid_feet"]
+    assert abs(given["height_mean"]) < 0.001, given
+    assert given["board_roll_rms"] < 0.005, given
+    assert rigid["height_mean"] > 0.002, rigid
+    assert rigid["board_roll_rms"] > 0.007, rigid
 
 
 def test_an_unestimated_gyro_bias_drifts(sensor_runs):

@@ -5,6 +5,8 @@ CyberDog2 has no foot force sensors: a foot planned on the deck or the ground th
 ``touch_m`` of its surface (its centre's height over the ground, or over the deck's plane) counts
 as touching; one whose velocity disagrees with its surface's is left out of the velocity
 correction (:mod:`.odometry`), so a foot that lands late or early does not pull the estimate.
+A loaded foot gives (:mod:`.loads`): its centre sits that much less than its radius over its
+surface, in the deck's plane, the deck's top, the trunk's height and the touch test alike.
 
 The world frame is the one the robot starts in: the ride's first planned pose (position, heading)
 and speed, standing on a level deck of the board's known height.
@@ -17,9 +19,10 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-import pinocchio as pin
 from skatelib.control.estimator.attitude import AttitudeFilter, AttitudeSettings
 from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, plane_normal, update_deck
+from skatelib.control.estimator.legs import LegTermsBuffer, leg_terms
+from skatelib.control.estimator.loads import BodyFigures, compressions
 from skatelib.control.estimator.odometry import LegOdometry, OdometrySettings
 from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
@@ -63,7 +66,8 @@ class EstimatorSettings:
     ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
-    the trunk's)."""
+    the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
+    lift-off (its load going, it slips back) [s]."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -71,60 +75,7 @@ class EstimatorSettings:
     touch_m: float = 0.005
     settle_s: float = 0.02
     mount_from_legs: bool = True
-
-
-@dataclass
-class LegTerms:
-    """The legs at the measured joints (trunk frame): foot centres (3, 4), their linear and angular
-    Jacobians in the legs' joints (4, 3, 3 each)."""
-
-    r: np.ndarray
-    J: np.ndarray
-    Jw: np.ndarray
-
-
-def leg_terms(kin: LegKinematics, q: np.ndarray) -> LegTerms:
-    """Foot centres and Jacobians of the fixed-trunk model at ``q`` (channel order)."""
-    qp = pin.neutral(kin.model)
-    qp[kin.q_index] = q
-    pin.computeJointJacobians(kin.model, kin.data, qp)
-    pin.updateFramePlacements(kin.model, kin.data)
-    r, J, Jw = np.empty((3, 4)), np.empty((4, 3, 3)), np.empty((4, 3, 3))
-    for i, f in enumerate(kin.feet):
-        r[:, i] = kin.data.oMf[f].translation
-        full = pin.getFrameJacobian(kin.model, kin.data, f, pin.LOCAL_WORLD_ALIGNED)[:, kin.v_index[3 * i:3 * i + 3]]
-        J[i], Jw[i] = full[:3], full[3:]
-    return LegTerms(r, J, Jw)
-
-
-class LegTermsBuffer:
-    """:func:`leg_terms` for every tick: its configuration and outputs kept, each leg's Jacobian
-    columns a plain slice (the legs' joints follow each other in the model, as CyberDog2's do; else
-    :func:`leg_terms` itself)."""
-
-    def __init__(self, kin: LegKinematics):
-        self.kin = kin
-        self.qp = pin.neutral(kin.model)
-        v = [int(i) for i in kin.v_index]
-        self.cols = [slice(v[3 * i], v[3 * i] + 3) if v[3 * i:3 * i + 3] == list(range(v[3 * i], v[3 * i] + 3))
-                     else None for i in range(4)]
-        self.frames = list(enumerate(kin.feet))
-
-    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Foot centres (3, 4), linear and angular Jacobians (4, 3, 3) at ``q`` (channel order)."""
-        kin = self.kin
-        if any(c is None for c in self.cols):
-            legs = leg_terms(kin, q)
-            return legs.r, legs.J, legs.Jw
-        m, d = kin.model, kin.data
-        self.qp[kin.q_index] = q
-        pin.computeJointJacobians(m, d, self.qp)
-        pin.updateFramePlacements(m, d)
-        r, J = np.empty((3, 4)), np.empty((4, 6, 3))
-        for i, f in self.frames:
-            r[:, i] = d.oMf[f].translation
-            J[i] = pin.getFrameJacobian(m, d, f, pin.LOCAL_WORLD_ALIGNED)[:, self.cols[i]]
-        return r, J[:, :3], J[:, 3:]
+    liftoff_s: float = 0.1
 
 
 class StateEstimator:
@@ -138,12 +89,14 @@ class StateEstimator:
             touch codes say which stand on the deck).
         settings: The parts' settings.
         gravity_mps2: g.
+        body: The robot's mass, centre of mass and feet's compliance (None: rigid feet).
     """
 
     def __init__(self, kin: LegKinematics, board: BoardGeometry, schedule: Callable[[float], np.ndarray],  # noqa: PLR0913
                  start: RobotState, settings: EstimatorSettings | None = None, gravity_mps2: float = 9.81,
-                 imu_mount: np.ndarray | None = None):
+                 imu_mount: np.ndarray | None = None, body: BodyFigures | None = None):
         self.kin, self.board, self.schedule = kin, board, schedule
+        self.body = body
         self.s = settings or EstimatorSettings()
         self.g = gravity_mps2
         self.attitude = AttitudeFilter(start.trunk_R, self.s.attitude, imu_mount)
@@ -168,6 +121,7 @@ class StateEstimator:
         self.now = 0.0
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
+        self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -195,7 +149,11 @@ class StateEstimator:
         normals = np.where(board, self.deck.R[:, 2:3], UP[:, None])
         rel -= cross(spin, self.rho * normals)
         centres = odo.p[:, None] + R @ r
-        self.deck = update_deck(self.deck, board & self.stance, centres, odo.v[:, None] + rel, dt, self.s.deck)
+        if self.body is not None:
+            self.give = compressions(centres, self.stance & (plan != 0), odo.p + R @ self.body.com_offset_m, self.body,
+                                     self.g)
+        rigid = centres + self.give * normals  # where the centres would be on rigid feet
+        self.deck = update_deck(self.deck, board & self.stance, rigid, odo.v[:, None] + rel, dt, self.s.deck)
         self.used = self._correct(plan, centres, rel, r, R)
         return self._state(reading, R, omega, r, plan)
 
@@ -205,7 +163,10 @@ class StateEstimator:
         ``settle_s`` past): returns which were used."""
         used = np.zeros(4, dtype=bool)
         board = plan == BOARD
-        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s))
+        # a floor foot about to lift off pushes with its load going: it slips back, where its row
+        # has it stay put
+        lifting = (plan == GROUND) & (self.schedule(self.now + self.s.liftoff_s) != GROUND)
+        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s) & ~lifting)
         if not len(idx):
             return used
         deck, b = self.deck, self.board
@@ -217,6 +178,7 @@ class StateEstimator:
         held = deck.footholds[:, idx].copy()
         held[2] += b.axis_depth_m
         target = np.where(on_deck, b.deck_height_m - b.axis_depth_m + deck.R[2] @ held, self.rho)
+        target = target - self.give[idx]
         used[idx] = self.odometry.correct_feet(on_deck, rel[:, idx], surface, deck.R[:, 0], target - R[2] @ r[:, idx])
         return used
 
@@ -228,12 +190,12 @@ class StateEstimator:
         over_deck = deck_n @ (centres - deck.pos[:, None]) - self.rho
         over_floor = centres[2] - self.rho
         deck_side = (plan == BOARD) | ((plan != GROUND) & (np.abs(over_deck) < np.abs(over_floor)))
-        gap = np.where(deck_side, over_deck, over_floor)
+        gap = np.where(deck_side, over_deck, over_floor) + self.give  # from where a loaded foot's centre sits
         touching = gap < self.s.touch_m
         touch = np.where(touching, np.where(deck_side, ON_DECK, ON_FLOOR), 0).astype(np.int8)
         newly = touching & deck_side & ~self.stance & (plan == BOARD)
         if newly.any():  # a foot lands on the deck: where it stands on it
-            hold = deck.R.T @ (centres[:, newly] - deck.pos[:, None])
+            hold = deck.R.T @ (centres[:, newly] + self.give[newly] * deck_n[:, None] - deck.pos[:, None])
             hold[2] = self.rho
             deck.footholds[:, newly] = hold
         stance = touching & (plan != 0)

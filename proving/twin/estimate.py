@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from skatelib.control.estimator.estimator import BoardGeometry, EstimatorSettings, StateEstimator
+from skatelib.control.estimator.loads import BodyFigures
 from skatelib.control.feedback import ON_DECK, RobotState
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.params import SkateParams
@@ -77,8 +78,9 @@ class EstimatedFeedback:
         self.sensors = TwinSensors(plant, tick_s, errors, seed)
         board = lib.quadruped_model.board
         geometry = BoardGeometry(deck_height_m=board.deck_height_m, axis_depth_m=p.roll_axis_depth_m)
+        body = BodyFigures(p.mass_kg, np.asarray(p.com_offset_m, dtype=float))
         self.estimator = StateEstimator(LegKinematics.from_library(lib), geometry, schedule, start, settings,
-                                        p.gravity_mps2)
+                                        p.gravity_mps2, body=body)
         self.estimator.calibrate(self.sensors.standstill(round(CALIBRATION_S / tick_s)))
         self.errors = EstimatorErrors()
 
