@@ -90,7 +90,7 @@ class LipStabilizer:
         """The COM (world, anchored on the support soles), the measured ZMP and each sole's load and
         CoP relative to its centre (foot frame: x, y)."""
         c, soles, pts, rots = self.kin.measure(qfull)
-        sup = r.support
+        sup = r.anchors
         anchor = np.mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]], axis=0)
         rel = c - np.mean([soles[s] for s in (0, 1) if sup[s]], axis=0)
         self.swing_z = soles[:, 2] + anchor[2]

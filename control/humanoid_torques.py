@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
-from skatelib.control.humanoid_reference import GROUND_M, HumanoidReference
+from skatelib.control.humanoid_reference import HumanoidReference
 
 MOMENT_ARM_M = 0.1  # a sole's moment counts in the least norm as a force at this arm
 MIN_SHARE = 0.02  # a support sole carries at least this share of the force in the least norm
@@ -39,7 +39,7 @@ class PlannedTorques:
     def __init__(self, kin: HumanoidKinematics, ref: HumanoidReference):
         model = kin.model
         t, base, q, zmp = ref.t, ref.base, ref.q, ref.zmp
-        support, soles = ref.feet[:, :, 2] < GROUND_M, ref.feet[:, :, 0:3]
+        support, soles = ref.support, ref.feet[:, :, 0:3]
         self.t = np.asarray(t, dtype=float)
         configs = [np.concatenate([base[k, 0:3], base[k, 3:7] / np.linalg.norm(base[k, 3:7]), q[k]])
                    for k in range(len(t))]
