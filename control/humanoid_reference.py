@@ -64,6 +64,8 @@ class ReferenceSample:
     ground_z: float = 0.0  # the support soles' plane (the ground's 0, a skate's deck on the board)
     sole_plane: np.ndarray = field(default_factory=lambda: np.zeros(2))  # (2,) the surface under each sole [m]
     anchored: np.ndarray | None = None  # (2,) the soles whose planned place anchors the estimate (None: support)
+    sole_vel: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))  # (2, 3) the soles' planned velocity
+    sole_pitch: np.ndarray = field(default_factory=lambda: np.zeros(2))  # (2,) heel up: a toe-off [rad]
 
     @property
     def anchors(self) -> np.ndarray:
@@ -140,6 +142,7 @@ class HumanoidReference:
             over = model.board.over_deck(self.feet[:, :, 0:2], self.feet[:, None, 0, 0:2])
             self.plane = np.where(over, model.board.deck_height_m, 0.0)
         self.support = self._lowest(self.feet) - self.plane < GROUND_M
+        self.sole_vel = np.gradient(self.feet[:, :, 0:3], self.t, axis=0)
 
     def _lowest(self, feet: np.ndarray) -> np.ndarray:
         """Each sole's lowest edge (..., 2): its toe on a heel raised (pitched) sole."""
@@ -166,4 +169,5 @@ class HumanoidReference:
             com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
             zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
             sole_size=(m.foot_length_m, m.foot_width_m), ground_z=float(plane[support].mean()) if support.any() else 0.0,
-            sole_plane=plane.copy(), anchored=(support & (plane == 0.0)) if (support & (plane == 0.0)).any() else None)
+            sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
+            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(), anchored=(support & (plane == 0.0)) if (support & (plane == 0.0)).any() else None)

@@ -50,14 +50,21 @@ class PlannedTorques:
         v = np.vstack([vi[0], (vi[:-1] + vi[1:]) / 2, vi[-1]])
         a = np.gradient(v, self.t, axis=0)
         self.qd = v[:, 6:]
-        self.tau = np.array([self._torque(kin, configs[k], v[k], a[k], support_shares(support[k], soles[k], zmp[k]))
-                             for k in range(len(t))])
+        # A sole on a skate's deck stands on a board that rolls along x: while a sole on the ground
+        # pushes, that one carries the robot's force along the board (the board's own inertia and
+        # rolling resistance left out).
+        rolling = ref.support & (ref.plane > 0.0)
+        pushing = rolling & (ref.support & (ref.plane == 0.0)).any(axis=1, keepdims=True)
+        self.tau = np.array([self._torque(kin, configs[k], v[k], a[k], support_shares(support[k], soles[k], zmp[k]),
+                                          pushing[k]) for k in range(len(t))])
         zero = np.zeros(model.nv)
         self.hold = self._torque(kin, configs[-1], zero, zero, support_shares(support[-1], soles[-1], ref.com[-1, 0:2]))
 
     @staticmethod
-    def _torque(kin: HumanoidKinematics, qf: np.ndarray, v: np.ndarray, a: np.ndarray, share: np.ndarray
-                ) -> np.ndarray:
+    def _torque(kin: HumanoidKinematics, qf: np.ndarray, v: np.ndarray, a: np.ndarray, share: np.ndarray,
+                free_x: np.ndarray | None = None) -> np.ndarray:
+        """The joint torques of the motion (qf, v, a) with the base's wrench carried by the soles
+        by ``share``; a sole of ``free_x`` carries no force along x."""
         model, data = kin.model, kin.data
         b = pin.rnea(model, data, qf, v, a)
         pin.computeJointJacobians(model, data, qf)
@@ -67,6 +74,10 @@ class PlannedTorques:
         scale = np.diag([1.0, 1.0, 1.0, 1 / MOMENT_ARM_M, 1 / MOMENT_ARM_M, 1 / MOMENT_ARM_M])
         A = np.hstack([J[i][:, 0:6].T @ scale for i in range(len(on))])  # base rows, scaled wrenches
         w = np.concatenate([np.full(6, share[s]) for s in on])  # the least norm's inverse weights
+        if free_x is not None:
+            for i, s in enumerate(on):
+                if free_x[s]:
+                    w[6 * i] = 0.0
         y = w * (A.T @ np.linalg.solve((A * w) @ A.T, b[0:6]))
         tau = b[6:].copy()
         for i in range(len(on)):
