@@ -120,6 +120,13 @@ class ReferenceSample:
                        [self.sole_size[0] / 2, self.sole_size[1] / 2])
 
 
+def _ground_anchors(support: np.ndarray, plane: np.ndarray) -> np.ndarray | None:
+    """The support soles on the ground when the others stand on a board (a skate's push), else
+    None (all support soles anchor)."""
+    ground, deck = support & (plane == 0.0), support & (plane > 0.0)
+    return ground if ground.any() and deck.any() else None
+
+
 class HumanoidReference:
     """An entry's whole body sampled at any time (linear between knots, clamped at the ends)."""
 
@@ -142,7 +149,8 @@ class HumanoidReference:
             over = model.board.over_deck(self.feet[:, :, 0:2], self.feet[:, None, 0, 0:2])
             self.plane = np.where(over, model.board.deck_height_m, 0.0)
         self.support = self._lowest(self.feet) - self.plane < GROUND_M
-        self.sole_vel = np.gradient(self.feet[:, :, 0:3], self.t, axis=0)
+        # A sole on the ground stands still; one on a deck rides at the board's planned speed.
+        self.sole_vel = np.where((self.plane > 0.0)[:, :, None], np.gradient(self.feet[:, :, 0:3], self.t, axis=0), 0.0)
 
     def _lowest(self, feet: np.ndarray) -> np.ndarray:
         """Each sole's lowest edge (..., 2): its toe on a heel raised (pitched) sole."""
@@ -170,4 +178,4 @@ class HumanoidReference:
             zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
             sole_size=(m.foot_length_m, m.foot_width_m), ground_z=float(plane[support].mean()) if support.any() else 0.0,
             sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
-            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(), anchored=(support & (plane == 0.0)) if (support & (plane == 0.0)).any() else None)
+            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(), anchored=_ground_anchors(support, plane))
