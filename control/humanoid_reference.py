@@ -176,6 +176,8 @@ class HumanoidReference:
             com=self._at(self.com, t), com_vel=np.zeros(3) if still else self._at(self.com_vel, t),
             com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
             zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
-            sole_size=(m.foot_length_m, m.foot_width_m), ground_z=float(plane[support].mean()) if support.any() else 0.0,
+            sole_size=(m.foot_length_m, m.foot_width_m),
+            ground_z=float(plane[support].mean()) if support.any() else 0.0,
             sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
-            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(), anchored=_ground_anchors(support, plane))
+            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(),
+            anchored=_ground_anchors(support, plane))

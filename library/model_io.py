@@ -119,5 +119,6 @@ def read_humanoid_model(attrs: Mapping[str, Any]) -> HumanoidModel:
 def attribute_names() -> tuple[str, ...]:
     """Every ``/model`` attribute and dataset name the records know (the layout checker keeps them
     in library/)."""
-    names = [f.metadata[ATTR] for cls in (QuadrupedModel, BoardModel, HumanoidModel, HumanoidBoard) for f in _attr_fields(cls)]
+    records = (QuadrupedModel, BoardModel, HumanoidModel, HumanoidBoard)
+    names = [f.metadata[ATTR] for cls in records for f in _attr_fields(cls)]
     return (*names, LEGACY_PIVOT_ATTR, *QuadrupedArrays.names())

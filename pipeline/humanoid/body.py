@@ -68,8 +68,7 @@ def feet_for(cfg: HumanoidConfig, m: Motion) -> np.ndarray:
     if cfg.sweep.motion == "walk":
         return walking_feet(m.plan, m.t, w.swing_height_m, h.step_width_m)
     toe_off = ToeOff(cfg.skate.toe_off_s, cfg.skate.toe_off_rad, h.foot_length_m / 2)
-    return skating_feet(m.plan, m.t, w.swing_height_m, h.step_width_m, w.skate_swing_s, toe_off,
-                        cfg.skate.landing_behind_m)
+    return skating_feet(m.plan, m.t, w.swing_height_m, h.step_width_m, w.skate_swing_s, toe_off)
 
 
 def whole_body(cfg: HumanoidConfig, m: Motion, robot: Humanoid) -> BodyMotion:

@@ -200,10 +200,11 @@ def _check_skate(path: Path, cfg: HumanoidConfig) -> None:
     rear = b.foot_ahead_m - cfg.skate.landing_behind_m - h.foot_length_m / 2
     if front > b.deck_length_m / 2 or rear < -b.deck_length_m / 2:
         raise ConfigError(path, "board.foot_ahead_m", f"the soles span {rear:+.3f} to {front:+.3f} m along the deck "
-                                                      f"(its ends at +-{b.deck_length_m / 2:.3f} m): place the board "
-                                                      "foot, skate.landing_behind_m or the deck's length so both fit")
+                                                      f"(its ends at +-{b.deck_length_m / 2:.3f} m): move the board "
+                                                      "foot, or change skate.landing_behind_m or the deck's length")
     if h.foot_width_m > b.deck_width_m:
-        raise ConfigError(path, "board.deck_width_m", f"{b.deck_width_m} m is narrower than a sole ({h.foot_width_m} m)")
+        raise ConfigError(path, "board.deck_width_m", f"{b.deck_width_m} m is narrower than a sole "
+                                                      f"({h.foot_width_m} m): widen the deck")
     gap = h.step_width_m - h.foot_width_m / 2 - b.deck_width_m / 2
     if gap <= 0.0:
         raise ConfigError(path, "board.deck_width_m", f"the pushing foot on the ground (humanoid.step_width_m = "

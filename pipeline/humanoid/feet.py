@@ -142,12 +142,13 @@ SWING_ACROSS = 0.3
 
 
 def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float,
-                 swing_s: float, toe_off: ToeOff | None = None, landing_behind_m: float = 0.0) -> np.ndarray:
+                 swing_s: float, toe_off: ToeOff | None = None) -> np.ndarray:
     """Both feet along a skating plan (push, slide, stop; module docstring). The board foot stands
     on the deck (the height of its planned support point). The pushing foot's swing takes the
     first ``swing_s`` of the slide, planned for its toe relative to the board foot: it leaves the
-    ground at rest (moving backwards relative to the board) and lands at rest on the board,
-    ``landing_behind_m`` behind the board foot on its line (0: beside it); along the board on a
+    ground at rest (moving backwards relative to the board) and lands at rest on the board where
+    the plan's stop stands it (the slide's DCM target is midway between the soles: behind the
+    board foot on the deck's line, or beside it); along the board on a
     minimum-jerk path, up to the deck over the swing's first half and across over its last 70 %
     (rest to rest), with the cycloid's ``height_m`` on top; its sole lies flat again when it lands."""
     push, slide = plan[0], plan[1]
@@ -164,8 +165,9 @@ def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
     board = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
     feet[:, RIGHT, 0:3] = board
     toe = np.array([toe_off.toe_m, 0.0, 0.0])
-    # Where the pushing foot lands, relative to the board foot.
-    landing = np.array([-landing_behind_m, 0.0, 0.0]) if landing_behind_m > 0.0 else np.array([0.0, step_width_m, 0.0])
+    # Where the pushing foot lands, relative to the board foot: the slide ends with its DCM midway
+    # between the two soles on the board.
+    landing = 2 * (np.asarray(slide.p_step, dtype=np.float64) - (board_end + v * slide.duration_s))
     start = ground + toe - board_end
     along = minimum_jerk((start[0:1], -v[0:1], [0.0]), (landing[0:1] + toe[0:1], [0.0], [0.0]), Ts)
     phase = np.clip((t - T1) / Ts, 0.0, 1.0)
