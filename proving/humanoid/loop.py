@@ -1,7 +1,8 @@
 """A humanoid entry executed on the twin: the stabilizer (500 Hz) reads the twin's sensors and
 sends joint angle targets to its servos (1 kHz physics), with the plan's joint speeds and the
 torques its motion needs fed forward (:mod:`skatelib.control.humanoid_torques`), through the entry
-and a static hold at its end; what the twin did and what was planned, sampled at every tick."""
+and a static hold at its end; what the twin did and what was planned, sampled at every tick (a
+skate's also its deck's speed and its soles' places on the deck)."""
 
 from __future__ import annotations
 
@@ -137,10 +138,10 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
                      ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque),
                      ("plane", s.sole_plane)):
             rows[k].append(np.asarray(v))
-        if skate:
+        if tr.deck_R is not None and tr.deck_v is not None:
             rows["deck_pos"].append(tr.on_deck(tr.sole_pos))
-            rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))  # type: ignore[index]
-            rows["deck_v"].append(np.asarray(tr.deck_v))
+            rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))
+            rows["deck_v"].append(tr.deck_v)
         airborne = np.isnan(tr.zmp).any()
         down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
         clock = s
@@ -155,8 +156,8 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
             fell_at = tr.t
             break
     a = {k: np.array(v) for k, v in rows.items()}
-    extra = dict(sole_plane=a["plane"], sole_deck_pos=a["deck_pos"], sole_deck_yaw=a["deck_yaw"], deck_v=a["deck_v"],
-                 push_end_s=push_end_s(lib, key)) if skate else {}
     return HumanoidRun(key, a["t"], a["com"], a["com_ref"], a["zmp"], a["zmp_measured"], a["zmp_ref"], a["margin"],
                        a["margin_clock"], a["support"], a["sole_pos"], a["sole_yaw"], a["sole_fz"], a["torque"],
-                       f.torque_limit_Nm, fell_at, reason, **extra)
+                       f.torque_limit_Nm, fell_at, reason, sole_plane=a["plane"] if skate else None,
+                       sole_deck_pos=a["deck_pos"] if skate else None, sole_deck_yaw=a["deck_yaw"] if skate else None,
+                       deck_v=a["deck_v"] if skate else None, push_end_s=push_end_s(lib, key))

@@ -6,7 +6,7 @@ ground and the soles' slip on the deck (its COM, ZMP and polygon relative to the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.proving.humanoid.loop import HumanoidRun
@@ -81,11 +81,11 @@ def _slips(run: HumanoidRun, support: np.ndarray, pos: np.ndarray, yaw_: np.ndar
     return slip, yaw
 
 
-def _skate(run: HumanoidRun) -> dict[str, float | None]:
-    """A skate's figures: the board's speed when the push ends, the pushing sole's slip on the
-    ground while it pushed and the soles' slip on the deck while they stood on it."""
+def _skate(run: HumanoidRun, v: HumanoidVerdict, label_mps: float | None) -> HumanoidVerdict:
+    """``v`` with a skate's figures: the board's speed when the push ends, the pushing sole's slip
+    on the ground while it pushed and the soles' slip on the deck while they stood on it."""
     if run.sole_plane is None or run.sole_deck_pos is None or run.sole_deck_yaw is None or run.deck_v is None:
-        return {}
+        return v
     on_deck = run.support & (run.sole_plane > 0.0)
     on_ground = run.support & (run.sole_plane == 0.0)
     push, _ = _slips(run, on_ground, run.sole_pos, run.sole_yaw)
@@ -94,7 +94,8 @@ def _skate(run: HumanoidRun) -> dict[str, float | None]:
     if run.push_end_s is not None and len(run.t) and run.t[-1] >= run.push_end_s:
         k = int(np.searchsorted(run.t, run.push_end_s))
         board = float(np.linalg.norm(run.deck_v[k, 0:2]))
-    return {"push_slip_m": push, "deck_slip_m": deck, "deck_yaw_slip_rad": deck_yaw, "board_mps": board}
+    return replace(v, push_slip_m=push, deck_slip_m=deck, deck_yaw_slip_rad=deck_yaw, board_mps=board,
+                   label_mps=label_mps)
 
 
 def verdict(run: HumanoidRun, label_mps: float | None = None) -> HumanoidVerdict:
@@ -104,10 +105,10 @@ def verdict(run: HumanoidRun, label_mps: float | None = None) -> HumanoidVerdict
     ec = np.linalg.norm(run.com[:, 0:2] - run.com_ref[:, 0:2], axis=1)
     ground = run.support if run.sole_plane is None else run.support & (run.sole_plane == 0.0)
     slip, yaw = _slips(run, ground, run.sole_pos, run.sole_yaw)
-    return HumanoidVerdict(
+    v = HumanoidVerdict(
         key=run.key, fell=run.fall_reason, com_rms_m=float(np.sqrt(np.mean(ec**2))), com_max_m=float(ec.max()),
         zmp_rms_m=float(np.sqrt(np.mean(ez**2))), zmp_max_m=float(ez.max()),
         zmp_outside_m=float(max(0.0, -run.zmp_margin[ok].min())) if ok.any() else np.inf,
         zmp_outside_clock_m=float(max(0.0, -run.zmp_margin_clock[ok].min())) if ok.any() else np.inf, slip_m=slip,
-        yaw_slip_rad=yaw, torque_ratio=float(np.abs(run.torque / run.torque_limit).max()),
-        label_mps=label_mps if run.sole_plane is not None else None, **_skate(run))  # type: ignore[arg-type]
+        yaw_slip_rad=yaw, torque_ratio=float(np.abs(run.torque / run.torque_limit).max()))
+    return _skate(run, v, label_mps)
