@@ -85,6 +85,14 @@ def _fallen(tr: Truth) -> str:
     return ""
 
 
+def _deck_rows(rows: dict[str, list[np.ndarray]], tr: Truth) -> None:
+    """A skate's deck samples: the soles' places and yaws on the deck, the deck's velocity."""
+    if tr.deck_R is not None and tr.deck_v is not None:
+        rows["deck_pos"].append(tr.on_deck(tr.sole_pos))
+        rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))
+        rows["deck_v"].append(tr.deck_v)
+
+
 @dataclass(frozen=True)
 class RunOptions:
     """How a run goes besides the plant's errors and the stabilizer's gains.
@@ -138,10 +146,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
                      ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque),
                      ("plane", s.sole_plane)):
             rows[k].append(np.asarray(v))
-        if tr.deck_R is not None and tr.deck_v is not None:
-            rows["deck_pos"].append(tr.on_deck(tr.sole_pos))
-            rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))
-            rows["deck_v"].append(tr.deck_v)
+        _deck_rows(rows, tr)
         airborne = np.isnan(tr.zmp).any()
         down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
         clock = s
