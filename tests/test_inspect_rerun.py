@@ -82,6 +82,8 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
 
 def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
     """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
+    from skatelib.pipeline.humanoid.motion import PUSH_SEGMENTS
+
     cfg = load_config(CONFIG_DIR / "hrp2_skate.toml")
     lib_path = build_library(cfg, tmp_path / "s.h5", BuildOptions(jobs=1, cache=False)).path
     out = tmp_path / "h.rrd"
@@ -93,7 +95,7 @@ def test_humanoid_recording_has_com_zmp_and_soles(tmp_path):
     assert np.allclose(np.array([p[0] for p in com["Points3D:positions"]])[:, 2], e.state[:, 2], atol=1e-6)
     assert "/skate_v1.00/zmp" in cols and "/skate_v1.00/soles" in cols and "/skate_v1.00/plots/com_vx" in cols
     (strips,) = cols["/skate_v1.00/support_polygons"]["LineStrips3D:strips"]  # one static row
-    assert len(strips) == 12  # 10 push segments, the slide, the stop
+    assert len(strips) == PUSH_SEGMENTS + 2  # the push's segments, the slide, the stop
     assert "/v1.00_s0" not in cols
 
 
