@@ -5,7 +5,7 @@ support soles' rectangles) that holds the desired ZMP."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from skatelib.library import schema
@@ -61,7 +61,17 @@ class ReferenceSample:
     zmp: np.ndarray
     gravity: float
     sole_size: tuple[float, float]
-    ground_z: float = 0.0
+    ground_z: float = 0.0  # the support soles' plane (the ground's 0, a skate's deck on the board)
+    sole_plane: np.ndarray = field(default_factory=lambda: np.zeros(2))  # (2,) the surface under each sole [m]
+    anchored: np.ndarray | None = None  # (2,) the soles whose planned place anchors the estimate (None: support)
+    sole_vel: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))  # (2, 3) the soles' planned velocity
+    sole_pitch: np.ndarray = field(default_factory=lambda: np.zeros(2))  # (2,) heel up: a toe-off [rad]
+
+    @property
+    def anchors(self) -> np.ndarray:
+        """The soles whose planned place the robot takes as known (the support soles; on a skate's
+        push the one on the ground alone: the board under the other rolls where it rolls)."""
+        return self.support if self.anchored is None else self.anchored
 
     def polygon(self, margin: float = 0.0) -> np.ndarray:
         """The support soles' convex hull, each sole shrunk by ``margin``."""
@@ -77,7 +87,7 @@ class ReferenceSample:
     def with_landed(self, load_N: np.ndarray, min_load_N: float, window_m: float) -> ReferenceSample:
         """This sample with the soles landed early among its support: those the plan still swings
         but has within ``window_m`` of the ground, carrying ``min_load_N`` of ``load_N`` (2,)."""
-        landed = (~self.support) & (self.soles[:, 2] < window_m) & (np.asarray(load_N) > min_load_N)
+        landed = (~self.support) & (self.soles[:, 2] - self.sole_plane < window_m) & (np.asarray(load_N) > min_load_N)
         return replace(self, support=self.support | landed) if landed.any() else self
 
     def clamp(self, p: np.ndarray, margin: float) -> np.ndarray:
@@ -110,6 +120,13 @@ class ReferenceSample:
                        [self.sole_size[0] / 2, self.sole_size[1] / 2])
 
 
+def _ground_anchors(support: np.ndarray, plane: np.ndarray) -> np.ndarray | None:
+    """The support soles on the ground when the others stand on a board (a skate's push), else
+    None (all support soles anchor)."""
+    ground, deck = support & (plane == 0.0), support & (plane > 0.0)
+    return ground if ground.any() and deck.any() else None
+
+
 class HumanoidReference:
     """An entry's whole body sampled at any time (linear between knots, clamped at the ends)."""
 
@@ -125,6 +142,20 @@ class HumanoidReference:
         self.zmp = np.asarray(a[schema.D_ZMP])
         self.model = model
         self.duration_s = float(self.t[-1])
+        # The surface under each sole at each knot: a skate's deck where the sole is over it (under
+        # the board sole, where its deck is), else the ground; a planned sole on it supports.
+        self.plane = np.zeros((len(self.t), 2))
+        if model.board is not None:
+            over = model.board.over_deck(self.feet[:, :, 0:2], self.feet[:, None, 0, 0:2])
+            self.plane = np.where(over, model.board.deck_height_m, 0.0)
+        self.support = self._lowest(self.feet) - self.plane < GROUND_M
+        # A sole on the ground stands still; one on a deck rides at the board's planned speed.
+        self.sole_vel = np.where((self.plane > 0.0)[:, :, None], np.gradient(self.feet[:, :, 0:3], self.t, axis=0), 0.0)
+
+    def _lowest(self, feet: np.ndarray) -> np.ndarray:
+        """Each sole's lowest edge (..., 2): its toe on a heel raised (pitched) sole."""
+        pitch = feet[..., 4] if feet.shape[-1] > 4 else np.zeros(feet.shape[:-1])
+        return np.asarray(feet[..., 2] - self.model.foot_length_m / 2 * np.abs(np.sin(pitch)))
 
     def _at(self, x: np.ndarray, t: float) -> np.ndarray:
         k = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2))
@@ -138,9 +169,15 @@ class HumanoidReference:
         base = self._at(self.base, t)
         m = self.model
         still = t >= self.duration_s
+        plane = self.plane[int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1))]
+        support = self._lowest(feet) - plane < GROUND_M
         return ReferenceSample(q=self._at(self.q, t), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
-            base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=feet[:, 2] < GROUND_M,
+            base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=support,
             com=self._at(self.com, t), com_vel=np.zeros(3) if still else self._at(self.com_vel, t),
             com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
             zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
-            sole_size=(m.foot_length_m, m.foot_width_m))
+            sole_size=(m.foot_length_m, m.foot_width_m),
+            ground_z=float(plane[support].mean()) if support.any() else 0.0,
+            sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
+            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(),
+            anchored=_ground_anchors(support, plane))

@@ -36,6 +36,7 @@ from skatelib.control.humanoid_kinematics import HumanoidKinematics
 from skatelib.control.humanoid_reference import ReferenceSample
 
 MIN_LOAD_N = 30.0  # a sole carrying less is not in the measured ZMP
+TOE_OFF_RAD = 0.01  # a support sole planned pitched more than this stands on its toe
 
 
 @dataclass(frozen=True)
@@ -83,14 +84,15 @@ class LipStabilizer:
         self.swing_z = np.zeros(2)  # the soles' heights by kinematics, anchored on the support soles
         self.rel_prev: np.ndarray | None = None
         self.support_prev: tuple[bool, bool] = (True, True)
-        self.v = np.zeros(3)
+        self.v = np.zeros(3)  # the COM's velocity relative to the anchor soles
+        self.v_world = np.zeros(3)
 
     def _estimate(self, r: ReferenceSample, qfull: np.ndarray, force: np.ndarray, torque: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The COM (world, anchored on the support soles), the measured ZMP and each sole's load and
         CoP relative to its centre (foot frame: x, y)."""
         c, soles, pts, rots = self.kin.measure(qfull)
-        sup = r.support
+        sup = r.anchors
         anchor = np.mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]], axis=0)
         rel = c - np.mean([soles[s] for s in (0, 1) if sup[s]], axis=0)
         self.swing_z = soles[:, 2] + anchor[2]
@@ -98,6 +100,9 @@ class LipStabilizer:
             a = 1.0 - math.exp(-2 * math.pi * self.g.velocity_cutoff_hz * self.dt)
             self.v += a * ((rel - self.rel_prev) / self.dt - self.v)
         self.rel_prev, self.support_prev = rel, (bool(sup[0]), bool(sup[1]))
+        # The COM's velocity over the anchor soles, plus theirs as planned (a board sole rides at
+        # the board's speed): the estimate's frame moves as the anchor soles' planned places do.
+        self.v_world = self.v + np.mean([r.sole_vel[s] for s in (0, 1) if sup[s]], axis=0)
         fz, num = 0.0, np.zeros(2)
         loads, cops = np.zeros(2), np.zeros((2, 2))
         for s in (0, 1):
@@ -126,7 +131,7 @@ class LipStabilizer:
         if not np.isnan(zmp_meas).any():  # the ZMP the COM's deviation implies against the measured one's
             implied = (c - r.com[0:2]) - self.acc / omega**2  # the plan's ZMP is its multibody one
             self.offset += g.offset_rate_per_s * dt * ((zmp_meas - r.zmp) - implied)
-        xi = c + self.v[0:2] / omega
+        xi = c + self.v_world[0:2] / omega
         xi_ref = r.com[0:2] + r.com_vel[0:2] / omega
         p_d = r.zmp + (1 + g.dcm_gain_per_s / omega) * (xi - xi_ref)
         p_d = r.clamp(p_d, g.polygon_margin_m)
@@ -174,7 +179,8 @@ class LipStabilizer:
         """Damping control of each loaded support sole's tilt towards its share of the desired ZMP."""
         g, dt = self.g, self.dt
         for s in (0, 1):
-            if not r.support[s] or loads[s] <= 0.0:
+            # A sole on its toe (a skate's toe-off) presses where its toe is: nothing to tilt towards.
+            if not r.support[s] or loads[s] <= 0.0 or abs(r.sole_pitch[s]) > TOE_OFF_RAD:
                 self.tilt[s] *= 1.0 - dt / g.ankle_return_s
                 continue
             want = r.foot_cop(s, p_d)  # the desired CoP on this sole, foot frame

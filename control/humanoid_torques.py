@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
-from skatelib.control.humanoid_reference import GROUND_M, HumanoidReference
+from skatelib.control.humanoid_reference import HumanoidReference
+from skatelib.control.humanoid_stabilizer import TOE_OFF_RAD
 
 MOMENT_ARM_M = 0.1  # a sole's moment counts in the least norm as a force at this arm
 MIN_SHARE = 0.02  # a support sole carries at least this share of the force in the least norm
@@ -39,7 +40,7 @@ class PlannedTorques:
     def __init__(self, kin: HumanoidKinematics, ref: HumanoidReference):
         model = kin.model
         t, base, q, zmp = ref.t, ref.base, ref.q, ref.zmp
-        support, soles = ref.feet[:, :, 2] < GROUND_M, ref.feet[:, :, 0:3]
+        support, soles = ref.support, ref.feet[:, :, 0:3]
         self.t = np.asarray(t, dtype=float)
         configs = [np.concatenate([base[k, 0:3], base[k, 3:7] / np.linalg.norm(base[k, 3:7]), q[k]])
                    for k in range(len(t))]
@@ -50,27 +51,50 @@ class PlannedTorques:
         v = np.vstack([vi[0], (vi[:-1] + vi[1:]) / 2, vi[-1]])
         a = np.gradient(v, self.t, axis=0)
         self.qd = v[:, 6:]
-        self.tau = np.array([self._torque(kin, configs[k], v[k], a[k], support_shares(support[k], soles[k], zmp[k]))
-                             for k in range(len(t))])
+        # A sole on a skate's deck stands on a board that rolls along x: while a sole on the ground
+        # pushes, that one carries the robot's force along the board (the board's own inertia and
+        # rolling resistance left out).
+        rolling = ref.support & (ref.plane > 0.0)
+        pushing = rolling & (ref.support & (ref.plane == 0.0)).any(axis=1, keepdims=True)
+        # A sole on its toe (a skate's toe-off) presses at its toe edge's middle.
+        on_toe = ref.support & (np.abs(ref.feet[:, :, 4]) > TOE_OFF_RAD) if ref.feet.shape[2] > 4 else \
+            np.zeros_like(ref.support)
+        toe = ref.model.foot_length_m / 2
+        self.tau = np.array([self._torque(kin, configs[k], v[k], a[k], support_shares(support[k], soles[k], zmp[k]),
+                                          (pushing[k], on_toe[k], toe)) for k in range(len(t))])
         zero = np.zeros(model.nv)
         self.hold = self._torque(kin, configs[-1], zero, zero, support_shares(support[-1], soles[-1], ref.com[-1, 0:2]))
 
     @staticmethod
-    def _torque(kin: HumanoidKinematics, qf: np.ndarray, v: np.ndarray, a: np.ndarray, share: np.ndarray
-                ) -> np.ndarray:
+    def _torque(kin: HumanoidKinematics, qf: np.ndarray, v: np.ndarray, a: np.ndarray, share: np.ndarray,
+                soles: tuple[np.ndarray, np.ndarray, float] | None = None) -> np.ndarray:
+        """The joint torques of the motion (qf, v, a) with the base's wrench carried by the soles
+        by ``share``. ``soles``: which soles carry no force along x (on a rolling board), which
+        press at their toe edge alone (a force there, no moment about it), and the toe's distance
+        from the sole's centre [m]."""
         model, data = kin.model, kin.data
         b = pin.rnea(model, data, qf, v, a)
         pin.computeJointJacobians(model, data, qf)
         pin.updateFramePlacements(model, data)
+        free_x, on_toe, toe = soles if soles is not None else (np.zeros(2, bool), np.zeros(2, bool), 0.0)
         on = [s for s in (0, 1) if share[s] > 0.0]
         J = [pin.getFrameJacobian(model, data, kin.soles[s], pin.LOCAL_WORLD_ALIGNED) for s in on]
         scale = np.diag([1.0, 1.0, 1.0, 1 / MOMENT_ARM_M, 1 / MOMENT_ARM_M, 1 / MOMENT_ARM_M])
-        A = np.hstack([J[i][:, 0:6].T @ scale for i in range(len(on))])  # base rows, scaled wrenches
-        w = np.concatenate([np.full(6, share[s]) for s in on])  # the least norm's inverse weights
-        y = w * (A.T @ np.linalg.solve((A * w) @ A.T, b[0:6]))
+        bases = []  # each sole's wrench (world axes, at its frame) from its unknowns
+        for s in on:
+            if on_toe[s]:
+                r = data.oMf[kin.soles[s]].rotation @ np.array([toe, 0.0, 0.0])
+                bases.append(np.vstack([np.eye(3), pin.skew(r)]))
+            else:
+                bases.append(scale[:, 1:] if free_x[s] else scale)
+        A = np.hstack([J[i][:, 0:6].T @ B for i, B in enumerate(bases)])  # base rows
+        w = np.concatenate([np.full(B.shape[1], share[s]) for s, B in zip(on, bases, strict=True)])
+        y = w * (A.T @ np.linalg.solve((A * w) @ A.T, b[0:6]))  # the weighted least norm
         tau = b[6:].copy()
-        for i in range(len(on)):
-            tau -= J[i][:, 6:].T @ (scale @ y[6 * i:6 * i + 6])
+        start = 0
+        for i, B in enumerate(bases):
+            tau -= J[i][:, 6:].T @ (B @ y[start:start + B.shape[1]])
+            start += B.shape[1]
         return np.asarray(tau)
 
     def _at(self, x: np.ndarray, t: float) -> np.ndarray:

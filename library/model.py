@@ -155,6 +155,39 @@ class QuadrupedModel:
 
 
 @dataclass(frozen=True, kw_only=True)
+class HumanoidBoard:
+    """A humanoid skate's skateboard (``skate_board_*`` attributes), SI units: the deck the board
+    foot stands on (its height is in the plan) and the figures the twin builds it from."""
+
+    deck_height_m: float = _a("skate_board_deck_height_m")  # the deck's top above the ground
+    deck_length_m: float = _a("skate_board_deck_length_m")
+    deck_width_m: float = _a("skate_board_deck_width_m")
+    foot_ahead_m: float = _a("skate_board_foot_ahead_m")  # the board foot's centre ahead of the deck's centre
+    l_front_m: float = _a("skate_board_l_front_m")  # the front axle ahead of the deck's centre
+    l_rear_m: float = _a("skate_board_l_rear_m")
+    wheel_radius_m: float = _a("skate_board_wheel_radius_m")
+    wheel_track_m: float = _a("skate_board_wheel_track_m")
+    mass_kg: float = _a("skate_board_mass_kg")
+    deck_mass_kg: float = _a("skate_board_deck_mass_kg")
+    pivot_from_horizontal_rad: float = _a("skate_board_pivot_from_horizontal_rad")
+    roll_stiffness_Nm_per_rad: float = _a("skate_board_roll_stiffness_Nm_per_rad")
+    roll_damping_Nms_per_rad: float = _a("skate_board_roll_damping_Nms_per_rad")
+    rolling_coeff: float = _a("skate_board_rolling_coeff")
+    deck_mu: float = _a("skate_board_deck_mu")  # the grip tape's friction with a sole
+    source: str = _a("skate_board_source", "")
+
+    def deck_centre(self, board_sole_xy: np.ndarray) -> np.ndarray:
+        """The deck's centre (x, y) under a board sole at ``board_sole_xy`` (the deck along x)."""
+        return np.asarray(board_sole_xy, dtype=np.float64)[..., 0:2] - np.array([self.foot_ahead_m, 0.0])
+
+    def over_deck(self, sole_xy: np.ndarray, board_sole_xy: np.ndarray) -> np.ndarray:
+        """Whether a sole's centre lies over the deck's top (its footprint) with the board sole at
+        ``board_sole_xy``; (..., 2) arrays."""
+        d = np.asarray(sole_xy, dtype=np.float64)[..., 0:2] - self.deck_centre(board_sole_xy)
+        return np.asarray((np.abs(d[..., 0]) <= self.deck_length_m / 2) & (np.abs(d[..., 1]) <= self.deck_width_m / 2))
+
+
+@dataclass(frozen=True, kw_only=True)
 class HumanoidModel:
     """A humanoid library's ``/model``: the robot as the GPM's point mass sees it and the build's settings."""
 
@@ -171,4 +204,5 @@ class HumanoidModel:
     gpm_solver: str = _a("gpm_solver")
     motion: str = _a("motion")
     source: str = _a("source", "")
+    board: HumanoidBoard | None = None  # a skate's skateboard (None: a walk)
 

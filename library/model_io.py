@@ -12,6 +12,7 @@ from skatelib.library.model import (
     ATTR,
     LEGACY_PIVOT_ATTR,
     BoardModel,
+    HumanoidBoard,
     HumanoidModel,
     QuadrupedArrays,
     QuadrupedModel,
@@ -97,21 +98,27 @@ def read_quadruped_model(attrs: Mapping[str, Any], datasets: Mapping[str, np.nda
 
 def humanoid_attributes(m: HumanoidModel) -> dict[str, Any]:
     """The humanoid record as ``/model`` attributes."""
-    return {f.metadata[ATTR]: getattr(m, f.name) for f in _attr_fields(HumanoidModel)}
+    out = {f.metadata[ATTR]: getattr(m, f.name) for f in _attr_fields(HumanoidModel)}
+    if m.board is not None:
+        out.update({f.metadata[ATTR]: getattr(m.board, f.name) for f in _attr_fields(HumanoidBoard)})
+    return out
 
 
 def read_humanoid_model(attrs: Mapping[str, Any]) -> HumanoidModel:
     """The record of a humanoid library's ``/model`` attributes.
 
     Raises:
-        KeyError: Naming a required attribute the file lacks.
+        KeyError: Naming a required attribute the file lacks (a skate's board is read when the
+            file has its deck height).
     """
-    model: HumanoidModel = _read(HumanoidModel, attrs, {})
+    board = _read(HumanoidBoard, attrs, {}) if "skate_board_deck_height_m" in attrs else None
+    model: HumanoidModel = _read(HumanoidModel, attrs, {"board": board})
     return model
 
 
 def attribute_names() -> tuple[str, ...]:
     """Every ``/model`` attribute and dataset name the records know (the layout checker keeps them
     in library/)."""
-    names = [f.metadata[ATTR] for cls in (QuadrupedModel, BoardModel, HumanoidModel) for f in _attr_fields(cls)]
+    records = (QuadrupedModel, BoardModel, HumanoidModel, HumanoidBoard)
+    names = [f.metadata[ATTR] for cls in records for f in _attr_fields(cls)]
     return (*names, LEGACY_PIVOT_ATTR, *QuadrupedArrays.names())

@@ -19,12 +19,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from skatelib.sim.figures import DECK_INERTIA_KGM2, DECK_THICKNESS_M, HANGER_MASS_KG, BoardFigures
+from skatelib.sim.figures import DECK_THICKNESS_M, HANGER_MASS_KG, BoardFigures
 from skatelib.sim.rolling import add_rolling_actuators
 
 # Collision bits (contype / conaffinity): the floor touches wheels, feet, deck and robot links; the
 # deck touches feet; nothing else touches anything.
 FLOOR_BIT, FOOT_BIT = 1, 2
+BODIES = ("deck", "truck_front", "truck_rear", "wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")  # add_board's
 # Urethane wheels are stiff (a 99A wheel gives about 0.1 mm under the robot's weight): a contact
 # time constant of 5 ms and a high impedance (MuJoCo's defaults let the loaded side's wheels sink
 # most of a millimetre more than the light side's, a roll compliance no real wheel has).
@@ -47,7 +48,7 @@ def add_board(spec: Any, b: BoardFigures, friction_mu: float, pos: tuple[float, 
     deck.explicitinertial = True
     deck.mass = b.deck_mass_kg
     deck.ipos = [0, 0, -DECK_THICKNESS_M / 2]
-    deck.inertia = list(DECK_INERTIA_KGM2)
+    deck.inertia = list(b.deck_inertia_kgm2)
     wheel_mass = (b.mass_kg - b.deck_mass_kg - 2 * HANGER_MASS_KG) / 4  # the rest of the board's mass
     lam = b.pivot_from_horizontal_rad
     k = b.roll_stiffness_Nm_per_rad * math.cos(lam) ** 2 / 2

@@ -47,6 +47,7 @@ class BoardFigures:
     deck_mass_kg: float  # the deck's share of the mass (the rest: 2 hangers and 4 wheels)
     wheel_radius_m: float  # the axles' height: the deck's roll axis
     wheel_track_m: float  # between the left and right wheels' centres
+    deck_inertia_kgm2: tuple[float, float, float] = DECK_INERTIA_KGM2  # about the deck's centre, deck frame
 
     @property
     def wheel_y_m(self) -> float:

@@ -80,9 +80,10 @@ def test_walking_feet_follow_the_plan():
 
 
 def test_skating_feet_follow_the_board():
-    """The board foot ends the push at the step's position and speed; it and then the landed
-    pushing foot move at the board speed; the pushing foot stays put on its foothold during the
-    push and leaves the ground at rest (flat: no toe-off)."""
+    """The board foot stands on the deck and ends the push at the step's position and speed; it
+    and then the landed pushing foot move at the board speed; the pushing foot stays put on its
+    foothold on the ground during the push, leaves it at rest (flat: no toe-off) and lands on the
+    deck behind the board foot, on its line."""
     cfg = load_config(CONFIGS / "hrp2_skate.toml")
     h, s = cfg.humanoid, cfg.skate
     v = 1.0
@@ -99,9 +100,12 @@ def test_skating_feet_follow_the_board():
     np.testing.assert_allclose(feet[:k1, LEFT, 0:3], np.tile(foothold, (k1, 1)), atol=1e-12)
     np.testing.assert_allclose(rate[k2 + 5:, LEFT], v, atol=1e-6)
     assert rate[k1 + 1, LEFT] == pytest.approx(0.0, abs=2e-3)
-    assert feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
-    assert feet[(k1 + k2) // 2, LEFT, 2] == pytest.approx(0.05, abs=1e-6)
-    np.testing.assert_allclose(feet[k2:, LEFT, 0] - feet[k2:, RIGHT, 0], 0.0, atol=1e-9)  # side by side
+    deck = cfg.board.deck_height_m
+    np.testing.assert_allclose(feet[:, RIGHT, 2], deck, atol=1e-12)
+    assert feet[k2, LEFT, 2] == pytest.approx(deck, abs=1e-12)
+    assert feet[(k1 + k2) // 2, LEFT, 2] == pytest.approx(deck + 0.05, abs=1e-6)
+    np.testing.assert_allclose(feet[k2:, LEFT, 0] - feet[k2:, RIGHT, 0], -s.landing_behind_m, atol=1e-9)
+    np.testing.assert_allclose(feet[k2:, LEFT, 1] - feet[k2:, RIGHT, 1], 0.0, atol=1e-9)  # in a row on the deck
 
 
 def test_toe_off_pivots_on_the_toe_edge():
@@ -127,7 +131,30 @@ def test_toe_off_pivots_on_the_toe_edge():
     rate = np.diff(sole, axis=0) / dt
     assert np.abs(rate[k1] - rate[k1 - 1]).max() < 0.01  # no velocity jump at lift-off (m/s)
     assert lowest_point(feet, half)[k1:k2, LEFT].min() > -1e-12
-    assert np.all(pitch[k2:] == 0.0) and feet[k2, LEFT, 2] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(pitch[k2:] == 0.0) and feet[k2, LEFT, 2] == pytest.approx(cfg.board.deck_height_m, abs=1e-12)
+
+
+@pytest.mark.parametrize("v", [0.5, 0.75, 1.0])
+def test_the_pushing_sole_never_enters_the_deck(v, monkeypatch):
+    """With the shipped skate the pushing sole is over the deck only above its top (the deck under
+    the board sole, by :func:`deck_failures`); the negative control: a swing that moves across
+    as it rises (both over the whole swing) enters the deck."""
+    from skatelib.pipeline.humanoid import feet as feet_module
+    from skatelib.pipeline.humanoid.body import deck_failures
+
+    cfg = load_config(CONFIGS / "hrp2_skate.toml")
+    h, s = cfg.humanoid, cfg.skate
+    _, plan = skating_steps(cfg, v)
+    t = np.round(np.arange(0.0, s.push_s + s.slide_s + s.stop_s + 1e-9, 0.001), 10)
+    toe_off = ToeOff(s.toe_off_s, s.toe_off_rad, h.foot_length_m / 2)
+    half = (h.foot_length_m / 2, h.foot_width_m / 2)
+    sound = skating_feet(plan, t, 0.05, h.step_width_m, 0.6, toe_off)
+    assert deck_failures(t, sound, half, cfg.board) == []
+    monkeypatch.setattr(feet_module, "SWING_ACROSS", 0.0)
+    monkeypatch.setattr(feet_module, "SWING_RISE", 1.0)
+    late = feet_module.skating_feet(plan, t, 0.05, h.step_width_m, 0.6, toe_off)
+    fails = deck_failures(t, late, half, cfg.board)
+    assert len(fails) == 1 and "enters the deck" in fails[0], fails
 
 
 def test_a_pitched_sole_is_lowest_at_its_toe_or_heel():

@@ -76,6 +76,8 @@ def test_quadruped_recording_has_robot_board_forces_and_plots(quad_lib, tmp_path
 
 def test_humanoid_recording_has_com_zmp_and_soles(hrp2_skate_build, tmp_path):
     """A humanoid library logs COM, ZMP, soles and plots with one time point per sample."""
+    from skatelib.pipeline.humanoid.motion import PUSH_SEGMENTS
+
     lib_path = hrp2_skate_build.path
     out = tmp_path / "h.rrd"
     inspect_library(lib_path, ["skate_v1.00"], out, spawn=False, overlay=False)
@@ -86,7 +88,7 @@ def test_humanoid_recording_has_com_zmp_and_soles(hrp2_skate_build, tmp_path):
     assert np.allclose(np.array([p[0] for p in com["Points3D:positions"]])[:, 2], e.state[:, 2], atol=1e-6)
     assert "/skate_v1.00/zmp" in cols and "/skate_v1.00/soles" in cols and "/skate_v1.00/plots/com_vx" in cols
     (strips,) = cols["/skate_v1.00/support_polygons"]["LineStrips3D:strips"]  # one static row
-    assert len(strips) == 12  # 10 push segments, the slide, the stop
+    assert len(strips) == PUSH_SEGMENTS + 2  # the push's segments, the slide, the stop
     assert "/v1.00_s0" not in cols
 
 

@@ -23,7 +23,7 @@ from skatelib.pipeline.humanoid.feet import POSE, ToeOff, lowest_point, skating_
 from skatelib.pipeline.humanoid.wholebody import Humanoid, dynamics_filter
 
 if TYPE_CHECKING:
-    from skatelib.pipeline.humanoid.config import HumanoidConfig
+    from skatelib.pipeline.humanoid.config import HumanoidBoardConfig, HumanoidConfig
     from skatelib.pipeline.humanoid.geometry import Support
     from skatelib.pipeline.humanoid.motion import Motion
     from skatelib.pipeline.humanoid.step import StepSpec
@@ -79,7 +79,7 @@ def whole_body(cfg: HumanoidConfig, m: Motion, robot: Humanoid) -> BodyMotion:
     t1 = time.perf_counter()
     dt = cfg.gpm.sample_dt_s
     f = dynamics_filter(robot, dt, (m.state[:, 0:3], feet, m.zmp), robot.standing(START_WAIST_M, START_KNEE_RAD),
-                        cfg.wholebody.preview_s)
+                        cfg.wholebody.preview_s, m.contact_point[:, 2])
     t2 = time.perf_counter()
     q = f.ik.q[:, 7:]
     err = [np.linalg.norm(z - m.zmp, axis=1) for z in (f.zmp_before, f.zmp_after)]
@@ -121,10 +121,11 @@ def zmp_margins(plan: list[StepSpec], t: np.ndarray, zmp: np.ndarray) -> np.ndar
     return out
 
 
-def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: BodyMotion, sole_half_m: float
-                  ) -> list[str]:
+def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: BodyMotion, sole_half_m: float,
+                  board: tuple[HumanoidBoardConfig, float] | None = None) -> list[str]:
     """The whole-body checks (module docstring), from the stored joints by forward kinematics
-    (``sole_half_m``: half the sole's length, for its lowest edge when pitched)."""
+    (``sole_half_m``: half the sole's length, for its lowest edge when pitched; ``board``: a
+    skate's board and half the sole's width: the deck the pushing sole must not enter)."""
     q = np.hstack([body.base, body.q])
     feet = body.feet.reshape(-1, 2, POSE)
     com_err, feet_err = robot.residuals(q, body.com_reference, feet)
@@ -146,6 +147,33 @@ def body_failures(robot: Humanoid, plan: list[StepSpec], t: np.ndarray, body: Bo
     if lowest_point(feet, sole_half_m).min() < -1e-9:
         out.append("a sole under the ground")
     out += _board_foot(plan, t, feet)
+    if board is not None:
+        out += deck_failures(t, feet, (sole_half_m, board[1]), board[0])
+    return out
+
+
+def deck_failures(t: np.ndarray, feet: np.ndarray, sole_half: tuple[float, float], board: HumanoidBoardConfig
+                  ) -> list[str]:
+    """Skating on a deck: the board (right) sole stands on the deck's top whenever it is down, and
+    the pushing (left) sole, wherever any of it is over the deck (the deck under the board sole,
+    ``board.foot_ahead_m`` behind it), has its lowest edge on or above the deck's top (1 mm);
+    ``sole_half``: half the sole's length and width [m]."""
+    right, left = feet[:, 0], feet[:, 1]
+    centre = right[:, 0:2] - np.array([board.foot_ahead_m, 0.0])
+    sole_half_m, sole_half_width_m = sole_half
+    out = []
+    if np.abs(right[:, 2] - board.deck_height_m).max() > 1e-3:
+        out.append(f"the board sole leaves the deck's top ({board.deck_height_m} m) by "
+                   f"{np.abs(right[:, 2] - board.deck_height_m).max() * 1e3:.1f} mm")
+    reach_x = board.deck_length_m / 2 + sole_half_m * np.abs(np.cos(left[:, 4]))
+    reach_y = board.deck_width_m / 2 + sole_half_width_m
+    over = (np.abs(left[:, 0] - centre[:, 0]) < reach_x) & (np.abs(left[:, 1] - centre[:, 1]) < reach_y)
+    low = left[:, 2] - sole_half_m * np.abs(np.sin(left[:, 4]))
+    inside = over & (low < board.deck_height_m - 1e-3)
+    if inside.any():
+        k = int(np.argmax(inside))
+        out.append(f"the pushing sole enters the deck at t = {t[k]:.2f} s (its lowest edge "
+                   f"{(board.deck_height_m - low[k]) * 100:.1f} cm under the deck's top, over the deck)")
     return out
 
 

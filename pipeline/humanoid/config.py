@@ -56,6 +56,32 @@ class SkateConfig:
                                     "toe edge on the ground (the support polygon's part of that foot); 0: flat.",
                           default=0.0)
     toe_off_rad: float = _f(0.0, 1.2, "Toe-off: the pushing sole's pitch (heel up) at lift-off [rad].", default=0.0)
+    landing_behind_m: float = _f(0.0, 1.0, "Where the pushing foot lands on the deck: its centre this far behind the "
+                                           "board foot's, on the deck's centre line [m] (0: beside the board foot, "
+                                           "the plan of a deck-less board).", default=0.0)
+
+
+@dataclass(frozen=True)
+class HumanoidBoardConfig:
+    """The skateboard of a humanoid skate: the deck's height is in the plan (the board foot stands
+    on it, the pushing foot lands on it), the rest is what the twin builds the board from."""
+
+    deck_height_m: float = _f(0.0, 0.5, "The deck's top above the ground [m].")
+    deck_length_m: float = _f(0.2, 2.0, "Deck length [m].")
+    deck_width_m: float = _f(0.05, 0.6, "Deck width [m].")
+    foot_ahead_m: float = _f(-1.0, 1.0, "The board foot's centre ahead of the deck's centre [m].")
+    l_front_m: float = _f(0.05, 1.0, "Front axle ahead of the deck's centre [m].")
+    l_rear_m: float = _f(0.05, 1.0, "Rear axle behind the deck's centre [m].")
+    wheel_radius_m: float = _f(0.01, 0.2, "Wheel radius [m] (the axles' height).")
+    wheel_track_m: float = _f(0.05, 0.6, "Between the left and right wheels' centres [m].")
+    mass_kg: float = _f(0.5, 20.0, "The whole board's mass [kg].")
+    deck_mass_kg: float = _f(0.2, 20.0, "The deck's share of the mass [kg] (the rest: hangers and wheels).")
+    pivot_from_horizontal_rad: float = _f(0.1, 1.5, "The trucks' pivot axis angle from the ground [rad].")
+    roll_stiffness_Nm_per_rad: float = _f(1.0, 1e5, "The deck's roll stiffness on its trucks' bushings [N m/rad].")
+    roll_damping_Nms_per_rad: float = _f(0.0, 1e4, "The deck's roll damping [N m s/rad].")
+    rolling_coeff: float = _f(0.0, 0.1, "Rolling resistance over the wheels' load [-].")
+    deck_mu: float = _f(0.1, 3.0, "Friction coefficient of a sole on the deck's grip tape [-].")
+    source: str = _f(doc="Where the figures come from.", default="")
 
 
 @dataclass(frozen=True)
@@ -98,6 +124,7 @@ class HumanoidConfig:
     skate: SkateConfig
     sweep: HumanoidSweepConfig
     wholebody: WholebodyConfig
+    board: HumanoidBoardConfig | None = None  # a skate's [board] (None: none given)
 
     def resolved_json(self) -> str:
         d = dataclasses.asdict(self)
@@ -113,6 +140,8 @@ class HumanoidConfig:
         d.pop("meta")
         d.pop("wholebody")
         d["sweep"].pop("velocities_mps")
+        if d.get("board") is None:  # a config without a board: the key of a plan from before boards
+            d.pop("board", None)
         return json.dumps(d, sort_keys=True)
 
 _HUMANOID_SECTIONS: dict[str, type] = {
@@ -121,9 +150,20 @@ _HUMANOID_SECTIONS: dict[str, type] = {
 }
 
 
+def _board(path: Path, data: dict[str, Any]) -> HumanoidBoardConfig | None:
+    if "board" not in data:
+        return None
+    if not isinstance(data["board"], dict):
+        raise ConfigError(path, "board", f"must be a table, got {data['board']!r}")
+    board: HumanoidBoardConfig = build_section(path, "board", HumanoidBoardConfig, data["board"])
+    return board
+
+
 def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
     data = {**data, "wholebody": data.get("wholebody", {})}  # an optional table: its defaults
-    cfg = HumanoidConfig(path=path.resolve(), text=text, **sections(path, data, _HUMANOID_SECTIONS))
+    board = _board(path, data)
+    data = {k: v for k, v in data.items() if k != "board"}
+    cfg = HumanoidConfig(path=path.resolve(), text=text, **sections(path, data, _HUMANOID_SECTIONS), board=board)
     urdf = cfg.wholebody.urdf_path(cfg.path)
     if not urdf.is_file():
         raise ConfigError(path, "wholebody.urdf", f"{urdf} is not a file; name a URDF, or leave the key out for "
@@ -137,13 +177,43 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
     if cfg.skate.toe_off_s > cfg.skate.push_s:
         raise ConfigError(path, "skate.toe_off_s", f"{cfg.skate.toe_off_s} s is longer than the push "
                                                    f"(skate.push_s = {cfg.skate.push_s} s): the heel rises within it")
+    if cfg.sweep.motion == "skate":
+        _check_skate(path, cfg)
     if not cfg.sweep.velocities_mps:
         raise ConfigError(path, "sweep.velocities_mps", "is empty: list at least one speed")
     check_unique_keys(path, cfg.sweep.velocities_mps)
     return cfg
 
 
+def _check_skate(path: Path, cfg: HumanoidConfig) -> None:
+    """A skate plan needs its board, and its feet must fit on the deck: the pushing foot stands
+    beside it on the ground and lands on it behind the board foot."""
+    b, h = cfg.board, cfg.humanoid
+    if b is None:
+        raise ConfigError(path, "board", "a skate needs its [board] table (deck height, length and width, the "
+                                         "board foot's place, trucks and wheels): see configs/hrp2_skate.toml")
+    if cfg.skate.landing_behind_m < h.foot_length_m:
+        raise ConfigError(path, "skate.landing_behind_m", f"{cfg.skate.landing_behind_m} m: the pushing foot lands on "
+                                                          f"the deck behind the board foot, at least a sole's length "
+                                                          f"({h.foot_length_m} m) behind it")
+    front = b.foot_ahead_m + h.foot_length_m / 2
+    rear = b.foot_ahead_m - cfg.skate.landing_behind_m - h.foot_length_m / 2
+    if front > b.deck_length_m / 2 or rear < -b.deck_length_m / 2:
+        raise ConfigError(path, "board.foot_ahead_m", f"the soles span {rear:+.3f} to {front:+.3f} m along the deck "
+                                                      f"(its ends at +-{b.deck_length_m / 2:.3f} m): move the board "
+                                                      "foot, or change skate.landing_behind_m or the deck's length")
+    if h.foot_width_m > b.deck_width_m:
+        raise ConfigError(path, "board.deck_width_m", f"{b.deck_width_m} m is narrower than a sole "
+                                                      f"({h.foot_width_m} m): widen the deck")
+    gap = h.step_width_m - h.foot_width_m / 2 - b.deck_width_m / 2
+    if gap <= 0.0:
+        raise ConfigError(path, "board.deck_width_m", f"the pushing foot on the ground (humanoid.step_width_m = "
+                                                      f"{h.step_width_m} m beside the board foot) overlaps the deck "
+                                                      f"by {-gap * 100:.1f} cm: narrow the deck or widen the step")
+
+
 def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> HumanoidConfig:
     data = {**data, "wholebody": data.get("wholebody", {})}  # libraries written before the table
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _HUMANOID_SECTIONS.items()}
-    return HumanoidConfig(path=Path(origin), text="", **sections)
+    board = build_section(origin, "board", HumanoidBoardConfig, data["board"]) if data.get("board") else None
+    return HumanoidConfig(path=Path(origin), text="", **sections, board=board)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -17,7 +18,7 @@ from skatelib.library.channels import (
     POINT_NAMES,
     ZMP_NAMES,
 )
-from skatelib.library.model import HumanoidModel
+from skatelib.library.model import HumanoidBoard, HumanoidModel
 from skatelib.library.model_io import humanoid_attributes
 from skatelib.library.records import EntryRecord
 from skatelib.library.writer import write_library
@@ -84,6 +85,13 @@ def _body_records(b: BodyMotion) -> tuple[dict[str, Any], dict[str, Any], dict[s
     return arrays, columns, units
 
 
+def board_record(config: HumanoidConfig) -> HumanoidBoard | None:
+    """A skate's ``[board]`` as the library's record (None without one)."""
+    if config.board is None:
+        return None
+    return HumanoidBoard(**dataclasses.asdict(config.board))
+
+
 def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[EntryOutcome]) -> Path:
     """Write the motions as a library (atomically): its model, provenance and one entry each."""
     h = config.humanoid
@@ -91,7 +99,7 @@ def write_humanoid_library(out: Path, config: HumanoidConfig, outcomes: list[Ent
                           foot_length_m=h.foot_length_m, foot_width_m=h.foot_width_m, step_width_m=h.step_width_m,
                           friction_mu=h.friction_mu, leg_min_m=h.leg_min_m, leg_max_m=h.leg_max_m,
                           gpm_nodes=config.gpm.nodes, gpm_solver=config.gpm.solver, motion=config.sweep.motion,
-                          source=h.source)
+                          source=h.source, board=board_record(config))
     root = root_attributes("humanoid", config.meta.name, config.text, config.resolved_json(),
                            {"solver": config.gpm.solver, "nodes": config.gpm.nodes})
     urdf = config.wholebody.urdf_path(config.path).read_text()

@@ -134,18 +134,30 @@ def walking_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
     return feet
 
 
+# The swing onto a deck: the pushing sole rises to the deck's height over the swing's first half
+# (SWING_RISE) and moves across towards the deck's centre line only over its last part
+# (SWING_ACROSS on), so that it is above the deck before any of it is over the deck.
+SWING_RISE = 0.5
+SWING_ACROSS = 0.3
+
+
 def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_width_m: float,
                  swing_s: float, toe_off: ToeOff | None = None) -> np.ndarray:
-    """Both feet along a skating plan (push, slide, stop; module docstring). The pushing foot's
-    swing takes the first ``swing_s`` of the slide, planned for its toe relative to the board
-    foot: it leaves the ground at rest (moving backwards relative to the board) and lands beside
-    the board foot, at rest on the board; its sole lies flat again when it lands."""
+    """Both feet along a skating plan (push, slide, stop; module docstring). The board foot stands
+    on the deck (the height of its planned support point). The pushing foot's swing takes the
+    first ``swing_s`` of the slide, planned for its toe relative to the board foot: it leaves the
+    ground at rest (moving backwards relative to the board) and lands at rest on the board where
+    the plan's stop stands it (the slide's DCM target is midway between the soles: behind the
+    board foot on the deck's line, or beside it); along the board on a
+    minimum-jerk path, up to the deck over the swing's first half and across over its last 70 %
+    (rest to rest), with the cycloid's ``height_m`` on top; its sole lies flat again when it lands."""
     push, slide = plan[0], plan[1]
     toe_off = toe_off or ToeOff()
     v = np.asarray(push.v_step, dtype=np.float64)
-    board0 = np.array([0.0, -step_width_m / 2, 0.0])
-    ground = np.asarray(push.segments[0][1].p0, dtype=np.float64)  # the pushing foot's foothold
     board_end = np.asarray(push.p_step, dtype=np.float64)
+    deck = float(board_end[2])
+    board0 = np.array([0.0, -step_width_m / 2, deck])
+    ground = np.asarray(push.segments[0][1].p0, dtype=np.float64)  # the pushing foot's foothold
     T1 = push.duration_s
     Ts = min(swing_s, slide.duration_s)
     feet = np.zeros((len(t), 2, POSE))
@@ -153,12 +165,19 @@ def skating_feet(plan: Sequence[StepSpec], t: np.ndarray, height_m: float, step_
     board = np.where((t < T1)[:, None], evaluate(path, t), board_end + v * (t - T1)[:, None])
     feet[:, RIGHT, 0:3] = board
     toe = np.array([toe_off.toe_m, 0.0, 0.0])
-    beside = np.array([0.0, step_width_m, 0.0])  # where the pushing foot lands, relative to the board foot
-    rel = minimum_jerk((ground + toe - board_end, -v, np.zeros(3)), (beside + toe, np.zeros(3), np.zeros(3)), Ts)
-    _, up = cycloid((t - T1) / Ts)
+    # Where the pushing foot lands, relative to the board foot: the slide ends with its DCM midway
+    # between the two soles on the board.
+    landing = 2 * (np.asarray(slide.p_step, dtype=np.float64) - (board_end + v * slide.duration_s))
+    start = ground + toe - board_end
+    along = minimum_jerk((start[0:1], -v[0:1], [0.0]), (landing[0:1] + toe[0:1], [0.0], [0.0]), Ts)
+    phase = np.clip((t - T1) / Ts, 0.0, 1.0)
+    across = _smooth(np.clip((phase - SWING_ACROSS) / (1.0 - SWING_ACROSS), 0.0, 1.0))
+    rise = _smooth(np.clip(phase / SWING_RISE, 0.0, 1.0))
+    rel = np.column_stack([evaluate(along, t - T1)[:, 0], start[1] + across * (landing[1] - start[1]),
+                           start[2] + rise * (landing[2] - start[2])])
+    _, up = cycloid(phase)
     swinging = (t >= T1) & (t < T1 + Ts)
-    toe_path = np.select([(t < T1)[:, None], swinging[:, None]], [ground + toe, board + evaluate(rel, t - T1)],
-                         board + beside + toe)
+    toe_path = np.select([(t < T1)[:, None], swinging[:, None]], [ground + toe, board + rel], board + landing + toe)
     toe_path[:, 2] += height_m * np.where(swinging, up, 0.0)
     pitch = toe_off.pitch(t, T1, Ts)
     feet[:, LEFT, 0:3] = toe_off.centre(toe_path, pitch)

@@ -65,7 +65,8 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
             else:
                 body = stored_body(dict(e.arrays), dict(e.columns), json.loads(str(e.attrs[schema.A_WHOLEBODY])))
                 half = cfg.humanoid.foot_length_m / 2
-                fails += [f"whole body: {f}" for f in body_failures(robot, plan, np.asarray(e.t), body, half)]
+                deck = (cfg.board, cfg.humanoid.foot_width_m / 2) if cfg.board is not None else None
+                fails += [f"whole body: {f}" for f in body_failures(robot, plan, np.asarray(e.t), body, half, deck)]
         bad += bool(fails)
         report(e.key, "failed" if fails else "ok", "ok" if not fails else "; ".join(fails), {})
     return bad

@@ -24,7 +24,7 @@ from skatelib.pipeline.humanoid.geometry import Support, convex_hull, rectangle
 from skatelib.pipeline.humanoid.step import StepModel, StepResult, StepSpec, solve_sequence
 from skatelib.pipeline.ocp.gpm import GaussPseudospectral
 
-PUSH_SEGMENTS = 10
+PUSH_SEGMENTS = 20
 
 
 def _rect(c: HumanoidConfig, foot: np.ndarray, ref: np.ndarray) -> tuple[tuple[float, float], ...]:
@@ -68,12 +68,21 @@ def walking_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[
     return np.array([0.0, 0.0, z, 0.0, 0.0, 0.0]), steps
 
 
+def deck_height(c: HumanoidConfig) -> float:
+    """The deck's top above the ground [m] (0 without a board)."""
+    return c.board.deck_height_m if c.board is not None else 0.0
+
+
 def skating_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[StepSpec]]:
-    """Initial state and the push, slide and stop phases for a board speed ``velocity``."""
+    """Initial state and the push, slide and stop phases for a board speed ``velocity``. The board
+    foot stands on the deck (its support point at the deck's height, the pendulum's heights
+    measured from it); the pushing foot on the ground beside the board, then on the deck behind
+    the board foot (``skate.landing_behind_m``; 0: beside it, a board without a deck)."""
     h, s = c.humanoid, c.skate
     mu, z = h.friction_mu, h.com_height_m
+    deck = deck_height(c)
     ground = np.array([s.push_foothold_m, h.step_width_m / 2, 0.0])
-    board = np.array([0.0, -h.step_width_m / 2, 0.0])
+    board = np.array([0.0, -h.step_width_m / 2, deck])
     v = np.array([velocity, 0.0, 0.0])
     board_end = board + v * s.push_s / 2  # the board speeds up evenly from rest during the push
     # Both soles carry the robot during the push: the support polygon is the hull of the ground foot
@@ -91,7 +100,9 @@ def skating_steps(c: HumanoidConfig, velocity: float) -> tuple[np.ndarray, list[
     push = StepSpec("push", s.push_s, tuple(segs), "skate", tuple(board_end), tuple(v),
                     dz_vrp_m=s.transition_com_height_m, mu_next=0.0)
     foot_b = board_end + v * s.slide_s
-    foot_g = np.array([foot_b[0], ground[1], 0.0])  # the pushing foot steps onto the board beside the other
+    # The pushing foot steps onto the board: behind the board foot on the deck, or beside it.
+    foot_g = foot_b - np.array([s.landing_behind_m, 0.0, 0.0]) if s.landing_behind_m > 0.0 else \
+        np.array([foot_b[0], ground[1], deck])
     mid = (foot_b + foot_g) / 2
     # The slide ends with its DCM over the stance to come (both feet on the board), at walking height.
     slide = StepSpec("slide", s.slide_s, ((0.0, Support(tuple(board_end), tuple(v), _rect(c, board_end, board_end),
@@ -202,7 +213,7 @@ def _contact_at(r: StepResult, t: float) -> np.ndarray:
     return np.asarray(s.p0) + np.asarray(s.velocity) * (t - start)
 
 
-__all__ = ["Motion", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
+__all__ = ["Motion", "deck_height", "plan_from_json", "plan_json", "skating_steps", "solve_motion",
            "stored_plan", "walking_steps"]
 
 

@@ -93,7 +93,8 @@ class BuildTask:
         if motion.success and not failures:  # the whole body of a motion that holds (not cached: it is quick)
             robot = robot_for(cfg)
             body = whole_body(cfg, motion, robot)
-            checks = body_failures(robot, list(motion.plan), motion.t, body, cfg.humanoid.foot_length_m / 2)
+            deck = (cfg.board, cfg.humanoid.foot_width_m / 2) if cfg.board is not None else None
+            checks = body_failures(robot, list(motion.plan), motion.t, body, cfg.humanoid.foot_length_m / 2, deck)
             failures = tuple(f"whole body: {f}" for f in checks)
         outcome = EntryOutcome(name, motion, failures, cached, key, note, body)
         if events is not None:

@@ -115,19 +115,22 @@ class Humanoid:
                                              - feet[k, s, 0:3, None], axis=0).max()
         return c_err, f_err
 
-    def zmp(self, q: np.ndarray, dt: float, g: float = 9.81) -> np.ndarray:
+    def zmp(self, q: np.ndarray, dt: float, g: float = 9.81, plane_z: np.ndarray | None = None) -> np.ndarray:
         """The multibody ZMP (K, 2) of the configurations ``q`` sampled every ``dt`` (velocities
         and accelerations by second-order differences on the configuration manifold, one-sided at
-        the ends: a motion that starts from rest with an acceleration has it at its first knot)."""
+        the ends: a motion that starts from rest with an acceleration has it at its first knot), on
+        the support plane at the height ``plane_z`` (K,) (the ground's 0 if not given; a board
+        foot's deck)."""
         model, data = self.model, self.data
         K = len(q)
         d = np.array([pin.difference(model, q[k], q[k + 1]) / dt for k in range(K - 1)])  # over [k, k+1]
         vk = np.vstack([(3 * d[0] - d[1]) / 2, (d[:-1] + d[1:]) / 2, (3 * d[-1] - d[-2]) / 2])  # at the knots
         a = np.gradient(vk, dt, axis=0, edge_order=2)
         out = np.empty((K, 2))
+        plane = np.zeros(K) if plane_z is None else np.asarray(plane_z, dtype=np.float64)
         for k in range(K):
             pin.computeCentroidalMomentumTimeVariation(model, data, q[k], vk[k], a[k])
-            c = data.com[0]
+            c = data.com[0] - np.array([0.0, 0.0, plane[k]])
             f = data.dhg.linear + np.array([0.0, 0.0, self.mass_kg * g])
             Ld = data.dhg.angular
             out[k] = (c[0] - (c[2] * f[0] + Ld[1]) / f[2], c[1] - (c[2] * f[1] - Ld[0]) / f[2])
@@ -143,17 +146,19 @@ class Filtered:
 
 
 def dynamics_filter(robot: Humanoid, dt: float, plan: tuple[np.ndarray, np.ndarray, np.ndarray], q0: np.ndarray,
-                    preview_s: float = PREVIEW_S) -> Filtered:
+                    preview_s: float = PREVIEW_S, plane_z: np.ndarray | None = None) -> Filtered:
     """Kajita's dynamics filter: IK on the planned COM, the multibody ZMP's error against the
     plan's, a cart-table preview servo on that error giving a COM correction, IK again (gravity:
-    the model's). ``plan``: the COM (K, 3), feet (K, 2, 4) and ZMP (K, 2) planned."""
+    the model's). ``plan``: the COM (K, 3), feet (K, 2, 4) and ZMP (K, 2) planned; ``plane_z``
+    (K,): the height of the plane the plan's ZMP lies on (its support point's; 0 if not given)."""
     com, feet, zmp_ref = plan
     g = float(-robot.model.gravity.linear[2])
+    plane = np.zeros(len(com)) if plane_z is None else np.asarray(plane_z, dtype=np.float64)
     first = robot.solve_ik(com, feet, q0)
-    before = robot.zmp(first.q, dt, g)
+    before = robot.zmp(first.q, dt, g, plane)
     if max(first.com_error_m.max(), first.feet_error_m.max()) > MISSED_M:
         return Filtered(first, before, before, com)  # a body not where the plan puts it: nothing to filter
-    model = CartTable.of(dt, float(np.mean(com[:, 2])), g)
+    model = CartTable.of(dt, float(np.mean(com[:, 2] - plane)), g)
     gains = preview_gains(model, round(preview_s / dt))
     shift = np.zeros_like(com)
     for axis in (0, 1):
@@ -162,4 +167,4 @@ def dynamics_filter(robot: Humanoid, dt: float, plan: tuple[np.ndarray, np.ndarr
         shift[:, axis] = track_offset(model, gains, zmp_ref[:, axis] - before[:, axis])[:, 0]
     corrected = com + shift
     second = robot.solve_ik(corrected, feet, first.q[0])
-    return Filtered(second, before, robot.zmp(second.q, dt, g), corrected)
+    return Filtered(second, before, robot.zmp(second.q, dt, g, plane), corrected)

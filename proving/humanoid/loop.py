@@ -1,11 +1,13 @@
 """A humanoid entry executed on the twin: the stabilizer (500 Hz) reads the twin's sensors and
 sends joint angle targets to its servos (1 kHz physics), with the plan's joint speeds and the
 torques its motion needs fed forward (:mod:`skatelib.control.humanoid_torques`), through the entry
-and a static hold at its end; what the twin did and what was planned, sampled at every tick."""
+and a static hold at its end; what the twin did and what was planned, sampled at every tick (a
+skate's also its deck's speed and its soles' places on the deck)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
@@ -47,13 +49,29 @@ class HumanoidRun:
     torque_limit: np.ndarray  # (n,)
     fell_at: float | None  # the first time the twin had fallen (None: it did not)
     fall_reason: str
+    # A skate's: the surface under each sole (N, 2) (0: the ground; the deck's height), each
+    # sole's place (N, 2, 3) and yaw (N, 2) in the deck's frame, the deck's velocity (N, 3), and
+    # when the push ends [s] (None: a walk).
+    sole_plane: np.ndarray | None = None
+    sole_deck_pos: np.ndarray | None = None
+    sole_deck_yaw: np.ndarray | None = None
+    deck_v: np.ndarray | None = None
+    push_end_s: float | None = None
 
 
 def figures_for(lib: MotionLibrary, key: str) -> HumanoidFigures:
     e = lib[key]
+    feet = np.asarray(e.arrays[schema.D_FEET])
     return HumanoidFigures.from_record(lib.humanoid_model, lib.urdf, tuple(e.columns[schema.D_JOINTS]),
                                        np.asarray(e.arrays[schema.D_JOINTS])[0],
-                                       np.asarray(e.arrays[schema.D_BASE_POSE])[0])
+                                       np.asarray(e.arrays[schema.D_BASE_POSE])[0], feet[0, 0:2])
+
+
+def push_end_s(lib: MotionLibrary, key: str) -> float | None:
+    """A skate entry's push duration [s] (its plan's first step; None: a walk)."""
+    if lib.humanoid_model.board is None:
+        return None
+    return float(json.loads(str(lib[key].attrs[schema.A_PLAN]))[0]["duration_s"])
 
 
 def _fallen(tr: Truth) -> str:
@@ -65,6 +83,14 @@ def _fallen(tr: Truth) -> str:
     if tr.floor_touches:
         return f"{', '.join(tr.floor_touches)} on the floor"
     return ""
+
+
+def _deck_rows(rows: dict[str, list[np.ndarray]], tr: Truth) -> None:
+    """A skate's deck samples: the soles' places and yaws on the deck, the deck's velocity."""
+    if tr.deck_R is not None and tr.deck_v is not None:
+        rows["deck_pos"].append(tr.on_deck(tr.sole_pos))
+        rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))
+        rows["deck_v"].append(tr.deck_v)
 
 
 @dataclass(frozen=True)
@@ -94,9 +120,10 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     stab = LipStabilizer(kin, dt, gains)
     torques = PlannedTorques(HumanoidKinematics(lib.urdf, f.joint_names), ref)
     n = round((ref.duration_s + o.hold_s) / dt)
+    skate = f.board is not None
     rows: dict[str, list[np.ndarray]] = {k: [] for k in (
         "t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref", "margin", "margin_clock", "support", "sole_pos",
-        "sole_yaw", "sole_fz", "torque")}
+        "sole_yaw", "sole_fz", "torque", "plane", "deck_pos", "deck_yaw", "deck_v")}
     fell_at, reason = None, ""
     for _ in range(n):
         r = plant.readings()
@@ -107,15 +134,28 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
             plant.step(out.q_target, STEPS_PER_TICK, qd, tau)
         else:
             plant.step(out.q_target, STEPS_PER_TICK)
-        tr = plant.truth()
-        for k, v in (("t", tr.t), ("com", tr.com), ("com_ref", s.com), ("zmp", tr.zmp), ("zmp_measured",
+        tr = plant.truth(s.ground_z)
+        # On a board the robot is where its board has rolled to: a skate's COM and ZMP are taken
+        # relative to the board sole (the plan's and the twin's), its support polygon where the
+        # soles are (the plan's slide has no rolling resistance; the twin's board falls behind it).
+        shift = s.soles[0, 0:2] - tr.sole_pos[0, 0:2] if skate else np.zeros(2)
+        com = tr.com + np.append(shift, 0.0)
+        zmp = tr.zmp + shift
+        for k, v in (("t", tr.t), ("com", com), ("com_ref", s.com), ("zmp", zmp), ("zmp_measured",
                      out.zmp_measured), ("zmp_ref", s.zmp), ("support", s.support), ("sole_pos", tr.sole_pos),
-                     ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque)):
+                     ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque),
+                     ("plane", s.sole_plane)):
             rows[k].append(np.asarray(v))
+        _deck_rows(rows, tr)
         airborne = np.isnan(tr.zmp).any()
         down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
-        rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), tr.zmp)))
-        rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(s.polygon(), tr.zmp)))
+        clock = s
+        if skate:
+            placed = np.column_stack([tr.sole_pos[:, 0:2] + shift, s.soles[:, 2]])
+            down, clock = replace(down, soles=placed, sole_yaw=tr.sole_yaw), replace(s, soles=placed,
+                                                                                     sole_yaw=tr.sole_yaw)
+        rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), zmp)))
+        rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(clock.polygon(), zmp)))
         reason = _fallen(tr)
         if reason:
             fell_at = tr.t
@@ -123,4 +163,6 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     a = {k: np.array(v) for k, v in rows.items()}
     return HumanoidRun(key, a["t"], a["com"], a["com_ref"], a["zmp"], a["zmp_measured"], a["zmp_ref"], a["margin"],
                        a["margin_clock"], a["support"], a["sole_pos"], a["sole_yaw"], a["sole_fz"], a["torque"],
-                       f.torque_limit_Nm, fell_at, reason)
+                       f.torque_limit_Nm, fell_at, reason, sole_plane=a["plane"] if skate else None,
+                       sole_deck_pos=a["deck_pos"] if skate else None, sole_deck_yaw=a["deck_yaw"] if skate else None,
+                       deck_v=a["deck_v"] if skate else None, push_end_s=push_end_s(lib, key))

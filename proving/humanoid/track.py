@@ -55,7 +55,7 @@ class HumanoidJob:
         e = lib[self.key]
         errors = parse_humanoid_perturbation(self.perturb) if self.perturb else None
         run = run_entry(lib, self.key, errors, StabilizerGains(enabled=self.stabilizer), RunOptions(seed=self.seed))
-        v = verdict(run)
+        v = verdict(run, float(e.attrs[schema.A_TARGET_VELOCITY]))
         return HumanoidTrackResult(self.key, lib.humanoid_model.motion, float(e.attrs[schema.A_TARGET_VELOCITY]),
                                    v, tuple(v.failures()),
                                    float(run.t[-1]) if len(run.t) else 0.0)
@@ -66,7 +66,7 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     """One job per entry (``entries``, or every successful one).
 
     Raises:
-        SkatelibError: Not a humanoid walk library (the twin has no board for a skate), an entry it
+        SkatelibError: Not a humanoid library, a skate library planned without a board, an entry it
             does not hold or one stored as failed, or MuJoCo missing (with the install hint).
         HumanoidPerturbationError: A bad ``perturb`` (before any run).
     """
@@ -81,9 +81,10 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     lib = MotionLibrary.open(path)
     if lib.kind != "humanoid":
         raise SkatelibError(f"{path}: the humanoid twin runs humanoid libraries; this one is {lib.kind}")
-    if lib.humanoid_model.motion != "walk":
-        raise SkatelibError(f"{path}: a {lib.humanoid_model.motion} library; the humanoid twin has no skateboard yet, "
-                            "so only walks are executed on it (docs/humanoid-twin.md)")
+    if lib.humanoid_model.motion == "skate" and lib.humanoid_model.board is None:
+        raise SkatelibError(f"{path}: a skate library planned without a board (both soles on the ground, no deck "
+                            "height): the twin cannot ride it on a deck; rebuild it from a config with a [board] "
+                            "table (configs/hrp2_skate.toml)")
     if perturb:
         parse_humanoid_perturbation(perturb)
     keys = list(entries) if entries else [e.key for e in lib if e.success]

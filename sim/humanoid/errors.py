@@ -4,7 +4,7 @@ sensors' noise.
 
 Keys (``KEY=VALUE,...``; ``+5%`` relative, a plain number absolute):
 
-* ``mass``: every link's mass and inertia (``+5%``: 5 % heavier);
+* ``mass``: every link's mass and inertia (``+5%``: 5 % heavier; a skate's board keeps its own);
 * ``com_x``, ``com_y`` [m]: the whole robot's COM moved in the waist frame (the upper body's
   mass centre shifted by the offset times the robot's mass over the upper body's);
 * ``mu``: the floor's friction coefficient;
@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from skatelib.library.errors import SkatelibError
 from skatelib.library.perturb import perturbation_items
+from skatelib.sim.board import BODIES as BOARD_BODIES
 
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
@@ -59,9 +60,10 @@ class HumanoidErrors:
 
     def apply(self, spec: mujoco.MjSpec) -> mujoco.MjSpec:
         """``spec`` with the links' masses, the COM offset and the floor's friction changed."""
-        total = sum(b.mass for b in spec.bodies)
-        for b in spec.bodies:
-            if b.name != "world" and self.mass_scale != 1.0:
+        robot = [b for b in spec.bodies if b.name != "world" and b.name not in BOARD_BODIES]
+        total = sum(b.mass for b in robot)
+        for b in robot:
+            if self.mass_scale != 1.0:
                 b.mass *= self.mass_scale
                 b.inertia = [self.mass_scale * i for i in b.inertia]
         if any(self.com_offset_m):
@@ -69,7 +71,9 @@ class HumanoidErrors:
             k = total / upper.mass  # the upper body moves its share of the whole COM's offset
             upper.ipos = [upper.ipos[0] + k * self.com_offset_m[0], upper.ipos[1] + k * self.com_offset_m[1],
                           upper.ipos[2]]
-        if self.floor_mu is not None:  # MuJoCo takes the larger of two geoms' friction: set both
+        # MuJoCo takes the larger of two geoms' friction: set both (the soles' and the floor's; the
+        # wheels and the deck's grip tape keep theirs)
+        if self.floor_mu is not None:
             for g in spec.geoms:
                 if g.contype or g.name == "floor":
                     g.friction = [self.floor_mu, g.friction[1], g.friction[2]]

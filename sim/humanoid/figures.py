@@ -6,11 +6,12 @@ torsional friction), each with its source in docs/sources.md."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.library.errors import ModelError
-from skatelib.library.model import HumanoidModel
+from skatelib.library.model import HumanoidBoard, HumanoidModel
+from skatelib.sim.figures import DECK_THICKNESS_M, BoardFigures
 
 # HRP-2 drives each joint by a brushless motor through a harmonic drive and servoes its angle on
 # the motor driver (Kaneko et al. 2004): the controller sends joint angles. No public figure of its
@@ -52,15 +53,38 @@ class HumanoidFigures:
     q0_rad: np.ndarray
     base0: np.ndarray
     torsional_friction_m: float = TORSIONAL_FRICTION_M
+    board: BoardFigures | None = None  # a skate's skateboard (the quadruped's board builder's figures)
+    deck_mu: float = 1.0  # the deck's grip tape against a sole
+    deck_xy: tuple[float, float] = (0.0, 0.0)  # the deck's centre at the start [m]
 
     @staticmethod
     def from_record(model: HumanoidModel, urdf: str, joint_names: tuple[str, ...], q0: np.ndarray,
-                    base0: np.ndarray) -> HumanoidFigures:
-        return HumanoidFigures(urdf=urdf, joint_names=joint_names, torque_limit_Nm=effort_limits(urdf, joint_names),
-                               foot_length_m=model.foot_length_m, foot_width_m=model.foot_width_m,
-                               friction_mu=model.friction_mu, gravity_mps2=model.gravity_mps2,
-                               robot_mass_kg=model.robot_mass_kg, q0_rad=np.asarray(q0, dtype=float),
-                               base0=np.asarray(base0, dtype=float))
+                    base0: np.ndarray, board_sole_xy: np.ndarray | None = None) -> HumanoidFigures:
+        """From a humanoid library's record; a skate's board is placed under the board sole's first
+        place ``board_sole_xy`` (x, y)."""
+        f = HumanoidFigures(urdf=urdf, joint_names=joint_names, torque_limit_Nm=effort_limits(urdf, joint_names),
+                            foot_length_m=model.foot_length_m, foot_width_m=model.foot_width_m,
+                            friction_mu=model.friction_mu, gravity_mps2=model.gravity_mps2,
+                            robot_mass_kg=model.robot_mass_kg, q0_rad=np.asarray(q0, dtype=float),
+                            base0=np.asarray(base0, dtype=float))
+        b = model.board
+        if b is None or board_sole_xy is None:
+            return f
+        centre = b.deck_centre(np.asarray(board_sole_xy))
+        return replace(f, board=board_figures(b), deck_mu=b.deck_mu, deck_xy=(float(centre[0]), float(centre[1])))
+
+
+def board_figures(b: HumanoidBoard) -> BoardFigures:
+    """The board builder's figures of a humanoid skate's board: the deck a uniform plank of
+    ``DECK_THICKNESS_M``; its truck width the wheel track."""
+    m, L, W, T = b.deck_mass_kg, b.deck_length_m, b.deck_width_m, DECK_THICKNESS_M
+    inertia = (m * (W**2 + T**2) / 12, m * (L**2 + T**2) / 12, m * (L**2 + W**2) / 12)
+    return BoardFigures(mass_kg=b.mass_kg, deck_length_m=L, deck_width_m=W, deck_height_m=b.deck_height_m,
+                        l_front_m=b.l_front_m, l_rear_m=b.l_rear_m, truck_width_m=b.wheel_track_m,
+                        roll_stiffness_Nm_per_rad=b.roll_stiffness_Nm_per_rad,
+                        roll_damping_Nms_per_rad=b.roll_damping_Nms_per_rad, rolling_friction_coeff=b.rolling_coeff,
+                        pivot_from_horizontal_rad=b.pivot_from_horizontal_rad, deck_mass_kg=b.deck_mass_kg,
+                        wheel_radius_m=b.wheel_radius_m, wheel_track_m=b.wheel_track_m, deck_inertia_kgm2=inertia)
 
 
 def effort_limits(urdf: str, joint_names: tuple[str, ...]) -> np.ndarray:

@@ -9,8 +9,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.sim.humanoid.errors import HumanoidErrors
-from skatelib.sim.humanoid.figures import FEET, SERVO_KD_NMS_PER_RAD, SERVO_KP_NM_PER_RAD, HumanoidFigures
+from skatelib.sim.humanoid.figures import (
+    FEET,
+    SERVO_KD_NMS_PER_RAD,
+    SERVO_KP_NM_PER_RAD,
+    SOLE_THICKNESS_M,
+    HumanoidFigures,
+)
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
+from skatelib.sim.rolling import WHEELS, RollingResistance
 
 
 @dataclass(frozen=True)
@@ -37,8 +44,9 @@ class Truth:
     """What happened (world frame): the COM, each sole's contact and the other links on the floor.
 
     Attributes:
-        sole_force: (2, 3) the floor's force on each sole box; sole_zmp (2, 2) its centre of
-            pressure (NaN without contact); zmp (2,) both soles' together.
+        sole_force: (2, 3) the floor's (or a skate's deck's) force on each sole box; sole_zmp (2, 2)
+            its centre of pressure on the plane of its bottom (NaN without contact); zmp (2,) both
+            soles' together, on the plane ``truth``'s ``plane_z`` names.
         sole_pos / sole_yaw: (2, 3) / (2,) the soles' frames; sole_v / sole_wz their velocity and
             yaw rate.
     """
@@ -57,6 +65,15 @@ class Truth:
     sole_wz: np.ndarray
     torque: np.ndarray
     floor_touches: tuple[str, ...]
+    deck_pos: np.ndarray | None = None  # a skate's deck: its top's centre (3,), orientation (3, 3) and velocity (3,)
+    deck_R: np.ndarray | None = None
+    deck_v: np.ndarray | None = None
+
+    def on_deck(self, p: np.ndarray) -> np.ndarray:
+        """World points (..., 3) in the deck's frame (its top's centre, x forward)."""
+        if self.deck_pos is None or self.deck_R is None:
+            raise ValueError("the twin has no board")
+        return np.asarray((np.asarray(p) - self.deck_pos) @ self.deck_R)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -83,6 +100,10 @@ class HumanoidPlant:
         self.root = m.body(ROOT).id
         self.sensor = {n: (m.sensor(n).adr[0], m.sensor(n).dim[0]) for n in
                        ("imu_quat", "imu_gyro", *(f"{foot}_{w}" for foot in FEET for w in ("force", "torque")))}
+        self.rolling = RollingResistance(m, f.board.rolling_friction_coeff) if f.board is not None else None
+        self.deck = m.body("deck").id if f.board is not None else -1
+        self.deck_geom = m.geom("deck").id if f.board is not None else -1
+        self.wheels = {m.geom(w).id for w in WHEELS} if f.board is not None else set()
         mujoco.mj_resetDataKeyframe(m, self.d, m.key("initial").id)
         self.d.ctrl[self.act] = f.q0_rad
         mujoco.mj_forward(m, self.d)
@@ -107,6 +128,8 @@ class HumanoidPlant:
         self.d.ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
         for _ in range(n):
             self.errors.push(self.d, self.root)
+            if self.rolling is not None:
+                self.rolling.apply(self.d)
             mujoco.mj_step(self.m, self.d)
 
     def _s(self, name: str) -> np.ndarray:
@@ -124,7 +147,8 @@ class HumanoidPlant:
                         d.qvel[self.dadr] + r.normal(0, 20 * e.encoder_noise_rad, n), quat / np.linalg.norm(quat),
                         self._s("imu_gyro") + r.normal(0, e.gyro_noise_radps, 3), force, torque)
 
-    def truth(self) -> Truth:
+    def truth(self, plane_z: float = 0.0) -> Truth:
+        """What happened; the soles' joint ZMP on the plane at height ``plane_z`` [m]."""
         import mujoco
 
         m, d = self.m, self.d
@@ -134,25 +158,26 @@ class HumanoidPlant:
         for k in range(d.ncon):
             c = d.contact[k]
             pair = (int(c.geom1), int(c.geom2))
-            if self.floor not in pair:
+            base = self.floor if self.floor in pair else self.deck_geom if self.deck_geom in pair else None
+            if base is None:
                 continue
-            other = pair[1] if pair[0] == self.floor else pair[0]
+            other = pair[1] if pair[0] == base else pair[0]
             if other not in self.soles:
-                others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
+                if base == self.floor and other not in self.wheels:
+                    others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
                 continue
             mujoco.mj_contactForce(m, d, k, frame)
-            fw = c.frame.reshape(3, 3).T @ frame[0:3]  # on geom2 (the sole when the floor is geom1)
-            fw = fw if pair[0] == self.floor else -fw
+            fw = c.frame.reshape(3, 3).T @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
+            fw = fw if pair[0] == base else -fw
             s = self.soles.index(other)
             force[s] += fw
-            moment[s] += _cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == self.floor
-                                                                                          else -1))
+            moment[s] += _cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == base else -1))
         zmp = np.full((2, 2), np.nan)
         for s in (0, 1):
             if force[s, 2] > 1.0:
-                zmp[s] = -moment[s, 1] / force[s, 2], moment[s, 0] / force[s, 2]
+                zmp[s] = _cop(force[s], moment[s], float(d.geom_xpos[self.soles[s]][2]) - SOLE_THICKNESS_M / 2)
         total_f, total_m = force.sum(axis=0), moment.sum(axis=0)
-        both = (np.array([-total_m[1], total_m[0]]) / total_f[2]) if total_f[2] > 1.0 else np.full(2, np.nan)
+        both = _cop(total_f, total_m, plane_z) if total_f[2] > 1.0 else np.full(2, np.nan)
         pos, yaw, v, wz = np.zeros((2, 3)), np.zeros(2), np.zeros((2, 3)), np.zeros(2)
         for s, g in enumerate(self.soles):
             R = d.geom_xmat[g].reshape(3, 3)
@@ -160,7 +185,17 @@ class HumanoidPlant:
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, w, 0)
             v[s], wz[s] = w[3:6], w[2]
         mujoco.mj_subtreeVel(m, d)
+        deck: tuple[np.ndarray | None, ...] = (None, None, None)
+        if self.deck >= 0:
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.deck, w, 0)
+            deck = (d.xpos[self.deck].copy(), d.xmat[self.deck].reshape(3, 3).copy(), w[3:6].copy())
         return Truth(float(d.time), d.subtree_com[self.root].copy(), d.subtree_linvel[self.root].copy(),
                      d.xpos[self.root].copy(), d.xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw,
-                     v, wz, d.actuator_force[self.act].copy(), tuple(sorted(others)))
+                     v, wz, d.actuator_force[self.act].copy(), tuple(sorted(others)), *deck)
+
+
+def _cop(f: np.ndarray, n: np.ndarray, z: float) -> np.ndarray:
+    """The centre of pressure (x, y) on the plane at height ``z`` of a force ``f`` with the moment
+    ``n`` about the world origin: the point of that plane about which the moment has no x, y part."""
+    return np.array([(z * f[0] - n[1]) / f[2], (n[0] + z * f[1]) / f[2]])
 

@@ -4,7 +4,9 @@ HRP-2 is position controlled) limited to the joint's torque limit, the rotor's r
 armature and a damping; each foot a sole box of the library's sole size under its sole frame, with
 the floor's friction and a torsional friction (yaw slip is a torsional effect), and a 6-axis
 force/torque sensor at its ankle; an IMU (orientation, rate) on the waist. Only the soles touch
-the floor as support: any other link touching it is a fall."""
+the floor as support: any other link touching it is a fall. A skate's twin has the quadruped's
+skateboard (:func:`skatelib.sim.board.add_board`: a free deck, trucks on their pivot axes, rolling
+wheels) under the board sole, which it holds by friction alone."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import re
 from typing import TYPE_CHECKING
 
 from skatelib.library.urdf import without_meshes
+from skatelib.sim.board import FLOOR_BIT, FOOT_BIT, add_board
 from skatelib.sim.humanoid.figures import (
     ANKLES,
     FEET,
@@ -29,7 +32,7 @@ from skatelib.sim.humanoid.figures import (
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
 
-FLOOR_BIT, SOLE_BIT = 1, 2
+SOLE_BIT = FOOT_BIT  # the board's deck touches what its builder calls feet: the soles
 ROOT = "waist"
 # A rubber sole gives a millimetre or so under the robot's weight: a 5 ms contact time constant.
 SOLE_SOLREF_S = 0.005
@@ -72,6 +75,8 @@ def humanoid_spec(f: HumanoidFigures) -> mujoco.MjSpec:
                             contype=FLOOR_BIT, conaffinity=0, condim=4,
                             friction=[f.friction_mu, f.torsional_friction_m, 0.0], rgba=[0.4, 0.43, 0.48, 1])
     spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
+    if f.board is not None:  # the skate's board under the board sole, its deck's top at the deck height
+        add_board(spec, f.board, f.deck_mu, (f.deck_xy[0], f.deck_xy[1], 0.0))
     key = spec.add_key(name="initial")
     m = spec.compile()
     qpos = m.qpos0.copy()
