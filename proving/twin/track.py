@@ -18,7 +18,7 @@ from skatelib.runtime import Entry, MotionLibrary
 
 if TYPE_CHECKING:  # MuJoCo's side, imported when a job runs (check_twin names the missing extra)
     from skatelib.proving.steer import SteerResult
-    from skatelib.proving.twin.loop import TwinRun
+    from skatelib.proving.twin.loop import Shove, TwinRun
     from skatelib.proving.twin.verdict import TwinResult
     from skatelib.sim.errors import TwinErrors
     from skatelib.sim.plant import TwinPlant
@@ -51,12 +51,14 @@ class TwinJob:
         return twin_result(self.key, label, run), written, entry
 
 
-def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: tuple[MpcConfig, TrackSettings],
-              outputs: tuple[bool, Path | None] = (False, None)) -> tuple[TwinRun, str | None]:
+def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str | TwinErrors,
+              controller: tuple[MpcConfig, TrackSettings], outputs: tuple[bool, Path | None] = (False, None),
+              shove: Shove | None = None) -> tuple[TwinRun, str | None]:
     """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
-    with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread.
-    ``outputs``: whether to keep the run's record, and a video to render it to. Returns the run
-    (:class:`skatelib.proving.twin.loop.TwinRun`) and the video's path or None."""
+    with ``perturb``'s errors (``--perturb`` text or the errors themselves) and ``shove``, the MPC's
+    and the run's settings ``controller``, one BLAS thread. ``outputs``: whether to keep the run's
+    record, and a video to render it to. Returns the run (:class:`skatelib.proving.twin.loop.TwinRun`)
+    and the video's path or None."""
     from skatelib.control.params import SkateParams
     from skatelib.proving.setup import ClosedLoop
     from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
@@ -69,7 +71,7 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: t
     plant, errors = _plant(lib, perturb, nominal.mu)
     loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
                     TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
-                                     sensor_errors=errors.sensors),
+                                     sensor_errors=errors.sensors, shove=shove),
                     keep=keep or video is not None)
     with threadpool_limits(limits=1, user_api="blas"):
         run = loop.ride()
@@ -108,12 +110,12 @@ class TwinSteerJob:
                               self.target_velocity_mps, SteerRun(loop=sensors))
 
 
-def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[TwinPlant, TwinErrors]:
+def _plant(lib: MotionLibrary, perturb: str | TwinErrors, mu: float) -> tuple[TwinPlant, TwinErrors]:
     from skatelib.sim.errors import parse_twin_perturbation
     from skatelib.sim.figures import TwinFigures
     from skatelib.sim.plant import TwinPlant
 
-    errors = parse_twin_perturbation(perturb, mu)
+    errors = parse_twin_perturbation(perturb, mu) if isinstance(perturb, str) else perturb
     return TwinPlant(TwinFigures.from_library(lib), errors), errors
 
 
