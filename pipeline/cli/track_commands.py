@@ -19,6 +19,7 @@ from skatelib.pipeline.cli.library_commands import (
     QpSolver,
 )
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
+from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.views.console import (
     console,
@@ -71,6 +72,8 @@ def track(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
     state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.true,
+    draw: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help=(
+        "With --plant mujoco and one --entry: ride a certificate's draw of this seed again."))] = None,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
@@ -82,6 +85,8 @@ def track(
                        (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed))
         return
     mpc, settings = _controller(solver, mpc_mu, seed, state)
+    if draw is not None:
+        return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
     plant_error = "" if perturb == "none" else perturb
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
     if ride is not None:
@@ -114,8 +119,7 @@ def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateK
 
 
 def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
-    """Exit 1 when every entry is to be tracked and none was solved; on the twin, the note on the
-    URDF's mesh files (not read) when it names some."""
+    """Exit 1 when every entry is to be tracked and none was solved; on the twin, a note on mesh files."""
     from skatelib.runtime import MotionLibrary
 
     if all_entries and not any(e.success for e in MotionLibrary.open(library)):
