@@ -108,3 +108,16 @@ def _entry(d: dict[str, Any]) -> EntryCertificate:
         shove_survived_Ns=float(d["shove_survived_Ns"]),
         shove_failed_Ns=None if d["shove_failed_Ns"] is None else float(d["shove_failed_Ns"]),
         worst_seed=None if d["worst_seed"] is None else int(d["worst_seed"]), digest=str(d["digest"]), draws=draws)
+
+
+def certificate_figures(text: Any) -> dict[str, Any]:
+    """A stored certificate as flat figures for ``skatelib diff`` (``code``, ``spec``,
+    ``<key>.rate``, ``.low``, ``.high``, ``.shove_survived_Ns``, ``.shove_failed_Ns``); {} for none."""
+    if text is None:
+        return {}
+    c = Certificate.from_json(str(text))
+    out: dict[str, Any] = {"code": c.code, "spec": c.spec_json}
+    for k, e in sorted(c.entries.items()):
+        out |= {f"{k}.rate": e.rate, f"{k}.low": e.low, f"{k}.high": e.high,
+                f"{k}.shove_survived_Ns": e.shove_survived_Ns, f"{k}.shove_failed_Ns": e.shove_failed_Ns}
+    return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from typing import Any
 
 from rich.markup import escape
@@ -41,11 +42,26 @@ def certificate_table(certificate: Certificate, library: str, stale: list[str]) 
         console.print(f"[yellow]stale:[/] {escape('; '.join(stale))}")
 
 
-def certificate_lines(lib: Any, certificate: Certificate | None, stale: list[str]) -> list[str]:
-    """``info``'s lines on the certificate: absent, or the range of rates and whether it is current."""
-    if certificate is None:
-        return ["certificate: none (skatelib certify LIB rides every entry under drawn errors)"]
-    rates = [e.rate for e in certificate.entries.values()]
-    lines = [f"certificate: {len(rates)} entries, success rate {min(rates):.2f} to {max(rates):.2f}, code "
-             f"{certificate.code}; {'stale: ' + '; '.join(stale) if stale else 'current'}"]
-    return lines
+def _stale(lib: Any) -> list[str]:
+    from skatelib.pipeline.certify_spec import library_spec, stale_reasons
+
+    return stale_reasons(lib, lib.certificate, library_spec(lib))
+
+
+def certificate_json(lib: Any) -> dict[str, Any]:
+    """``info --json``'s certificate (without each draw): ``{}`` when the library has none."""
+    import json
+
+    if lib.kind != "quadruped" or lib.certificate is None:
+        return {}
+    cert = lib.certificate
+    entries = {k: {f: v for f, v in asdict(e).items() if f != "draws"} | {"rate": e.rate}
+               for k, e in sorted(cert.entries.items())}
+    return {"certificate": {"spec": json.loads(cert.spec_json), "code": cert.code, "stale": _stale(lib),
+                            "entries": entries}}
+
+
+def certificate_summary(lib: Any) -> None:
+    """``info``'s certificate: its table, and whether it is current."""
+    if lib.kind == "quadruped" and lib.certificate is not None:
+        certificate_table(lib.certificate, str(lib.path), _stale(lib))

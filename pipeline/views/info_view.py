@@ -8,6 +8,7 @@ from typing import Any
 
 from rich.markup import escape
 from skatelib.library import schema
+from skatelib.pipeline.views.certificate_view import certificate_json, certificate_summary
 from skatelib.pipeline.views.console import console, count, entry_table, fmt, label_error, parameter_table
 from skatelib.pipeline.views.transitions_view import transitions_json, transitions_summary
 
@@ -35,7 +36,8 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
                    if f"{name}_{k}" in lib.attrs}
     transitions = transitions_json(lib) if lib.kind == "quadruped" else {}
     return {"library": str(path), schema.A_KIND: lib.kind, **provenance, schema.A_CHECKSUM: lib.content_sha256,
-            "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {})}
+            "model": dict(lib.model), "entries": entries, **({"transitions": transitions} if transitions else {}),
+            **certificate_json(lib)}
 
 
 def library_summary(lib: Any, path: Any) -> None:
@@ -64,6 +66,7 @@ def library_summary(lib: Any, path: Any) -> None:
         transitions_summary(lib)
     _wholebody_summary(lib)
     _closed_loop_summary(lib)
+    certificate_summary(lib)
 
 
 def _wholebody_summary(lib: Any) -> None:
