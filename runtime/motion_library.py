@@ -133,7 +133,9 @@ class MotionLibrary:
         return None if text is None else Certificate.from_json(str(text), f"{self.path}: /@{schema.A_CERTIFICATE}")
 
     def _candidates(self, strides: int | None, from_velocity_mps: float = 0.0,
-                    min_success: float | None = None) -> list[Entry]:
+                    min_success: float | None = None) -> tuple[list[Entry], str]:
+        """The successful entries (certified at ``min_success``) from ``from_velocity_mps`` with
+        ``strides``, and a note on those ``min_success`` left out."""
         v0 = from_velocity_mps
         entries, note = usable(self, self.certificate, min_success)
         start = [e for e in entries if speed_key(e.from_velocity_mps) == speed_key(v0)]
@@ -145,7 +147,7 @@ class MotionLibrary:
             have = sorted({e.n_strides for e in start})
             raise EntryNotFound(f"{self.path}: no successful entry from {v0} m/s with strides={strides}; "
                                 f"strides available: {have}{note}")
-        return c
+        return c, note
 
     @renamed(velocity="target_velocity_mps", v_from="from_velocity_mps", v_to="target_velocity_mps")
     def select(self, target_velocity_mps: float, strides: int | None = None, clamp: bool = False,
@@ -164,13 +166,13 @@ class MotionLibrary:
         v, v0 = target_velocity_mps, from_velocity_mps
         if not (isfinite(v) and isfinite(v0)):
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
-        c = self._candidates(strides, v0, min_success)
+        c, note = self._candidates(strides, v0, min_success)
         speeds = sorted({e.target_velocity_mps for e in c})
         if not clamp and not speeds[0] - 1e-9 <= v <= speeds[-1] + 1e-9:
             which = "" if strides is None else f" for {strides} strides"
             start = "" if not v0 else f" from {v0} m/s"
             raise EntryNotFound(f"{self.path}: {v} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
-                                "pass clamp=True for the nearest, or route() for a chain")
+                                f"pass clamp=True for the nearest, or route() for a chain{note}")
         return min(c, key=lambda e: (abs(e.target_velocity_mps - v), e.n_strides))
 
     @renamed(v_from="from_velocity_mps", v_to="target_velocity_mps")
@@ -221,7 +223,7 @@ class MotionLibrary:
         counts = [strides] if strides is not None else sorted(
             {e.n_strides for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(0.0)})
         for s in counts:
-            c = sorted(self._candidates(s), key=lambda e: e.target_velocity_mps)
+            c = sorted(self._candidates(s)[0], key=lambda e: e.target_velocity_mps)
             lo = [e for e in c if e.target_velocity_mps <= target_velocity_mps]
             hi = [e for e in c if e.target_velocity_mps >= target_velocity_mps]
             if lo and hi:
