@@ -136,11 +136,32 @@ def _dask(jobs: Sequence[CertifyJob], scheduler: Any) -> Iterator[DrawResult]:
             client.close()
 
 
+def merged(old: Certificate | None, new: Certificate) -> Certificate:
+    """``new`` with the entries of ``old`` it did not ride, when ``old`` was drawn from the same
+    table (N and seed too) by the same code; ``new`` alone otherwise (an ``--entry`` run adds to a
+    certificate, never mixes two)."""
+    if old is None or (old.spec_json, old.code) != (new.spec_json, new.code):
+        return new
+    return Certificate(new.spec_json, new.code, {**old.entries, **new.entries})
+
+
 def store_certificate(path: Path, certificate: Certificate) -> Path:
     """Write ``certificate`` into the library at ``path`` (the file rewritten atomically)."""
     return amend_library(path, {schema.A_CERTIFICATE: certificate.to_json()}, {})
 
 
-def check_writable(path: Path) -> None:
-    """Refuse, before any ride, a library file that cannot take its certificate."""
+def check_writable(path: Path, options: CertifyOptions) -> None:
+    """Refuse, before any ride, a library file that cannot take its certificate, and a dask
+    backend without a reachable scheduler.
+
+    Raises:
+        OutputError: The file cannot be rewritten.
+        SkatelibError: ``--backend dask`` without ``--scheduler``, or one nothing listens at.
+    """
     check_amendable(path)
+    if options.backend == "dask" and not hasattr(options.scheduler, "submit"):  # an address, not a Client
+        if options.scheduler is None:
+            raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
+        from skatelib.pipeline.build.preflight import check_scheduler
+
+        check_scheduler(options.scheduler)

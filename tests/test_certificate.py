@@ -191,7 +191,7 @@ def test_select_and_route_skip_entries_below_min_success(certified):
     with pytest.raises(EntryNotFound, match=r"v0.30_s1 \(success rate 0.50 < min_success 0.9\)"):
         lib.select(0.3, min_success=0.9)
     assert [e.key for e in lib.route(0.0, 0.4, min_success=0.9)] == ["v0.40_s1"]
-    with pytest.raises(EntryNotFound, match="skipped below min_success: v0.30_s1"):
+    with pytest.raises(EntryNotFound, match=r"skipped below min_success: v0\.30_s1"):
         lib.route(0.0, 0.3, min_success=0.9)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
-from skatelib.library.errors import Interrupted, SkatelibError
+from skatelib.library.errors import Interrupted
 from skatelib.pipeline.cli.build_commands import Backend
 from skatelib.pipeline.cli.library_commands import LibArg
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED
@@ -62,8 +62,7 @@ def certify(
     import dataclasses
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-    from skatelib.pipeline.build.preflight import check_scheduler
-    from skatelib.pipeline.certify_run import CertifyOptions, check_writable, store_certificate
+    from skatelib.pipeline.certify_run import CertifyOptions, check_writable, merged, store_certificate
     from skatelib.pipeline.certify_run import certify as run
     from skatelib.pipeline.certify_spec import config_spec, library_spec, stale_reasons
     from skatelib.pipeline.views.certificate_view import certificate_table
@@ -73,11 +72,8 @@ def certify(
     spec = config_spec(config) if config is not None else library_spec(lib)
     spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
                                seed=spec.seed if seed is None else seed)
-    check_writable(library)
-    if backend is Backend.dask:
-        if scheduler is None:
-            raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
-        check_scheduler(scheduler)
+    options = CertifyOptions(jobs, backend.value, scheduler, cache)
+    check_writable(library, options)
     keys = entry or [e.key for e in lib if e.success]
     total = len(keys) * spec.samples  # what a --entry names is checked before any ride
     console.print(escape(f"certifying {count(len(keys), 'entry')} of {library}: {spec.samples} rides each on the twin"))
@@ -85,12 +81,13 @@ def certify(
                   console=console, disable=not progress) as bar:
         rates = _Rates(bar, bar.add_task("certifying", total=total))
         try:
-            cert = run(library, spec, keys, CertifyOptions(jobs, backend.value, scheduler, cache), rates)
+            cert = run(library, spec, keys, options, rates)
         except KeyboardInterrupt:
             done = sum(v[1] for v in rates.passed.values())
             kept = f"{done} of {total} rides are cached" if cache else "nothing is cached (--no-cache)"
             raise Interrupted(f"interrupted: {kept}; the library is unchanged. Run the same command to resume."
                               ) from None
+    cert = merged(lib.certificate, cert)
     certificate_table(cert, str(library), stale_reasons(MotionLibrary.open(store_certificate(library, cert)), cert))
     console.print(escape(f"wrote the certificate into {library}"))
 
