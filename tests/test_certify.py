@@ -83,3 +83,33 @@ def test_certify_stores_info_reads_and_track_draw_replays(lib):
     t = run_cli(["track", str(lib), "--plant", "mujoco", "-e", KEY, "--draw", str(draw.seed)], timeout=600)
     assert t.returncode == (0 if draw.passed else 1), t.stdout + t.stderr
     assert f"draw {draw.seed}" in t.stdout
+
+
+def test_sigint_leaves_no_worker_and_the_library_unchanged(lib, tmp_path):
+    """SIGINT to ``certify -j 2`` once its first rides are cached: exit 130 saying how many rides
+    are cached, after 10 s no process of its session is alive (found by session, not by name), the
+    library's bytes as they were."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    from tests.helpers import CLI
+    from tests.test_reliability import _session
+
+    before = lib.read_bytes()
+    cache = Path(os.environ["SKATELIB_CACHE_DIR"])
+    p = subprocess.Popen([*CLI, "certify", str(lib), "--samples", "8", "-j", "2", "--no-progress"],
+                         env={**os.environ, "COLUMNS": "200"}, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True)
+    deadline = time.monotonic() + 300
+    while not list((cache / "entries").glob("*.entry")) and time.monotonic() < deadline and p.poll() is None:
+        time.sleep(0.2)
+    assert p.poll() is None, "certify ended before it could be interrupted"
+    assert len(_session(p.pid)) >= 3  # the command and its two workers
+    os.kill(p.pid, signal.SIGINT)
+    _, stderr = p.communicate(timeout=60)
+    time.sleep(10)
+    assert _session(p.pid) == [], "processes of the interrupted certify are still running"
+    assert p.returncode == 130 and "rides are cached" in stderr and "resume" in stderr, stderr
+    assert lib.read_bytes() == before
