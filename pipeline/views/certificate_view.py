@@ -12,7 +12,8 @@ from skatelib.pipeline.views.console import console
 
 
 def _modes(e: EntryCertificate) -> str:
-    return ", ".join(f"{m} {n}" for m, n in e.modes.items() if n) or "-"
+    """The failure modes of failed rides, the most frequent first."""
+    return ", ".join(f"{m} {n}" for m, n in sorted(e.modes.items(), key=lambda mn: -mn[1]) if n) or "-"
 
 
 def _shove(value: float | None) -> str:
