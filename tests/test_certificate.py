@@ -200,3 +200,19 @@ def test_select_and_route_skip_entries_below_min_success(certified):
         plain.select(0.3, min_success=0.1)
     with pytest.raises(ValueError, match="min_success"):
         lib.select(0.3, min_success=1.5)
+
+
+def test_certify_refuses_a_bad_table_and_track_draw_off_the_twin(tmp_path):
+    """``certify --config`` with a reversed range exits 2 naming the file and the key, before any
+    ride and with the library unchanged; ``track --draw`` without ``--plant mujoco`` exits 2 saying
+    what to add."""
+    from tests.helpers import run_cli
+
+    lib = tmp_path / "lib.h5"
+    shutil.copy(REFERENCE, lib)
+    bad = _config(tmp_path, "floor_mu = [0.8, 0.4]")
+    r = run_cli(["certify", str(lib), "--config", str(bad), "--no-progress"])
+    assert r.returncode == 2 and str(bad) in r.stderr and "certify.floor_mu" in r.stderr, r.stderr
+    assert lib.read_bytes() == REFERENCE.read_bytes()
+    t = run_cli(["track", str(lib), "--draw", "5", "-e", "v0.30_s1"])
+    assert t.returncode == 2 and "give --plant mujoco and one --entry" in t.stderr, t.stderr
