@@ -4,9 +4,10 @@ the table of ``docs/benchmarks.md``.
 One module per subject, each with its figures (name, target, baseline) as data and a ``measure``
 function: :mod:`benchmarks.pushoff`, :mod:`benchmarks.library`, :mod:`benchmarks.runtime`,
 :mod:`benchmarks.humanoid`, :mod:`benchmarks.rerun_log`, :mod:`benchmarks.mpc`,
-:mod:`benchmarks.fatrop`, :mod:`benchmarks.sim`, :mod:`benchmarks.wbc`, :mod:`benchmarks.estimator`.
+:mod:`benchmarks.fatrop`, :mod:`benchmarks.sim`, :mod:`benchmarks.wbc`, :mod:`benchmarks.estimator`,
+:mod:`benchmarks.certify`.
 
-``python -m benchmarks.run [pushoff|library|runtime|humanoid|rerun|mpc|fatrop|sim|wbc|estimator ...]`` runs a subset
+``python -m benchmarks.run [pushoff|library|runtime|...|certify ...]`` runs a subset
 (and rewrites only its rows); ``--no-write`` leaves the table alone.
 """
 
@@ -37,6 +38,7 @@ PARTS: dict[str, tuple[str, bool]] = {
     "sim": ("benchmarks.sim", False),
     "wbc": ("benchmarks.wbc", True),
     "estimator": ("benchmarks.estimator", True),
+    "certify": ("benchmarks.certify", True),
 }
 
 

@@ -19,11 +19,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skatelib.library import schema
 from skatelib.library.attributes import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
+from skatelib.library.certificate import certificate_figures
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord, jsonable
 
 CONFIG = "config_resolved_json"
+CERTIFICATE = schema.A_CERTIFICATE
 
 
 @dataclass(frozen=True)
@@ -87,6 +90,7 @@ class LibraryDiff:
     model: tuple[ValueChange, ...] = ()
     config: tuple[ValueChange, ...] = ()  # the resolved config's differing keys (dotted)
     provenance: tuple[ValueChange, ...] = field(default=())
+    certificate: tuple[ValueChange, ...] = ()  # per entry rate, interval, shove margin; spec, code (not counted)
 
     @property
     def equal(self) -> bool:
@@ -119,11 +123,14 @@ def compare(A: LibraryData, B: LibraryData, tol: Tolerance = Tolerance(), keys: 
     config = _values(json_figures(A.attrs.get(CONFIG)), json_figures(B.attrs.get(CONFIG)), Tolerance())
     prov = _values({k: v for k, v in A.attrs.items() if k in PROVENANCE},
                    {k: v for k, v in B.attrs.items() if k in PROVENANCE}, Tolerance())
-    other = {k for k in set(A.attrs) | set(B.attrs) if k not in PROVENANCE | VOLATILE | {CONFIG}}
+    other = {k for k in set(A.attrs) | set(B.attrs) if k not in PROVENANCE | VOLATILE | {CONFIG, CERTIFICATE}}
     prov += _values({k: A.attrs[k] for k in other if k in A.attrs}, {k: B.attrs[k] for k in other if k in B.attrs},
                     tol)
+    cert = _values(certificate_figures(A.attrs.get(CERTIFICATE)), certificate_figures(B.attrs.get(CERTIFICATE)),
+                   Tolerance())
     return LibraryDiff(str(A.path), str(B.path), tol, tuple(sorted(kb - ka)), tuple(sorted(ka - kb)), tuple(changed),
-                       len(ka & kb) - sum(c.differs for c in changed), tuple(model), tuple(config), tuple(prov))
+                       len(ka & kb) - sum(c.differs for c in changed), tuple(model), tuple(config), tuple(prov),
+                       tuple(cert))
 
 
 def _entry(a: EntryRecord, b: EntryRecord, tol: Tolerance) -> EntryChange | None:

@@ -46,11 +46,12 @@ class Bound:
 BOUNDS: dict[str, Bound] = {
     "mass": Bound(0.1, 10.0, FACTOR),  # the robot's mass (the twin: every link's mass and inertia)
     "inertia": Bound(0.1, 10.0, FACTOR),  # the trunk's inertia (model plant)
-    "board_mass": Bound(0.1, 10.0, FACTOR),  # the board's mass (model plant)
+    "board_mass": Bound(0.1, 10.0, FACTOR),  # the board's mass (model plant; the twin: the deck's)
     "kb": Bound(0.1, 10.0, FACTOR),  # the trucks' roll stiffness
     "bb": Bound(0.1, 10.0, FACTOR),  # the trucks' roll damping
     "rolling": Bound(0.0, 10.0, FACTOR),  # the wheels' rolling resistance (0: none)
     "armature": Bound(0.1, 10.0, FACTOR),  # the rotors' reflected inertia (twin)
+    "motor": Bound(0.1, 2.0, FACTOR),  # the motors' torque per commanded torque (twin)
     "tanh": Bound(1.0, 1e4, "s/m"),  # k of Eq. (10) (model plant; the config's range)
     "mu": Bound(0.0, 2.0, "", low_open=True),  # the floor's friction coefficient
     "com": Bound(-0.05, 0.05, "m"),  # the COM's lateral shift (model plant)

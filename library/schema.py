@@ -12,10 +12,10 @@ from typing import Final
 
 FORMAT_NAME: Final = "skatelib.motion-library"
 HDF5_SIGNATURE: Final = b"\x89HDF\r\n\x1a\n"  # the first 8 bytes of an HDF5 file (after any user block)
-FORMAT_VERSION: Final = (1, 5)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
+FORMAT_VERSION: Final = (1, 6)  # 1.1: friction model, terminal state, cache_key, frontier_json; 1.2: the board
 # model; 1.3: the humanoid's whole body (joints, feet, filtered COM and ZMP, its URDF); 1.4: transitions from
 # riding (from_velocity_mps, keys v0.50-0.80_s2) and the riding stance in /model; 1.5: the humanoid's soles
-# carry their pitch (toe-off)
+# carry their pitch (toe-off); 1.6: the robustness certificate (certificate_json, optional)
 FORMAT_VERSION_STR: Final = f"{FORMAT_VERSION[0]}.{FORMAT_VERSION[1]}"
 
 # Root attributes.
@@ -35,6 +35,7 @@ A_PINOCCHIO: Final = "pinocchio_version"
 A_CHECKSUM: Final = "content_sha256"
 A_SOLVER_OPTIONS: Final = "solver_options_json"
 A_FRONTIER: Final = "frontier_json"  # optional: the reachable-speed frontier (skatelib build --frontier)
+A_CERTIFICATE: Final = "certificate_json"  # optional, since 1.6: the robustness certificate (skatelib certify)
 ROOT_REQUIRED: Final = (
     A_FORMAT,
     A_FORMAT_VERSION,

@@ -11,13 +11,15 @@ from collections.abc import Iterator
 from math import isfinite
 from pathlib import Path
 
-import numpy as np
 from skatelib.library import schema
+from skatelib.library.certificate import Certificate
 from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.library.model import HumanoidModel, QuadrupedModel
 from skatelib.library.model_io import read_humanoid_model, read_quadruped_model
 from skatelib.library.reader import EntryRecord, LibraryData, read_library
 from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck
+from skatelib.runtime.blended import blend_pair
+from skatelib.runtime.certified import usable
 from skatelib.runtime.entry import Entry, EntryNotFound
 from skatelib.runtime.renamed import renamed
 from skatelib.runtime.routes import route, speed_key
@@ -124,28 +126,39 @@ class MotionLibrary:
         """The speeds successful entries start at: 0 (the start-ups) and the transitions' [m/s]."""
         return sorted({speed_key(e.from_velocity_mps) for e in self if e.success})
 
-    def _candidates(self, strides: int | None, from_velocity_mps: float = 0.0) -> list[Entry]:
+    @functools.cached_property
+    def certificate(self) -> Certificate | None:
+        """The robustness certificate (``skatelib certify``), or None."""
+        text = self.attrs.get(schema.A_CERTIFICATE)
+        return None if text is None else Certificate.from_json(str(text), f"{self.path}: /@{schema.A_CERTIFICATE}")
+
+    def _candidates(self, strides: int | None, from_velocity_mps: float = 0.0,
+                    min_success: float | None = None) -> tuple[list[Entry], str]:
+        """The successful entries (certified at ``min_success``) from ``from_velocity_mps`` with
+        ``strides``, and a note on those ``min_success`` left out."""
         v0 = from_velocity_mps
-        start = [e for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(v0)]
+        entries, note = usable(self, self.certificate, min_success)
+        start = [e for e in entries if speed_key(e.from_velocity_mps) == speed_key(v0)]
         if not start:
             raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v0} m/s; entries start at "
-                                f"{self.start_speeds()} m/s (0: from rest)")
+                                f"{self.start_speeds()} m/s (0: from rest){note}")
         c = [e for e in start if strides is None or e.n_strides == strides]
         if not c:
             have = sorted({e.n_strides for e in start})
             raise EntryNotFound(f"{self.path}: no successful entry from {v0} m/s with strides={strides}; "
-                                f"strides available: {have}")
-        return c
+                                f"strides available: {have}{note}")
+        return c, note
 
     @renamed(velocity="target_velocity_mps", v_from="from_velocity_mps", v_to="target_velocity_mps")
     def select(self, target_velocity_mps: float, strides: int | None = None, clamp: bool = False,
-               from_velocity_mps: float = 0.0) -> Entry:
+               from_velocity_mps: float = 0.0, min_success: float | None = None) -> Entry:
         """The successful entry from ``from_velocity_mps`` (0: a start-up from rest) nearest
-        ``target_velocity_mps`` [m/s] (fewest strides on ties).
+        ``target_velocity_mps`` [m/s] (fewest strides on ties); with ``min_success``, only entries
+        certified at that success rate or better (:mod:`skatelib.runtime.certified`).
 
         Raises:
-            ValueError: When a speed is NaN or infinite.
-            EntryNotFound: When no successful entry starts at ``from_velocity_mps`` or has ``strides``
+            ValueError: When a speed is NaN or infinite, or ``min_success`` is not from 0 to 1.
+            EntryNotFound: When no (certified) successful entry starts at ``from_velocity_mps`` or has ``strides``
                 strides, or ``target_velocity_mps`` lies outside the stored speeds and ``clamp`` is
                 false (the message lists the speeds; :meth:`route` chains entries where no single one
                 gets there).
@@ -153,26 +166,32 @@ class MotionLibrary:
         v, v0 = target_velocity_mps, from_velocity_mps
         if not (isfinite(v) and isfinite(v0)):
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
-        c = self._candidates(strides, v0)
+        c, note = self._candidates(strides, v0, min_success)
         speeds = sorted({e.target_velocity_mps for e in c})
         if not clamp and not speeds[0] - 1e-9 <= v <= speeds[-1] + 1e-9:
             which = "" if strides is None else f" for {strides} strides"
             start = "" if not v0 else f" from {v0} m/s"
             raise EntryNotFound(f"{self.path}: {v} m/s is outside the stored speeds{start} {speeds} m/s{which}; "
-                                "pass clamp=True for the nearest, or route() for a chain")
+                                f"pass clamp=True for the nearest, or route() for a chain{note}")
         return min(c, key=lambda e: (abs(e.target_velocity_mps - v), e.n_strides)).ready()
 
     @renamed(v_from="from_velocity_mps", v_to="target_velocity_mps")
-    def route(self, from_velocity_mps: float, target_velocity_mps: float) -> list[Entry]:
-        """The chain of successful entries that rides from ``from_velocity_mps`` to
-        ``target_velocity_mps`` [m/s] in the least time (0: at rest), one entry when one gets there
-        (:func:`skatelib.runtime.routes.route`).
+    def route(self, from_velocity_mps: float, target_velocity_mps: float,
+              min_success: float | None = None) -> list[Entry]:
+        """The chain of successful entries (certified at ``min_success`` or better, when given) that
+        rides from ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] in the least time (0: at
+        rest), one entry when one gets there (:func:`skatelib.runtime.routes.route`).
 
         Raises:
-            ValueError: When the speeds are equal or negative.
-            EntryNotFound: When no chain gets there (the message lists what can be reached).
+            ValueError: When the speeds are equal or negative, or ``min_success`` is not from 0 to 1.
+            EntryNotFound: When no chain gets there (the message lists what can be reached and the
+                entries skipped below ``min_success``).
         """
-        return [e.ready() for e in route(self, from_velocity_mps, target_velocity_mps, f"{self.path}: ")]
+        entries, note = usable(self, self.certificate, min_success)
+        try:
+            return [e.ready() for e in route(entries, from_velocity_mps, target_velocity_mps, f"{self.path}: ")]
+        except EntryNotFound as e:
+            raise EntryNotFound(f"{e}{note}") from None
 
     @renamed(velocity="target_velocity_mps")
     def blend(self, target_velocity_mps: float, strides: int | None = None, strict: bool = True,
@@ -204,7 +223,7 @@ class MotionLibrary:
         counts = [strides] if strides is not None else sorted(
             {e.n_strides for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(0.0)})
         for s in counts:
-            c = sorted(self._candidates(s), key=lambda e: e.target_velocity_mps)
+            c = sorted(self._candidates(s)[0], key=lambda e: e.target_velocity_mps)
             lo = [e for e in c if e.target_velocity_mps <= target_velocity_mps]
             hi = [e for e in c if e.target_velocity_mps >= target_velocity_mps]
             if lo and hi:
@@ -216,33 +235,6 @@ class MotionLibrary:
     def _margin_check(self, margin: BlendMargin) -> MarginCheck:
         return MarginCheck(float(self.model[schema.A_FRICTION_MU]), self.model_arrays.get(schema.D_JOINT_LOWER),
                            self.model_arrays.get(schema.D_JOINT_UPPER), margin)
-
-
-def blend_pair(a: Entry, b: Entry, target_velocity_mps: float, check: MarginCheck) -> Entry:
-    """``(1 - w) a + w b`` knot by knot, ``w`` placing ``target_velocity_mps`` [m/s] between their
-    target speeds; the entry
-    carries its check and its own attributes (``success`` only when both succeeded and it passes).
-
-    Raises:
-        SkatelibError: When the two entries' contact schedules differ.
-    """
-    v = target_velocity_mps
-    w = 0.0 if b is a else (v - a.target_velocity_mps) / (b.target_velocity_mps - a.target_velocity_mps)
-    if a.contact is not None and b.contact is not None and not np.array_equal(a.contact, b.contact):
-        raise SkatelibError(f"entries {a.key} and {b.key} have different contact schedules; cannot blend")
-    arrays = {schema.D_T: a.t}
-    for name in (schema.D_STATE, schema.D_CONTROL, schema.D_FOOT_POS, schema.D_BOARD_POS):
-        xa, xb = getattr(a, name), getattr(b, name)
-        if xa is not None and xb is not None:
-            arrays[name] = (1 - w) * xa + w * xb
-    if a.contact is not None:
-        arrays[schema.D_CONTACT] = a.contact
-    result = check(arrays)
-    attrs = {schema.A_TARGET_VELOCITY: float(v), schema.A_N_STRIDES: a.n_strides,
-             "success": bool(a.success and b.success and result.ok),
-             "status": f"blend of {a.key} and {b.key} (weights {1 - w:.3f}, {w:.3f})",
-             "blend_sources": (a.key, b.key), "blend_weights": (1.0 - w, w)}
-    return Entry(f"blend_v{v:.4f}_s{a.n_strides}", attrs, arrays, a.columns, a.units, result)
 
 
 def _entry(r: EntryRecord) -> Entry:

@@ -8,6 +8,8 @@ Keys (``KEY=VALUE,...``; ``+10%`` relative, a plain number absolute):
 * ``kb``, ``bb``: the trucks' roll stiffness and damping;
 * ``rolling``: the wheels' rolling resistance;
 * ``armature``: the rotors' reflected inertia;
+* ``board_mass``: the deck's mass and inertia;
+* ``motor``: the motors' strength (the torque a command delivers; ``-10%``: a tenth weaker);
 * ``payload`` [kg] at ``payload_x``, ``payload_y``, ``payload_z`` [m] in the trunk frame;
 * ``noise`` [m, rad; 5x per second for velocities] and ``delay`` [s]: the controller's state
   feedback (``--state true``);
@@ -18,7 +20,7 @@ Keys (``KEY=VALUE,...``; ``+10%`` relative, a plain number absolute):
   from :data:`skatelib.library.perturb.DEFAULT_SENSOR_PERTURBATION`.
 
 Each value within its range (:data:`skatelib.library.perturb.BOUNDS`; a factor of the planned
-figure for ``mass``, ``kb``, ``bb``, ``rolling``, ``armature``).
+figure for ``mass``, ``kb``, ``bb``, ``rolling``, ``armature``, ``board_mass``, ``motor``).
 """
 
 from __future__ import annotations
@@ -44,6 +46,8 @@ class TwinErrors:
     bb_scale: float = 1.0
     rolling_scale: float = 1.0
     armature_scale: float = 1.0
+    deck_mass_scale: float = 1.0
+    motor_scale: float = 1.0  # torque delivered per torque commanded
     payload_kg: float = 0.0
     payload_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     noise_std: float = 0.0
@@ -52,7 +56,7 @@ class TwinErrors:
 
 
 _SCALES = {"mass": "mass_scale", "kb": "kb_scale", "bb": "bb_scale", "rolling": "rolling_scale",
-           "armature": "armature_scale"}
+           "armature": "armature_scale", "board_mass": "deck_mass_scale", "motor": "motor_scale"}
 _ABSOLUTE = {"mu": "floor_mu", "payload": "payload_kg", "noise": "noise_std", "delay": "delay_s"}
 _PAYLOAD_AXES = {"payload_x": 0, "payload_y": 1, "payload_z": 2}
 TWIN_KEYS = (*_SCALES, *_ABSOLUTE, *_PAYLOAD_AXES, *SENSOR_KEYS)

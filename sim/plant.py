@@ -87,13 +87,15 @@ def twin_spec(f: TwinFigures, errors: TwinErrors) -> mujoco.MjSpec:
     spec.option.timestep = TIMESTEP_S
     robot_bodies = {b.name for b in spec.body("trunk").find_all(mujoco.mjtObj.mjOBJ_BODY)} | {"trunk"}
     for b in spec.bodies:
-        if b.name in robot_bodies and errors.mass_scale != 1.0:
-            b.mass *= errors.mass_scale
-            b.inertia = [errors.mass_scale * i for i in b.inertia]
-            b.fullinertia = [errors.mass_scale * i for i in b.fullinertia]
+        scale = errors.mass_scale if b.name in robot_bodies else errors.deck_mass_scale if b.name == "deck" else 1.0
+        if scale != 1.0:
+            b.mass *= scale
+            b.inertia = [scale * i for i in b.inertia]
+            b.fullinertia = [scale * i for i in b.fullinertia]
     for name in JOINTS:
         j = spec.joint(name)
         j.armature *= errors.armature_scale
+        spec.actuator(name).gear = [errors.motor_scale, 0, 0, 0, 0, 0]
     for name in ("truck_front", "truck_rear"):
         j = spec.joint(name)
         j.stiffness = [j.stiffness[0] * errors.kb_scale, 0, 0]
@@ -185,6 +187,10 @@ class TwinPlant:
 
         self.d.qpos[self.trunk_q + 2] += dz
         mujoco.mj_forward(self.m, self.d)
+
+    def push(self, force_N: np.ndarray) -> None:
+        """A force on the trunk's centre of mass (world frame) [N], held until changed."""
+        self.d.xfrc_applied[self.trunk, 0:3] = force_N
 
     def step(self, tau: np.ndarray, n: int = 1) -> None:
         self.d.ctrl[self.robot_actuators] = tau

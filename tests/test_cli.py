@@ -195,7 +195,7 @@ def test_every_help_shows_defaults_choices_and_units():
     assert set(QpSolver) == set(SOLVERS)
     assert {"solver", "plant", "state", "backend"} <= choice_options, choice_options
     assert seen == {"build", "frontier", "solve", "info", "validate", "inspect", "plot", "track", "model", "diff",
-                    "export"}
+                    "export", "certify"}
 
 
 def test_h_is_help_for_every_command():

@@ -17,7 +17,8 @@ from tests.helpers import CLI, TINY
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "tests" / "data" / "tiny-reference.h5"
-COMMANDS = ("build", "solve", "frontier", "model", "info", "validate", "inspect", "plot", "track", "diff", "export")
+COMMANDS = ("build", "solve", "frontier", "model", "info", "validate", "inspect", "plot", "track", "diff", "export",
+            "certify")
 
 
 def _run(args: list[str]) -> subprocess.CompletedProcess:
@@ -46,6 +47,7 @@ def test_an_unknown_option_is_usage(command):
     ["plot", "{missing}", "-o", "{tmp}/fig"], ["track", "{missing}"], ["diff", "{missing}", "{ref}"],
     ["diff", "{ref}", "{missing}"], ["export", "{missing}", "-f", "csv", "-o", "{tmp}/csv"],
     ["model", "{damaged}", "--twin", "{tmp}/t.xml"], ["info", "{damaged}"], ["build", "{tiny}", "--check", "{missing}"],
+    ["certify", "{missing}"], ["certify", "{damaged}"],
 ])
 def test_a_missing_or_damaged_library_is_3(tmp_path, args):
     damaged = tmp_path / "damaged.h5"

@@ -16,8 +16,9 @@ from skatelib.runtime import MotionLibrary
 REFERENCE = Path(__file__).parent / "data" / "tiny-reference.h5"
 MODEL_KEYS = ("mass", "inertia", "board_mass", "kb", "bb", "rolling", "mu", "tanh", "com", "noise", "impulse",
               "impulse_t", "init")
-TWIN_KEYS = ("mass", "mu", "kb", "bb", "rolling", "armature", "payload", "payload_x", "payload_y", "payload_z",
-             "noise", "delay", "gyro_bias", "accel_bias", "imu_noise", "encoder_offset", "imu_tilt", "sensor_delay")
+TWIN_KEYS = ("mass", "mu", "kb", "bb", "rolling", "armature", "board_mass", "motor", "payload", "payload_x",
+             "payload_y", "payload_z", "noise", "delay", "gyro_bias", "accel_bias", "imu_noise", "encoder_offset",
+             "imu_tilt", "sensor_delay")
 
 
 def _model_parser():

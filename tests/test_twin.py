@@ -98,3 +98,39 @@ def test_model_twin_writes_a_loadable_mjcf(tmp_path):
     other.write_text("my notes")
     r = subprocess.run([*CLI, "model", "--twin", str(other)], capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 2 and "not a MuJoCo model" in r.stderr and other.read_text() == "my notes"
+
+
+def test_deck_mass_motor_strength_and_a_shove(built):
+    """``board_mass`` scales the deck's mass and inertia, ``motor`` the torque each command
+    delivers (the actuators' gear); a shove (``TwinPlant.push`` over one whole-body tick) changes
+    the momentum of robot and board along the deck by its impulse (the impulse-momentum theorem,
+    within 3 %; the wheels roll freely that way), and no push changes it by less than 1 % of it."""
+    from skatelib.sim.errors import parse_twin_perturbation
+    from skatelib.sim.plant import TwinPlant
+
+    _, _, f, _ = built
+    plain = TwinPlant(f)
+    changed = TwinPlant(f, parse_twin_perturbation("board_mass=+20%,motor=-10%", 0.6))
+    deck = plain.m.body("deck").id
+    assert changed.m.body_mass[deck] == pytest.approx(1.2 * plain.m.body_mass[deck])
+    assert np.allclose(changed.m.body_inertia[deck], 1.2 * plain.m.body_inertia[deck])
+    trunk = plain.m.body("trunk").id
+    assert changed.m.body_mass[trunk] == pytest.approx(plain.m.body_mass[trunk])
+    legs = plain.robot_actuators
+    assert np.allclose(changed.m.actuator_gear[legs, 0], 0.9) and np.allclose(plain.m.actuator_gear[legs, 0], 1.0)
+
+    def momentum_change(impulse_Ns: float) -> float:
+        p = TwinPlant(f)
+        mujoco.mj_resetDataKeyframe(p.m, p.d, p.m.key("stance").id)
+        mujoco.mj_forward(p.m, p.d)
+        before = p.state()
+        tick = 2 * p.timestep_s
+        p.push(np.array([impulse_Ns / tick, 0.0, 0.0]))
+        p.step(np.zeros(12), 2)
+        p.push(np.zeros(3))
+        mujoco.mj_forward(p.m, p.d)  # the velocities after the last step (state() reads them one step late)
+        after = p.state()
+        return float(after.system_mass_kg * (after.system_v[0] - before.system_v[0]))
+
+    assert momentum_change(1.0) == pytest.approx(1.0, rel=0.03)
+    assert abs(momentum_change(0.0)) < 0.01

@@ -182,8 +182,13 @@ def _run_dask(tasks: Sequence[BuildTask], scheduler: Any, use_cache: bool,
 T = TypeVar("T")
 
 
-def _call(job: Callable[[], T], parent_pid: int) -> T:
+def call_in_worker(job: Callable[[], T], parent_pid: int | None, worker: bool = False) -> T:
+    """``job()`` in a worker: one that ends with the process ``parent_pid`` (:func:`exit_with_parent`);
+    ``worker``: a cluster's worker, whose BLAS and OpenMP threads this sets to 1."""
     exit_with_parent(parent_pid)
+    if worker:
+        for var in THREAD_VARS:
+            os.environ[var] = "1"
     return job()
 
 
@@ -202,7 +207,7 @@ def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int, done: Callable[[int]
 
     with parallel_config(backend="loky", inner_max_num_threads=1):
         for r in Parallel(n_jobs=min(n_jobs, len(jobs)), backend="loky", return_as="generator")(
-                delayed(_call)(job, os.getpid()) for job in jobs):
+                delayed(call_in_worker)(job, os.getpid()) for job in jobs):
             out.append(r)
             if done is not None:
                 done(len(out))

@@ -19,6 +19,7 @@ from skatelib.pipeline.cli.library_commands import (
     QpSolver,
 )
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
+from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.track_setup import run_jobs
 from skatelib.pipeline.views.console import (
@@ -32,6 +33,8 @@ from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twi
 
 STATE_HELP = ("With --plant mujoco: what the controller is fed: true (the twin's state) or estimate (the robot's "
               "estimator on the twin's IMU and joint encoders; the verdict adds its error).")
+
+DRAW_HELP = "With --plant mujoco and one --entry: ride a certificate's draw of this seed again (skatelib certify)."
 
 
 class StateKind(enum.StrEnum):
@@ -69,6 +72,7 @@ def track(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
     state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.true,
+    draw: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help=DRAW_HELP)] = None,
 ) -> None:
     """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
     error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
@@ -76,29 +80,28 @@ def track(
     library's entries on the humanoid twin under its balance stabilizer (docs/humanoid-twin.md)."""
     if is_humanoid(library):
         quadruped_only = ride is not None or maneuver is not Maneuver.entries or save is not None or video is not None
-        track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
-                       (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed))
-        return
+        return track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
+                              (plant is PlantKind.mujoco, quadruped_only or draw is not None), (jobs, progress, seed))
     mpc, settings = _controller(solver, mpc_mu, seed, state)
+    if draw is not None:
+        return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
     plant_error = "" if perturb == "none" else perturb
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
     if ride is not None:
-        _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
-                    (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
-        return
+        return _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
+                           (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
     if plant is PlantKind.mujoco:
-        _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver, (save, video))
-        return
+        return _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver,
+                           (save, video))
     if video is not None:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
-    if maneuver is Maneuver.steer:
-        from skatelib.pipeline.build.sweep import run_calls
-        from skatelib.proving.track import steer_jobs
+    if maneuver is not Maneuver.steer:
+        return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), save)
+    from skatelib.pipeline.build.sweep import run_calls
+    from skatelib.proving.track import steer_jobs
 
-        if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs), perturb):
-            raise typer.Exit(1)
-        return
-    _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), save)
+    if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs), perturb):
+        raise typer.Exit(1)
 
 
 def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind) -> tuple[Any, Any]:
@@ -109,8 +112,7 @@ def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateK
 
 
 def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
-    """Exit 1 when every entry is to be tracked and none was solved; on the twin, the note on the
-    URDF's mesh files (not read) when it names some."""
+    """Exit 1 when every entry is to be tracked and none was solved; on the twin, a note on mesh files."""
     from skatelib.runtime import MotionLibrary
 
     if all_entries and not any(e.success for e in MotionLibrary.open(library)):

@@ -16,6 +16,7 @@ from skatelib.pipeline.config_tables import MetaConfig, build_section, check_uni
 from skatelib.pipeline.config_tables import setting as _f
 from skatelib.pipeline.quadruped.board_config import BoardConfig, ContactConfig
 from skatelib.pipeline.quadruped.ride_config import TerminalConfig, TransitionsConfig
+from skatelib.proving.certify.spec import CertifySpec, check_spec
 
 FRICTION_MODELS = ("cone", "polygon8")
 
@@ -131,6 +132,7 @@ class QuadrupedConfig:
     terminal: TerminalConfig
     sweep: SweepConfig
     transitions: TransitionsConfig
+    certify: CertifySpec  # what skatelib certify draws (not part of the build)
 
     @property
     def urdf_path(self) -> Path:
@@ -151,6 +153,7 @@ class QuadrupedConfig:
         d = json.loads(self.resolved_json())
         d.pop("meta")
         d.pop("sweep")
+        d.pop("certify")
         for key in ("speeds_mps", "stops", "strides", "twin_judge"):  # what is built and judged, not how it is posed
             d["transitions"].pop(key)
         d["optimization"].pop("compile")
@@ -162,12 +165,14 @@ _SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "robot": RobotConfig, "board": BoardConfig, "stance": StanceConfig,
     "contact": ContactConfig, "schedule": ScheduleConfig, "optimization": OptimizationConfig,
     "terminal": TerminalConfig, "sweep": SweepConfig, "transitions": TransitionsConfig,
+    "certify": CertifySpec,
 }
 
 
 def from_toml(path: Path, data: dict[str, Any], text: str) -> QuadrupedConfig:
-    data = {**data, "transitions": data.get("transitions", {})}  # an optional table: its defaults
+    data = {**data, "transitions": data.get("transitions", {}), "certify": data.get("certify", {})}  # optional
     cfg = QuadrupedConfig(path=path.resolve(), text=text, **sections(path, data, _SECTIONS))
+    check_spec(cfg.certify, path)
     _check_cross_fields(cfg)
     return cfg
 
@@ -178,6 +183,7 @@ def from_json(data: dict[str, Any], origin: Path, urdf: Path | None) -> Quadrupe
     data["robot"]["urdf"] = str(urdf)
     data.setdefault("terminal", {})  # format 1.0 libraries predate the riding end state
     data.setdefault("transitions", {})  # libraries before 1.4 hold start-ups only
+    data.setdefault("certify", {})  # libraries before 1.6 had no [certify] table
     sections = {name: build_section(origin, name, cls, data[name]) for name, cls in _SECTIONS.items()}
     cfg = QuadrupedConfig(path=Path(origin), text="", **sections)
     _check_cross_fields(cfg)

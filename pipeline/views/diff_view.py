@@ -69,6 +69,7 @@ def show_diff(d: LibraryDiff) -> None:
     _values("model", d.model)
     _values("config (resolved; not counted: the entries show what it changed)", d.config)
     _values("provenance and other attributes (not counted)", d.provenance)
+    _values("robustness certificate (not counted)", d.certificate)
     differing = [e.key for e in d.changed if e.differs]
     if d.equal:
         console.print(f"[green]equal[/]: {count(d.same, 'entry')} within the tolerance")

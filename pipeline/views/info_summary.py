@@ -120,6 +120,7 @@ def compact_table(lib: Any) -> None:
 
 def library_summary(lib: Any, path: Any) -> None:
     """``skatelib info``: the summary's lines, the compact entry table, a quadruped's transitions."""
+    from skatelib.pipeline.views.certificate_view import certificate_summary
     from skatelib.pipeline.views.transitions_view import transitions_summary
 
     for line in summary_lines(lib, path):
@@ -127,4 +128,5 @@ def library_summary(lib: Any, path: Any) -> None:
     compact_table(lib)
     if lib.kind == "quadruped":
         transitions_summary(lib, stops=False)
+    certificate_summary(lib)
     console.print("more: --wide (provenance, the model, every figure and verdict), --json (all of it, for scripts)")

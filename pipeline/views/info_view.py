@@ -9,6 +9,7 @@ from typing import Any
 
 from rich.markup import escape
 from skatelib.library import schema
+from skatelib.pipeline.views.certificate_view import certificate_json, certificate_summary
 from skatelib.pipeline.views.console import console, count, fmt, label_error
 from skatelib.pipeline.views.fitted import Col, print_table
 from skatelib.pipeline.views.info_summary import CLOSED_LOOP, summary_json
@@ -36,7 +37,7 @@ def library_json(lib: Any, path: Any) -> dict[str, Any]:
     transitions = transitions_json(lib) if lib.kind == "quadruped" else {}
     return {"library": str(path), schema.A_KIND: lib.kind, **provenance, schema.A_CHECKSUM: lib.content_sha256,
             "summary": summary_json(lib), "model": dict(lib.model), "entries": entries,
-            **({"transitions": transitions} if transitions else {})}
+            **({"transitions": transitions} if transitions else {}), **certificate_json(lib)}
 
 
 def library_wide(lib: Any, path: Any) -> None:
@@ -72,6 +73,7 @@ def library_wide(lib: Any, path: Any) -> None:
         transitions_summary(lib)
     _wholebody_summary(lib)
     _closed_loop_summary(lib)
+    certificate_summary(lib)
 
 
 def _wholebody_summary(lib: Any) -> None:

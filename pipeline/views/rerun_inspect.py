@@ -53,8 +53,9 @@ def blueprint(lib: MotionLibrary, roots: list[str]) -> rrb.Blueprint:
     return rrb.Blueprint(rrb.Tabs(*tabs, overview), collapse_panels=True)
 
 
-def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
-    """A short text at ``<root>/summary`` saying which entry this is and how it did."""
+def _log_summary(rec: rr.RecordingStream, root: str, e: Entry, certificate: Any = None) -> None:
+    """A short text at ``<root>/summary`` saying which entry this is and how it did (with the
+    library's certificate, how it did under drawn errors)."""
     a = e.attrs
     status = f"{a['status']}" if e.success else f"**FAILED** ({a['status']}): not a usable motion"
     parts = [f"{e.target_velocity_mps:.2f} m/s x {e.n_strides}", status]
@@ -69,6 +70,9 @@ def _log_summary(rec: rr.RecordingStream, root: str, e: Entry) -> None:
     if schema.A_CLOSED_LOOP in a:
         cl = json.loads(str(a[schema.A_CLOSED_LOOP]))
         parts.append(f"closed loop {'pass' if cl['passed'] else 'FAIL'} ({cl['delivered_mps']:.3f} m/s)")
+    figures = None if certificate is None else certificate.current_for(e.key, e.arrays)
+    if figures is not None:
+        parts.append(f"certified {figures.successes}/{figures.samples} rides ({figures.low:.2f}-{figures.high:.2f})")
     text = f"**{e.key}**: " + "; ".join(parts)
     rec.log(f"{root}/summary", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
 
@@ -83,7 +87,7 @@ def log_library(lib: MotionLibrary, rec: rr.RecordingStream, keys: list[str] | N
     for n, e in enumerate(entries):
         root = f"/{e.key}"
         log(rec, e, root, np.zeros(3) if overlay else np.array([0.0, SPACING_M * n, 0.0]))
-        _log_summary(rec, root, e)
+        _log_summary(rec, root, e, lib.certificate)
         roots.append(root)
     rec.send_blueprint(blueprint(lib, roots))
     return roots

@@ -45,6 +45,15 @@ FALL_TILT_RAD = 0.6
 
 
 @dataclass(frozen=True)
+class Shove:
+    """An impulse on the trunk: ``impulse_Ns`` (world x, y, z) [N s], spread over the one whole-body
+    tick that holds ``t_s`` (the entry's clock) [s]."""
+
+    t_s: float
+    impulse_Ns: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
 class TwinLoopSettings:
     """Rates, sensors and the whole-body QP's settings of a full-physics run."""
 
@@ -56,6 +65,7 @@ class TwinLoopSettings:
     state: str = "true"  # the controller's feedback: "estimate" (the robot's sensors and estimator) or "true"
     sensor_errors: SensorErrors = field(default_factory=SensorErrors)
     estimator: EstimatorSettings | None = None  # the estimator's settings (None: its defaults)
+    shove: Shove | None = None
 
 
 @dataclass(frozen=True)
@@ -185,7 +195,13 @@ class TwinLoop:
                 self.run.record.add(self.t, tick.x, st)
         self.run.wbc_times_s.append(tick.wbc_s)
         limit = self.kin.torque_limit_Nm
+        shove = self.cfg.shove
+        pushed = shove is not None and self.t <= shove.t_s < self.t + self.tick_s
+        if pushed and shove is not None:
+            self.plant.push(np.asarray(shove.impulse_Ns) / self.tick_s)
         self.plant.step(np.clip(tick.out.tau, -limit, limit), self.cfg.steps_per_tick)
+        if pushed:
+            self.plant.push(np.zeros(3))
         self.t += self.tick_s
         after = self._true = self.plant.state()
         self.meter.tick(after, tick.out.tau, planned_floor_near(self.contacts.at, self.t))

@@ -18,7 +18,7 @@ from skatelib.runtime import Entry, MotionLibrary
 
 if TYPE_CHECKING:  # MuJoCo's side, imported when a job runs (check_twin names the missing extra)
     from skatelib.proving.steer import SteerResult
-    from skatelib.proving.twin.loop import TwinRun
+    from skatelib.proving.twin.loop import Shove, TwinRun
     from skatelib.proving.twin.verdict import TwinResult
     from skatelib.sim.errors import TwinErrors
     from skatelib.sim.plant import TwinPlant
@@ -58,12 +58,14 @@ class TwinJob:
         return result, written, entry
 
 
-def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: tuple[MpcConfig, TrackSettings],
-              keep: bool = False) -> tuple[TwinRun, TwinPlant]:
+def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str | TwinErrors,
+              controller: tuple[MpcConfig, TrackSettings], keep: bool = False,
+              shove: Shove | None = None) -> tuple[TwinRun, TwinPlant]:
     """Ride ``what`` (an entry's key, or an entry made of the library's: a chained ride) on the twin
-    with ``perturb``'s errors, the MPC's and the run's settings ``controller``, one BLAS thread;
-    ``keep``: keep the run's configurations and record (for a recording or a video). Returns the
-    run (:class:`skatelib.proving.twin.loop.TwinRun`) and the plant it rode."""
+    with ``perturb``'s errors (``--perturb`` text or the errors themselves) and ``shove``, the MPC's
+    and the run's settings ``controller``, one BLAS thread; ``keep``: keep the run's configurations
+    and record (for a recording or a video). Returns the run
+    (:class:`skatelib.proving.twin.loop.TwinRun`) and the plant it rode."""
     from skatelib.control.params import SkateParams
     from skatelib.proving.setup import ClosedLoop
     from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
@@ -75,7 +77,7 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str, controller: t
     plant, errors = _plant(lib, perturb, nominal.mu)
     loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
                     TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
-                                     sensor_errors=errors.sensors),
+                                     sensor_errors=errors.sensors, shove=shove),
                     keep=keep)
     with threadpool_limits(limits=1, user_api="blas"):
         run = loop.ride()
@@ -110,12 +112,12 @@ class TwinSteerJob:
                               self.target_velocity_mps, SteerRun(loop=sensors))
 
 
-def _plant(lib: MotionLibrary, perturb: str, mu: float) -> tuple[TwinPlant, TwinErrors]:
+def _plant(lib: MotionLibrary, perturb: str | TwinErrors, mu: float) -> tuple[TwinPlant, TwinErrors]:
     from skatelib.sim.errors import parse_twin_perturbation
     from skatelib.sim.figures import TwinFigures
     from skatelib.sim.plant import TwinPlant
 
-    errors = parse_twin_perturbation(perturb, mu)
+    errors = parse_twin_perturbation(perturb, mu) if isinstance(perturb, str) else perturb
     return TwinPlant(TwinFigures.from_library(lib), errors), errors
 
 

@@ -5,9 +5,9 @@ transfer and 1.5 s of riding) under each of the configured model-error sets, and
 ``skatelib track --plant mujoco`` judges an entry (:func:`skatelib.proving.twin.verdict.twin_result`).
 A stride count the twin refuses is not kept: the next is tried.
 
-Verdicts are cached beside the solves, under the candidate's cache key, the error sets and a
-fingerprint of the controller's, the twin's and the judge's code and MuJoCo's version: a changed
-controller or twin rides every candidate again."""
+Verdicts are cached beside the solves, under the candidate's cache key, the error sets, the twin's
+code fingerprint (:mod:`skatelib.proving.twin.fingerprint`, which certificates store too) and a
+hash of this judge's code: a changed controller or twin rides every candidate again."""
 
 from __future__ import annotations
 
@@ -60,26 +60,19 @@ def _errors(text: str) -> str:
 
 
 @functools.cache
-def twin_fingerprint() -> str:
-    """A hash of the controller's and the twin's source, the ride's and this judge's, and MuJoCo's version."""
-    import mujoco
-    import skatelib.control
-    import skatelib.proving
-    import skatelib.sim
+def judge_fingerprint() -> str:
+    """The twin's code fingerprint (:func:`skatelib.proving.twin.fingerprint.twin_fingerprint`) and
+    a hash of this judge's source."""
+    from skatelib.proving.twin.fingerprint import twin_fingerprint
 
-    h = hashlib.sha256(mujoco.__version__.encode())
-    files = [p for package in (skatelib.control, skatelib.sim, skatelib.proving) for folder in package.__path__
-             for p in sorted(Path(folder).rglob("*.py"))]
-    for path in [*files, Path(__file__)]:
-        h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+    return twin_fingerprint() + hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
 
 
 def twin_refusals(config: QuadrupedConfig, result: SolveResult, solve_key: str, use_cache: bool) -> str:
     """Why the twin refuses ``result`` (the first error set of ``[transitions] twin_judge`` it fails
     under, and how; '' when it passes under every one); the verdict is cached under ``solve_key``."""
     sets = tuple(config.transitions.twin_judge)
-    key = cache_key("twin_judge", solve_key, sets, twin_fingerprint())
+    key = cache_key("twin_judge", solve_key, sets, judge_fingerprint())
     payload, _, _ = cached_or_solved(key, ("reasons",), lambda: {"reasons": _ride(config, result, sets)}, use_cache)
     return str(payload["reasons"])
 

@@ -1,0 +1,95 @@
+"""The command ``certify``: a library's entries each ridden N times on the twin under model errors
+and a shove drawn from the config's ``[certify]`` table, the certificate stored in the file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from skatelib.library.errors import Interrupted
+from skatelib.pipeline.cli.build_commands import Backend
+from skatelib.pipeline.cli.library_commands import LibArg
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED
+from skatelib.pipeline.views.console import console, count
+
+
+class _Rates:
+    """The progress bar's text: rides passed so far, overall and of the entry last heard from."""
+
+    def __init__(self, bar: Any, task: Any):
+        self.bar, self.task = bar, task
+        self.passed: dict[str, list[int]] = {}
+
+    def __call__(self, r: Any, cached: bool) -> None:
+        ok, n = self.passed.setdefault(r.key, [0, 0])
+        self.passed[r.key] = [ok + r.passed, n + 1]
+        total_ok = sum(v[0] for v in self.passed.values())
+        total = sum(v[1] for v in self.passed.values())
+        e_ok, e_n = self.passed[r.key]
+        text = (f"certifying: {total_ok}/{total} passed ({100 * total_ok / total:.0f} %); {r.key} {e_ok}/{e_n}"
+                f"{' (cached)' if cached else ''}")
+        self.bar.update(self.task, advance=1, description=escape(text))
+
+
+def certify(
+    library: LibArg,
+    entry: Annotated[list[str] | None,
+                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
+                     ] = None,
+    samples: Annotated[int | None, typer.Option(
+        min=1, max=100_000, help="Rides per entry; default: the [certify] table's samples.")] = None,
+    seed: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help="Seed of the draws; default: the table's.")
+                    ] = None,
+    config: Annotated[Path | None, typer.Option(
+        help="A quadruped config whose [certify] table to draw from; default: the one the library was built from.")
+                      ] = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")
+                    ] = 2,
+    backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
+                       ] = Backend.loky,
+    scheduler: Annotated[str | None, typer.Option(
+        help="Dask scheduler address, tcp://HOST:PORT or tls://HOST:PORT (certificates from the dask config); "
+             "a scheduler runs code on its workers: use your own cluster only.")] = None,
+    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
+    cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished rides (resume).")] = True,
+) -> None:
+    """Ride each entry N times on the twin (the MPC over the whole-body controller), each ride under
+    model errors and a shove drawn from the [certify] table, judged as track --plant mujoco judges
+    it; store per entry the success rate, its 95 % Wilson interval, the failure modes and the shove
+    margin in the library (docs/certify.md)."""
+    import dataclasses
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from skatelib.pipeline.certify_run import CertifyOptions, check_writable, merged, store_certificate
+    from skatelib.pipeline.certify_run import certify as run
+    from skatelib.pipeline.certify_spec import config_spec, library_spec, stale_reasons
+    from skatelib.pipeline.views.certificate_view import certificate_table
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(library)
+    spec = config_spec(config) if config is not None else library_spec(lib)
+    spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
+                               seed=spec.seed if seed is None else seed)
+    options = CertifyOptions(jobs, backend.value, scheduler, cache)
+    check_writable(library, options)
+    keys = entry or [e.key for e in lib if e.success]
+    total = len(keys) * spec.samples  # what a --entry names is checked before any ride
+    console.print(escape(f"certifying {count(len(keys), 'entry')} of {library}: {spec.samples} rides each on the twin"))
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console, disable=not progress) as bar:
+        rates = _Rates(bar, bar.add_task("certifying", total=total))
+        try:
+            cert = run(library, spec, keys, options, rates)
+        except KeyboardInterrupt:
+            done = sum(v[1] for v in rates.passed.values())
+            kept = f"{done} of {total} rides are cached" if cache else "nothing is cached (--no-cache)"
+            raise Interrupted(f"interrupted: {kept}; the library is unchanged. Run the same command to resume."
+                              ) from None
+    cert = merged(lib.certificate, cert)
+    certificate_table(cert, str(library), stale_reasons(MotionLibrary.open(store_certificate(library, cert)), cert))
+    console.print(escape(f"wrote the certificate into {library}"))
+
+
+COMMANDS = (certify,)

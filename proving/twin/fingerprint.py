@@ -1,0 +1,26 @@
+"""The fingerprint of the code that judges a ride on the twin: a hash of the controller's
+(:mod:`skatelib.control`), the twin's (:mod:`skatelib.sim`) and the proving ground's source and
+MuJoCo's version. The build's twin judge keys its cached verdicts with it and a certificate
+stores it: a verdict or a certificate made by other code is never taken for this code's."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+from pathlib import Path
+
+
+@functools.cache
+def twin_fingerprint() -> str:
+    """16 hex digits of a SHA-256 over MuJoCo's version and every source file of the three packages."""
+    import mujoco
+    import skatelib.control
+    import skatelib.proving
+    import skatelib.sim
+
+    h = hashlib.sha256(mujoco.__version__.encode())
+    for package in (skatelib.control, skatelib.sim, skatelib.proving):
+        for folder in package.__path__:
+            for path in sorted(Path(folder).rglob("*.py")):
+                h.update(path.read_bytes())
+    return h.hexdigest()[:16]
