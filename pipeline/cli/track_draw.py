@@ -11,7 +11,8 @@ from typing import Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
-from skatelib.pipeline.views.console import console, twin_table
+from skatelib.pipeline.views.console import console
+from skatelib.pipeline.views.verdict_tables import twin_table
 
 
 def track_draw(library: Path, keys: list[str] | None, seed: int, on_twin: bool, video: Path | None,

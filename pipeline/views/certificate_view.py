@@ -26,7 +26,8 @@ def certificate_table(certificate: Certificate, library: str, stale: list[str]) 
 
     spec = json.loads(certificate.spec_json)
     rows = [[escape(k), f"{e.successes}/{e.samples}", f"{e.rate:.2f}", f"{e.low:.2f}-{e.high:.2f}", escape(_modes(e)),
-             f"{e.shove_survived_Ns:.2f}", _shove(e.shove_failed_Ns), "-" if e.worst_seed is None else str(e.worst_seed)]
+             f"{e.shove_survived_Ns:.2f}", _shove(e.shove_failed_Ns),
+             "-" if e.worst_seed is None else str(e.worst_seed)]
             for k, e in sorted(certificate.entries.items())]
     print_table(console, escape(f"robustness certificate: {spec['samples']} rides per entry on the twin, seed "
                                 f"{spec['seed']}, controller fed the {spec['state']} state; code {certificate.code}"),
