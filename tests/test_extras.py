@@ -24,6 +24,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("control/**/*.py", ("control",)),
     ("proving/twin/*.py", ("control", "sim")),  # track --plant mujoco, its rides and maneuvers
     ("proving/humanoid/*.py", ("control", "sim")),  # the humanoid's rides on its twin
+    ("proving/certify/*.py", ("control", "sim")),  # certify: rides on the twin under drawn errors
     ("proving/*.py", ("control",)),  # track on the model plant, rides, the steering experiment
     ("sim/video.py", ("sim", "video")),
     ("sim/overlay.py", ("sim", "video")),
@@ -34,6 +35,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/views/figures.py", ("build", "plot")),
     ("pipeline/*/plots.py", ("build", "plot")),
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
+    ("pipeline/certify_run.py", ("build", "control", "sim", "dask")),  # certify (dask when asked)
     ("pipeline/quadruped/transitions/twin_judge.py", ("build", "control", "sim")),  # [transitions] twin_judge
     ("pipeline/exports.py", ("build", "export")),  # export --format mcap
     ("pipeline/ros_bag.py", ("build", "export")),  # export --format mcap

@@ -42,6 +42,7 @@ SUMMARIES = {
     "diff": "What changed between two libraries, channel by channel.",
     "export": "Write a library as npz, csv or an MCAP ROS 2 bag.",
     "track": "Ride the entries in closed loop on the model plant or the twin.",
+    "certify": "Ride each entry N times on the twin under drawn errors and shoves.",
 }
 
 
