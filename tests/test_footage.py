@@ -128,3 +128,16 @@ def test_track_writes_a_720p_video_ending_on_its_verdict(tmp_path):
     assert np.linalg.norm(banner - own[:3]) < 60 < np.linalg.norm(banner - other[:3])
     before = np.median(frames[len(frames) - 95][-30:-15, 40:-40].reshape(-1, 3), axis=0)
     assert np.linalg.norm(before - own[:3]) > 60
+
+
+def test_a_chained_rides_label_is_its_stages_target():
+    """The label on screen follows a chained ride's stages (the ride's last target only after them);
+    an entry's is its own label throughout."""
+    from types import SimpleNamespace
+
+    from skatelib.proving.twin.footage import _label
+
+    result = SimpleNamespace(target_velocity_mps=0.0)
+    stages = ((2.0, 0.5), (4.0, 0.8), (6.0, 0.3))
+    assert [_label(t, result, stages) for t in (0.0, 2.0, 3.0, 5.9, 7.0)] == [0.5, 0.5, 0.8, 0.3, 0.0]
+    assert _label(3.0, SimpleNamespace(target_velocity_mps=0.7), ()) == 0.7

@@ -71,7 +71,7 @@ def ride_draw(path: str | Path, key: str, spec: CertifySpec, seed: int, mpc: Mpc
     if video is not None:
         from skatelib.proving.twin.footage import film_run
 
-        film_run(lib, entry, (run, plant.m), verdict, (f"draw {seed}", settings.transfer_s), video)
+        film_run(lib, entry, (run, plant.m), verdict, (f"draw {seed}", settings.transfer_s, ()), video)
     modes = failure_modes(verdict)
     return DrawResult(key, seed, not modes, modes, draw.shove_Ns, verdict.reasons), verdict
 

@@ -12,6 +12,7 @@ the transfer (as the controller's reference does, at the plan's speed instead of
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -94,10 +95,17 @@ def verdict_caption(lines: tuple[str, ...], result: TwinResult) -> Caption:
     return Caption(lines, text, result.passed)
 
 
-def run_footage(m: mujoco.MjModel, entry: Entry, run: TwinRun, result: TwinResult, plan: tuple[str, tuple]
-                ) -> Footage:
+def _label(t: float, result: TwinResult, stages: Sequence[tuple[float, float]]) -> float:
+    """The label at ``t``: a chained ride's stage's target (``stages``: when each stage ends [s] and its
+    target [m/s]), else the entry's."""
+    return next((v for end, v in stages if t <= end), result.target_velocity_mps)
+
+
+def run_footage(m: mujoco.MjModel, entry: Entry, run: TwinRun, result: TwinResult, plan: tuple[str, tuple],
+                stages: Sequence[tuple[float, float]] = ()) -> Footage:
     """The footage of ``run`` (kept: its configurations and record) of ``entry`` judged ``result``;
-    ``plan``: the model errors' text and :func:`plan_qpos`'s ``body``."""
+    ``plan``: the model errors' text and :func:`plan_qpos`'s ``body``; ``stages``: a chained ride's
+    (end [s], target [m/s]) per stage, for the label shown."""
     errors, body = plan
     times = np.array(run.record.t[:len(run.qpos)])
     qpos = np.array(run.qpos[:len(times)])
@@ -106,21 +114,22 @@ def run_footage(m: mujoco.MjModel, entry: Entry, run: TwinRun, result: TwinResul
     speeds = board_speeds(m, qpos, dt)
     planned = [float(np.linalg.norm(plan_state(entry, float(t), body[1], body[2])[0][24:26])) for t in times]
     head = f"{result.key} on the MuJoCo twin, errors: {errors or 'none'}"
-    label = f"label {result.target_velocity_mps:.2f} m/s"
     captions = tuple(Caption((head, f"t = {t:5.2f} s   (cyan ghost: the plan)",
-                              f"board {v:4.2f} m/s   plan {p:4.2f} m/s   {label}"))
+                              f"board {v:4.2f} m/s   plan {p:4.2f} m/s   "
+                              f"label {_label(float(t), result, stages):.2f} m/s"))
                      for t, v, p in zip(times, speeds, planned, strict=True))
     return Footage(qpos, 1.0 / dt, captions, ghost, verdict_caption(captions[-1].lines, result))
 
 
 def film_run(lib: MotionLibrary, entry: Entry, ride: tuple[TwinRun, mujoco.MjModel], result: TwinResult,
-             how: tuple[str, float], out: Path) -> str:
+             how: tuple[str, float, Sequence[tuple[float, float]]], out: Path) -> str:
     """Write the video of ``ride`` (the kept run of ``entry`` and the twin's model) judged ``result``
     to ``out`` (.mp4 or .gif, :func:`skatelib.sim.video.write_run`); ``how``: the model errors'
-    text and the transfer's length [s]. Returns the path written."""
+    text, the transfer's length [s] and a chained ride's (end [s], target [m/s]) per stage (or none).
+    Returns the path written."""
     from skatelib.sim.video import write_run
 
     run, m = ride
-    errors, transfer_s = how
+    errors, transfer_s, stages = how
     body = (SkateParams.from_library(lib).com_offset_m, lib.quadruped_model.arrays.stance_q_board_rad, transfer_s)
-    return str(write_run(m, run_footage(m, entry, run, result, (errors, body)), out))
+    return str(write_run(m, run_footage(m, entry, run, result, (errors, body), stages), out))

@@ -31,5 +31,6 @@ def twin_ride(path: Path, stages: list[tuple[float, float]], perturb: str, mpc: 
     if video is not None:
         from skatelib.proving.twin.footage import film_run
 
-        film_run(lib, plan.entry, (run, plant.m), verdict, (perturb, settings.transfer_s), video)
+        labels = tuple(zip(plan.ends, (v for _, v in plan.stages), strict=True))
+        film_run(lib, plan.entry, (run, plant.m), verdict, (perturb, settings.transfer_s, labels), video)
     return RideResult(judge_stages(plan, run.measures.stage_speeds_mps), verdict, kept, plan.entry)

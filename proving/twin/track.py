@@ -53,7 +53,7 @@ class TwinJob:
         if self.video is not None:
             from skatelib.proving.twin.footage import film_run
 
-            written = film_run(lib, lib[self.key], (run, plant.m), result, (self.perturb, self.settings.transfer_s),
+            written = film_run(lib, lib[self.key], (run, plant.m), result, (self.perturb, self.settings.transfer_s, ()),
                                Path(self.video))
         return result, written, entry
 
