@@ -30,6 +30,8 @@ _EXPORTS = {
     "build": "skatelib.pipeline.api",
     "validate": "skatelib.pipeline.api",
     "track": "skatelib.pipeline.api",
+    "certify": "skatelib.pipeline.api_certify",
+    "Certificate": "skatelib.library.certificate",
     "BuildReport": "skatelib.pipeline.build.orchestrate",
     "EntryEvent": "skatelib.pipeline.build.contract",
     "ValidationReport": "skatelib.pipeline.validate",
@@ -43,9 +45,9 @@ _EXPORTS = {
     "OutputError": "skatelib.library.errors",
 }
 
-__all__ = ["BuildReport", "ConfigError", "EntryEvent", "EntryVerdict", "LibraryFormatError", "MotionLibrary",
-           "OutputError", "SkatelibError", "TrackResult", "TwinResult", "ValidationReport", "build", "track",
-           "validate"]  # the names of _EXPORTS (a test holds them equal)
+__all__ = ["BuildReport", "Certificate", "ConfigError", "EntryEvent", "EntryVerdict", "LibraryFormatError",
+           "MotionLibrary", "OutputError", "SkatelibError", "TrackResult", "TwinResult", "ValidationReport", "build",
+           "certify", "track", "validate"]  # the names of _EXPORTS (a test holds them equal)
 
 if TYPE_CHECKING:
     from skatelib.library.errors import ConfigError, LibraryFormatError, OutputError, SkatelibError

@@ -1,11 +1,12 @@
-"""The commands as Python functions: :func:`build`, :func:`validate` and :func:`track`, imported from
+"""The commands as Python functions: :func:`build`, :func:`validate`, :func:`track` (and
+:func:`skatelib.pipeline.api_certify.certify`), imported from
 the package (``skatelib.build(...)``; ``import skatelib`` loads this module on first use).
 
 Each takes the command's options as keyword arguments, checks them as the command does (a wrong
 config key raises the same :class:`~skatelib.library.errors.ConfigError`, naming the file and the
 key), runs the code the command runs, and returns its result records instead of printing. Progress
 goes to a callback of yours, or (``progress=True``) to the command's own bar on the terminal. One
-function per command, each named in ``skatelib.__all__`` (``api/__init__.py``): ``certify`` joins here.
+function per command, each named in ``skatelib.__all__`` (``api/__init__.py``).
 """
 
 from __future__ import annotations

@@ -165,3 +165,32 @@ def check_writable(path: Path, options: CertifyOptions) -> None:
         from skatelib.pipeline.build.preflight import check_scheduler
 
         check_scheduler(options.scheduler)
+
+
+def certify_plan(path: Path, keys: Sequence[str] | None, samples: int | None, seed: int | None,
+                 config: Path | None) -> tuple[CertifySpec, list[str]]:
+    """What a certification of the library at ``path`` rides: the ``[certify]`` table of ``config``
+    (the library's own config when None) with ``samples`` and ``seed`` when given, and ``keys`` (every
+    successful entry when None)."""
+    import dataclasses
+
+    from skatelib.pipeline.certify_spec import config_spec, library_spec
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(path)
+    spec = config_spec(config) if config is not None else library_spec(lib)
+    spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
+                               seed=spec.seed if seed is None else seed)
+    return spec, list(keys) if keys else [e.key for e in lib if e.success]
+
+
+def certify_into(path: Path, spec: CertifySpec, keys: Sequence[str], options: CertifyOptions,
+                 on_ride: Callable[[DrawResult, bool], None] | None = None) -> Certificate:
+    """Certify ``keys`` (:func:`certify`) and store the certificate in the library, merged with the
+    one it holds when both were drawn alike by the same code; returns the stored certificate."""
+    from skatelib.runtime import MotionLibrary
+
+    cert = merged(MotionLibrary.open(path).certificate, certify(path, spec, keys, options, on_ride))
+    store_certificate(path, cert)
+    return cert
+

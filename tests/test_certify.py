@@ -113,3 +113,23 @@ def test_sigint_leaves_no_worker_and_the_library_unchanged(lib, tmp_path):
     assert _session(p.pid) == [], "processes of the interrupted certify are still running"
     assert p.returncode == 130 and "rides are cached" in stderr and "resume" in stderr, stderr
     assert lib.read_bytes() == before
+
+
+@pytest.mark.slow
+def test_the_python_api_certifies_and_stores_as_the_command_does(lib):
+    """``skatelib.certify`` rides and stores what the runner gives for the same table (the same
+    certificate, read back from the file); arguments out of range are refused before any ride."""
+    import skatelib
+
+    heard: list[bool] = []
+    cert = skatelib.certify(lib, [KEY], samples=2, seed=5, jobs=1, cache=False,
+                            progress=lambda result, cached: heard.append(cached))
+    assert heard == [False, False] and cert.entries[KEY].samples == 2
+    assert MotionLibrary.open(lib).certificate.to_json() == cert.to_json()
+    direct = certify(lib, dataclasses.replace(SPEC, samples=2), [KEY], CertifyOptions(jobs=1, cache=False))
+    assert direct.entries[KEY] == cert.entries[KEY]
+    before = lib.read_bytes()
+    for bad in ({"jobs": 0}, {"samples": 0}, {"backend": "ray"}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            skatelib.certify(lib, [KEY], **bad)  # type: ignore[arg-type]
+    assert lib.read_bytes() == before

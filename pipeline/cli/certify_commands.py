@@ -59,36 +59,28 @@ def certify(
     model errors and a shove drawn from the [certify] table, judged as track --plant mujoco judges
     it; store per entry the success rate, its 95 % Wilson interval, the failure modes and the shove
     margin in the library (docs/certify.md)."""
-    import dataclasses
-
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-    from skatelib.pipeline.certify_run import CertifyOptions, check_writable, merged, store_certificate
-    from skatelib.pipeline.certify_run import certify as run
-    from skatelib.pipeline.certify_spec import config_spec, library_spec, stale_reasons
+    from skatelib.pipeline.certify_run import CertifyOptions, certify_into, certify_plan, check_writable
+    from skatelib.pipeline.certify_spec import stale_reasons
     from skatelib.pipeline.views.certificate_view import certificate_table
     from skatelib.runtime import MotionLibrary
 
-    lib = MotionLibrary.open(library)
-    spec = config_spec(config) if config is not None else library_spec(lib)
-    spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
-                               seed=spec.seed if seed is None else seed)
+    spec, keys = certify_plan(library, entry, samples, seed, config)
     options = CertifyOptions(jobs, backend.value, scheduler, cache)
     check_writable(library, options)
-    keys = entry or [e.key for e in lib if e.success]
     total = len(keys) * spec.samples  # what a --entry names is checked before any ride
     console.print(escape(f"certifying {count(len(keys), 'entry')} of {library}: {spec.samples} rides each on the twin"))
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console, disable=not progress) as bar:
         rates = _Rates(bar, bar.add_task("certifying", total=total))
         try:
-            cert = run(library, spec, keys, options, rates)
+            cert = certify_into(library, spec, keys, options, rates)
         except KeyboardInterrupt:
             done = sum(v[1] for v in rates.passed.values())
             kept = f"{done} of {total} rides are cached" if cache else "nothing is cached (--no-cache)"
             raise Interrupted(f"interrupted: {kept}; the library is unchanged. Run the same command to resume."
                               ) from None
-    cert = merged(lib.certificate, cert)
-    certificate_table(cert, str(library), stale_reasons(MotionLibrary.open(store_certificate(library, cert)), cert))
+    certificate_table(cert, str(library), stale_reasons(MotionLibrary.open(library), cert))
     console.print(escape(f"wrote the certificate into {library}"))
 
 
