@@ -33,6 +33,7 @@ GROUPS: list[tuple[str, tuple[str, ...]]] = [
     ("pipeline/views/rerun_*.py", ("build", "viz")),
     ("pipeline/*/rerun.py", ("build", "viz")),
     ("pipeline/views/figures.py", ("build", "plot")),
+    ("pipeline/views/track_report.py", ("build", "control", "plot")),  # track --report
     ("pipeline/*/plots.py", ("build", "plot")),
     ("pipeline/build/sweep.py", ("build", "dask")),  # the dask backend, imported only when asked
     ("pipeline/certify_run.py", ("build", "control", "sim", "dask")),  # certify (dask when asked)

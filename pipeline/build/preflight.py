@@ -176,6 +176,11 @@ def is_json(path: Path) -> bool:
     return _head(path, 64).lstrip().startswith(b"{")
 
 
+def is_html(path: Path) -> bool:
+    """Whether ``path`` starts like an HTML document (a report)."""
+    return _head(path, 64).lstrip().lower().startswith((b"<!doctype html", b"<html"))
+
+
 def is_video(path: Path) -> bool:
     """Whether ``path`` starts like an MP4 (an ``ftyp`` box) or a GIF."""
     head = _head(path, 12)
@@ -190,4 +195,5 @@ _OUTPUTS = {
     "video": ("run.mp4", is_video, "video"),
     "frontier": ("frontier.json", is_json, "JSON file"),
     "mcap": ("library.mcap", is_mcap, "MCAP file"),
+    "report": ("report.html", is_html, "HTML file"),
 }

@@ -21,6 +21,7 @@ from skatelib.pipeline.cli.library_commands import (
 from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
+from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
 from skatelib.pipeline.track_setup import run_jobs
 from skatelib.pipeline.views.console import (
     console,
@@ -33,6 +34,9 @@ from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twi
 
 STATE_HELP = ("With --plant mujoco: what the controller is fed: true (the twin's state) or estimate (the robot's "
               "estimator on the twin's IMU and joint encoders; the verdict adds its error).")
+
+REPORT_HELP = ("Write an HTML report (.html): per entry the plan against the closed loop (board speed, heading, deck "
+               "roll, Coulomb margin) and the verdict with its reasons (either plant).")
 
 DRAW_HELP = "With --plant mujoco and one --entry: ride a certificate's draw of this seed again (skatelib certify)."
 
@@ -73,30 +77,30 @@ def track(
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
     state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.true,
     draw: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help=DRAW_HELP)] = None,
+    report: Annotated[Path | None, typer.Option(help=REPORT_HELP)] = None,
 ) -> None:
-    """Closed loop: the paper's linear MPC (30 Hz), fed by the runtime, drives a plant with model
-    error through each entry, the transfer and 1.5 s of riding (exit 1 if any fails): the model
-    plant, or with ``--plant mujoco`` the physical twin under the whole-body controller; a humanoid
-    library's entries on the humanoid twin under its balance stabilizer (docs/humanoid-twin.md)."""
+    """Closed loop: the paper's MPC (30 Hz) drives a plant with model error through each entry, the transfer
+    and 1.5 s of riding (exit 1 if any fails): the model plant, the twin (--plant mujoco), a humanoid's twin."""
     if is_humanoid(library):
-        quadruped_only = ride is not None or maneuver is not Maneuver.entries or save is not None or video is not None
+        quadruped_only = ride is not None or maneuver is not Maneuver.entries or (save, video, report) != (None,) * 3
         return track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
                               (plant is PlantKind.mujoco, quadruped_only or draw is not None), (jobs, progress, seed))
     mpc, settings = _controller(solver, mpc_mu, seed, state)
     if draw is not None:
         return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
     plant_error = "" if perturb == "none" else perturb
-    _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco)
+    _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco,
+                     (report, ride if maneuver is Maneuver.entries else "the steering maneuver"))
     if ride is not None:
         return _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
                            (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
     if plant is PlantKind.mujoco:
         return _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver,
-                           (save, video))
+                           (save, video, report))
     if video is not None:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     if maneuver is not Maneuver.steer:
-        return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), save)
+        return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), (save, report))
     from skatelib.pipeline.build.sweep import run_calls
     from skatelib.proving.track import steer_jobs
 
@@ -111,8 +115,12 @@ def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateK
     return controller(solver.value, mpc_mu, seed, state.value)
 
 
-def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
-    """Exit 1 when every entry is to be tracked and none was solved; on the twin, a note on mesh files."""
+def _library_checked(library: Path, all_entries: bool, on_twin: bool, report: tuple[Path | None, str | None]
+                     ) -> None:
+    """Exit 1 when every entry is to be tracked and none was solved; on the twin, a note on mesh files;
+    ``report``: the report's path, checked, and the ride or maneuver asked for (a report shows entries'
+    runs)."""
+    report_checked(library, report[0], report[1] is None)
     from skatelib.runtime import MotionLibrary
 
     if all_entries and not any(e.success for e in MotionLibrary.open(library)):
@@ -120,20 +128,6 @@ def _library_checked(library: Path, all_entries: bool, on_twin: bool) -> None:
         raise typer.Exit(1)
     if on_twin:
         mesh_note(library)
-
-
-def _recording(library: Path, save: Path | None) -> Any:
-    """``save_closed_loop`` when a recording is asked for, its output checked before the runs."""
-    if save is None:
-        return None
-    from skatelib.pipeline.build.preflight import check_output
-
-    try:
-        from skatelib.pipeline.views.rerun_inspect import save_closed_loop
-    except ImportError as e:
-        raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
-    check_output(save, [library], what="recording")
-    return save_closed_loop
 
 
 def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any],
@@ -157,7 +151,7 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
         stages = parse_ride(text)
     except ValueError as e:
         raise typer.BadParameter(str(e), param_hint="--ride") from None
-    save_closed_loop = _recording(library, save)
+    save_closed_loop = recording(library, save)
     if video is not None:
         from skatelib.pipeline.build.preflight import check_output
 
@@ -183,14 +177,16 @@ def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: t
 
 
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                 runner: tuple[int, bool], save: Path | None) -> None:
-    """``runner``: parallel jobs, and whether to show progress."""
+                 runner: tuple[int, bool], outputs: tuple[Path | None, Path | None]) -> None:
+    """``runner``: parallel jobs, and whether to show progress; ``outputs``: a recording and a report."""
     from skatelib.proving.track import track_jobs
 
     jobs, progress = runner
-    save_closed_loop = _recording(library, save)
-    runs = run_jobs(track_jobs(library, entry, plant_error, mpc, settings, keep_runs=save is not None),
-                    jobs, progress, "tracking")
+    save, report = outputs
+    save_closed_loop = recording(library, save)
+    report_checked(library, report)
+    runs = run_jobs(track_jobs(library, entry, plant_error, mpc, settings,
+                               keep_runs=save is not None or report is not None), jobs, progress, "tracking")
     results = [r for r, _ in runs]
     if save is not None and save_closed_loop is not None:
         from skatelib.runtime import MotionLibrary
@@ -198,19 +194,22 @@ def _track_model(library: Path, entry: list[str] | None, plant_error: str, pertu
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = track_table(results, perturb)
+    write_report(library, report, list(runs), f"skatelib track on the model plant, errors: {perturb}")
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
         raise typer.Exit(1)
 
 
 def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                runner: tuple[int, bool], maneuver: Maneuver, outputs: tuple[Path | None, Path | None]) -> None:
-    """``runner``: parallel jobs, and whether to show progress."""
+                runner: tuple[int, bool], maneuver: Maneuver,
+                outputs: tuple[Path | None, Path | None, Path | None]) -> None:
+    """``runner``: parallel jobs, and whether to show progress; ``outputs``: a recording, a video and a
+    report."""
     jobs, progress = runner
     from skatelib.pipeline.build.sweep import run_calls
     from skatelib.proving.twin.track import twin_jobs, twin_steer_jobs
 
-    save, video = outputs
+    save, video, report = outputs
     if maneuver is Maneuver.steer:
         if save is not None or video is not None:
             raise SkatelibError("--save and --video record the entries' runs, not the steering maneuver")
@@ -218,13 +217,15 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
                        f"{perturb} (MuJoCo twin, whole-body controller)"):
             raise typer.Exit(1)
         return
-    save_closed_loop = _recording(library, save)
+    save_closed_loop = recording(library, save)
     if video is not None:
         from skatelib.pipeline.build.preflight import check_output
 
         check_output(video, [library], what="video")
-    runs = run_jobs(twin_jobs(library, entry, plant_error, mpc, settings, (video, save is not None)),
-                    jobs, progress, "riding on the twin")
+    report_checked(library, report)
+    keep = save is not None or report is not None
+    runs = run_jobs(twin_jobs(library, entry, plant_error, mpc, settings, (video, keep)), jobs, progress,
+                    "riding on the twin")
     results = [r for r, _, _ in runs]
     for _, written, _ in runs:
         if written:
@@ -235,6 +236,8 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         save_closed_loop(MotionLibrary.open(library), [(r.key, e) for r, _, e in runs if e is not None], save)
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = twin_table(results, perturb)
+    write_report(library, report, [(r, e) for r, _, e in runs],
+                  f"skatelib track on the MuJoCo twin, errors: {perturb}")
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
         raise typer.Exit(1)
