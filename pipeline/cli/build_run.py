@@ -29,8 +29,10 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None
     kind = kind_of(cfg)
     with ExitStack() as stack:
         bars: list[BuildBar] = []
+        totals: list[int] = []
 
         def start(total: int) -> None:  # the output and the options are checked: nothing is printed before
+            totals.append(total)
             console.print(f"building {count(total, 'entry')} of {escape(str(cfg.path))} -> {escape(str(out))}")
             kind.announce(cfg)
             bars.append(stack.enter_context(build_bar(total, opts.progress)))
@@ -40,8 +42,8 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None
                                frontier=opts.frontier, backend="dask" if opts.backend == "dask" else "loky",
                                scheduler=opts.scheduler, force=bool(force), allow_large=opts.yes, on_start=start)
         except KeyboardInterrupt:
-            kept = (f"{len(bars[0].done) if bars else 0} entries are cached" if opts.cache
-                    else "nothing is cached (--no-cache)")
+            done = f"{len(bars[0].done)} of {totals[0]}" if bars and totals else "0"
+            kept = f"{done} entries are cached" if opts.cache else "nothing is cached (--no-cache)"
             raise Interrupted(f"interrupted: {kept}; no library was written. Run the same command to resume.") from None
     kind.summary(report.written)
     for o in report.outcomes:
