@@ -26,6 +26,13 @@ class Backend(enum.StrEnum):
 VELOCITY_RANGE = field_range(SweepConfig, "velocities_mps")  # one range, defined with the config
 STRIDE_RANGE = tuple(round(x) for x in field_range(SweepConfig, "strides"))
 
+# Where the workers run, shared by build and certify.
+JobsOpt = Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")]
+BackendOpt = Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")]
+SchedulerOpt = Annotated[str | None, typer.Option(
+    help="Dask scheduler address, tcp://HOST:PORT or tls://HOST:PORT (certificates from the dask config); "
+         "a scheduler runs code on its workers: use your own cluster only.")]
+ProgressOpt = Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")]
 ConfigArg = Annotated[Path | None, typer.Argument(help="Build config (TOML); the shipped default when omitted.")]
 YesOpt = Annotated[bool, typer.Option(
     "--yes", help=f"Go on past the size bounds ({MAX_ENTRIES} entries, {MAX_SOLVE_VARIABLES:,} variables in one "
@@ -68,14 +75,10 @@ OutOpt = Annotated[Path | None, typer.Option(
 def build(
     config: ConfigArg = None,
     out: OutOpt = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")
-                    ] = 2,
-    backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
-                       ] = Backend.loky,
-    scheduler: Annotated[str | None, typer.Option(
-        help="Dask scheduler address, tcp://HOST:PORT or tls://HOST:PORT (certificates from the dask config); "
-             "a scheduler runs code on its workers: use your own cluster only.")] = None,
-    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
+    jobs: JobsOpt = 2,
+    backend: BackendOpt = Backend.loky,
+    scheduler: SchedulerOpt = None,
+    progress: ProgressOpt = True,
     allow_failures: Annotated[bool, typer.Option(help="Exit 0 even when entries failed.")] = False,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished entries (resume).")] = True,
     frontier: Annotated[bool, typer.Option(

@@ -9,9 +9,9 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import Interrupted
-from skatelib.pipeline.cli.build_commands import Backend
+from skatelib.pipeline.cli.build_commands import Backend, BackendOpt, JobsOpt, ProgressOpt, SchedulerOpt
 from skatelib.pipeline.cli.library_commands import LibArg
-from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED
+from skatelib.pipeline.cli.option_checks import MAX_SEED
 from skatelib.pipeline.views.console import console, count
 
 
@@ -45,14 +45,10 @@ def certify(
     config: Annotated[Path | None, typer.Option(
         help="A quadruped config whose [certify] table to draw from; default: the one the library was built from.")
                       ] = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", min=1, max=MAX_JOBS, help="Worker processes (loky backend).")
-                    ] = 2,
-    backend: Annotated[Backend, typer.Option(help="loky: worker processes on this machine; dask: a cluster.")
-                       ] = Backend.loky,
-    scheduler: Annotated[str | None, typer.Option(
-        help="Dask scheduler address, tcp://HOST:PORT or tls://HOST:PORT (certificates from the dask config); "
-             "a scheduler runs code on its workers: use your own cluster only.")] = None,
-    progress: Annotated[bool, typer.Option("--progress/--no-progress", help="Show a progress bar.")] = True,
+    jobs: JobsOpt = 2,
+    backend: BackendOpt = Backend.loky,
+    scheduler: SchedulerOpt = None,
+    progress: ProgressOpt = True,
     cache: Annotated[bool, typer.Option("--cache/--no-cache", help="Reuse finished rides (resume).")] = True,
 ) -> None:
     """Ride each entry N times on the twin (the MPC over the whole-body controller), each ride under
