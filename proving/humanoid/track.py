@@ -70,17 +70,12 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
             does not hold or one stored as failed, or MuJoCo missing (with the install hint).
         HumanoidPerturbationError: A bad ``perturb`` (before any run).
     """
-    try:
-        import mujoco  # noqa: F401
-        from skatelib.control.humanoid_stabilizer import LipStabilizer  # noqa: F401
-    except ImportError as e:
-        raise SkatelibError(f"the twin needs MuJoCo and the controller ({e}); pip install 'skatelib[control,sim]'"
-                            ) from e
+    from skatelib.proving.twin.track import twin_library
+
+    lib = twin_library(path, "humanoid", "the humanoid twin runs humanoid libraries; this one is ",
+                       ("mujoco", "skatelib.control.humanoid_stabilizer"))
     from skatelib.sim.humanoid.errors import parse_humanoid_perturbation
 
-    lib = MotionLibrary.open(path)
-    if lib.kind != "humanoid":
-        raise SkatelibError(f"{path}: the humanoid twin runs humanoid libraries; this one is {lib.kind}")
     if lib.humanoid_model.motion == "skate" and lib.humanoid_model.board is None:
         raise SkatelibError(f"{path}: a skate library planned without a board (both soles on the ground, no deck "
                             "height): the twin cannot ride it on a deck; rebuild it from a config with a [board] "

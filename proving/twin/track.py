@@ -121,17 +121,30 @@ def _plant(lib: MotionLibrary, perturb: str | TwinErrors, mu: float) -> tuple[Tw
     return TwinPlant(TwinFigures.from_library(lib), errors), errors
 
 
-def check_twin(path: Path, perturb: str) -> MotionLibrary:
-    """The library at ``path`` for the twin: a quadruped one, ``perturb`` valid and MuJoCo there."""
+def twin_library(path: Path, kind: str, other_kind: str, modules: Sequence[str]) -> MotionLibrary:
+    """The library at ``path`` for a twin of ``kind``'s robots: ``modules`` importable (MuJoCo's and the
+    controller's; else the install hint) and a library of that kind (else ``other_kind`` and its kind)."""
+    import importlib
+
     try:
-        from skatelib.control.params import SkateParams
-        from skatelib.sim.errors import parse_twin_perturbation
+        for module in modules:
+            importlib.import_module(module)
     except ImportError as e:
         raise SkatelibError(f"the twin needs MuJoCo and the controller ({e}); pip install 'skatelib[control,sim]'"
                             ) from e
     lib = MotionLibrary.open(path)
-    if lib.kind != "quadruped":
-        raise SkatelibError(f"{path}: the twin is a quadruped's; this library is {lib.kind}")
+    if lib.kind != kind:
+        raise SkatelibError(f"{path}: {other_kind}{lib.kind}")
+    return lib
+
+
+def check_twin(path: Path, perturb: str) -> MotionLibrary:
+    """The library at ``path`` for the twin: a quadruped one, ``perturb`` valid and MuJoCo there."""
+    lib = twin_library(path, "quadruped", "the twin is a quadruped's; this library is ",
+                       ("skatelib.control.params", "skatelib.sim.errors"))
+    from skatelib.control.params import SkateParams
+    from skatelib.sim.errors import parse_twin_perturbation
+
     parse_twin_perturbation(perturb, SkateParams.from_library(lib).mu)  # refuse a bad --perturb before any work
     return lib
 
