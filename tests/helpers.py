@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 TINY = Path(__file__).parent / "configs" / "tiny.toml"  # 2 entries, 1 stride, interpreted stage functions
 CLI = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
@@ -24,3 +25,14 @@ def copy_of(path: Path, folder: Path, name: str = "lib.h5") -> Path:
     """A copy of a shared library, for a test that writes into it or beside it."""
     folder.mkdir(parents=True, exist_ok=True)
     return Path(shutil.copy(path, folder / name))
+
+
+def load_tool(name: str) -> Any:
+    """The script ``tools/<name>.py`` as a module (the tools are not part of the package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parents[1] / "tools" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
