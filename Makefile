@@ -71,7 +71,7 @@ library: venv-build
 # each file's shared libraries are made once per process (docs/benchmarks.md, "The test suite").
 TEST_WORKERS ?= 2
 test: venv
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=15
 
 # Everything but the tests marked slow (pyproject.toml names the marker; docs/benchmarks.md what
 # each part takes). make test runs them all.
