@@ -154,8 +154,11 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
             placed = np.column_stack([tr.sole_pos[:, 0:2] + shift, s.soles[:, 2]])
             down, clock = replace(down, soles=placed, sole_yaw=tr.sole_yaw), replace(s, soles=placed,
                                                                                      sole_yaw=tr.sole_yaw)
-        rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), zmp)))
-        rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(clock.polygon(), zmp)))
+        margin = -np.inf if airborne else polygon_margin(down.polygon(), zmp)
+        rows["margin"].append(np.asarray(margin))
+        # the clock's soles are the same soles, most ticks the same ones down: the same polygon
+        same = np.array_equal(down.support, clock.support)
+        rows["margin_clock"].append(np.asarray(margin if airborne or same else polygon_margin(clock.polygon(), zmp)))
         reason = _fallen(tr)
         if reason:
             fell_at = tr.t

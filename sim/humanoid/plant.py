@@ -155,23 +155,28 @@ class HumanoidPlant:
         force, moment = np.zeros((2, 3)), np.zeros((2, 3))  # moment about the world origin
         others: set[str] = set()
         frame, w = np.zeros(6), np.zeros(6)
-        for k in range(d.ncon):
-            c = d.contact[k]
-            pair = (int(c.geom1), int(c.geom2))
-            base = self.floor if self.floor in pair else self.deck_geom if self.deck_geom in pair else None
-            if base is None:
-                continue
-            other = pair[1] if pair[0] == base else pair[0]
+        con = d.contact
+        g1, g2 = (con.geom1, con.geom2) if d.ncon else (np.zeros(0, int), np.zeros(0, int))
+        # the contacts with the floor or the deck, picked from the arrays (a Python loop over every
+        # contact, the board's wheels among them, cost as much as the physics step)
+        floor = (g1 == self.floor) | (g2 == self.floor)
+        deck = (g1 == self.deck_geom) | (g2 == self.deck_geom)  # no board: -1, no geom's id
+        pos, frames = (con.pos, con.frame) if d.ncon else (None, None)
+        for k in np.nonzero(floor | deck)[0]:
+            base = self.floor if floor[k] else self.deck_geom
+            first = int(g1[k]) == base  # the floor or the deck is geom1
+            other = int(g2[k]) if first else int(g1[k])
             if other not in self.soles:
                 if base == self.floor and other not in self.wheels:
                     others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
                 continue
-            mujoco.mj_contactForce(m, d, k, frame)
-            fw = c.frame.reshape(3, 3).T @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
-            fw = fw if pair[0] == base else -fw
+            mujoco.mj_contactForce(m, d, int(k), frame)
+            R = frames[k].reshape(3, 3).T
+            fw = R @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
+            fw = fw if first else -fw
             s = self.soles.index(other)
             force[s] += fw
-            moment[s] += _cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == base else -1))
+            moment[s] += _cross(pos[k], fw) + (R @ frame[3:6] * (1 if first else -1))
         zmp = np.full((2, 2), np.nan)
         for s in (0, 1):
             if force[s, 2] > 1.0:
