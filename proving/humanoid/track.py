@@ -4,7 +4,7 @@ twin under the stabilizer, as picklable jobs (one per entry) that return the ent
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from skatelib.library import schema
@@ -33,6 +33,15 @@ class HumanoidTrackResult:
     @property
     def passed(self) -> bool:
         return not self.failures
+
+    def as_dict(self) -> dict[str, float | str | bool | None]:
+        """The verdict as ``validate --closed-loop`` stores it (the quadruped's names where they
+        mean the same: ``target_velocity_mps``, ``delivered_mps`` (a skate's board at the push's
+        end), ``passed``, ``reasons``), with every figure of :class:`HumanoidVerdict`."""
+        figures = {k: v for k, v in asdict(self.verdict).items() if k != "key"}
+        return {"key": self.key, "motion": self.motion, "target_velocity_mps": self.label_mps,
+                "delivered_mps": self.verdict.board_mps, "passed": self.passed, "reasons": "; ".join(self.failures),
+                "duration_s": self.duration_s, **figures}
 
 
 @dataclass(frozen=True)
