@@ -120,9 +120,9 @@ def _humanoid_twin_summary(stored: dict[str, Any], plant: str, when: str) -> Non
     def board(v: dict[str, Any]) -> list[str]:  # a walk has none
         if v.get("delivered_mps") is None:
             return ["-", "-"]
-        return [f"{v['delivered_mps']:.3f}", label_error(v.get("target_velocity_mps", 0.0), v["delivered_mps"])]
+        return [f"{v['delivered_mps']:.3f}", label_error(v.get(schema.A_TARGET_VELOCITY, 0.0), v["delivered_mps"])]
 
-    rows = [[escape(key), escape(str(v.get("fell") or "no")), fmt(v, "target_velocity_mps", "{:.3f}"), *board(v),
+    rows = [[escape(key), escape(str(v.get("fell") or "no")), fmt(v, schema.A_TARGET_VELOCITY, "{:.3f}"), *board(v),
              f"{100 * v['zmp_outside_m']:.1f}" if "zmp_outside_m" in v else "-", cm(v, "zmp_rms_m", "zmp_max_m"),
              cm(v, "com_rms_m", "com_max_m"),
              "[green]pass[/]" if v.get("passed") else "[red]FAIL[/]", escape(str(v.get("reasons") or ""))]

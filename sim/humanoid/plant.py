@@ -132,6 +132,20 @@ class HumanoidPlant:
                 self.rolling.apply(self.d)
             mujoco.mj_step(self.m, self.d)
 
+    def layout(self) -> tuple[int, np.ndarray, int]:
+        """Where in ``qpos`` the waist's free joint, the joints (the figures' order) and a skate's
+        deck's free joint (-1: no board) begin."""
+        deck = int(self.m.joint("deck_free").qposadr[0]) if self.f.board is not None else -1
+        return int(self.m.joint("root_free").qposadr[0]), self.qadr.copy(), deck
+
+    def pose_qpos(self, base_pos: np.ndarray, base_quat_wxyz: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """A configuration (nq,) of this twin: its waist at ``base_pos`` turned ``base_quat_wxyz``,
+        its joints at ``q`` [rad], the rest (a skate's board) as the twin has it now."""
+        out = self.d.qpos.copy()
+        a = self.m.joint("root_free").qposadr[0]
+        out[a:a + 3], out[a + 3:a + 7], out[self.qadr] = base_pos, base_quat_wxyz, q
+        return out
+
     def _s(self, name: str) -> np.ndarray:
         a, n = self.sensor[name]
         return np.array(self.d.sensordata[a:a + n])
@@ -156,13 +170,14 @@ class HumanoidPlant:
         others: set[str] = set()
         frame, w = np.zeros(6), np.zeros(6)
         con = d.contact
-        g1, g2 = (con.geom1, con.geom2) if d.ncon else (np.zeros(0, int), np.zeros(0, int))
+        empty = np.zeros(0, int)
+        g1, g2 = (con.geom1, con.geom2) if d.ncon else (empty, empty)
         # the contacts with the floor or the deck, picked from the arrays (a Python loop over every
         # contact, the board's wheels among them, cost as much as the physics step)
         floor = (g1 == self.floor) | (g2 == self.floor)
-        deck = (g1 == self.deck_geom) | (g2 == self.deck_geom)  # no board: -1, no geom's id
-        pos, frames = (con.pos, con.frame) if d.ncon else (None, None)
-        for k in np.nonzero(floor | deck)[0]:
+        on_deck = (g1 == self.deck_geom) | (g2 == self.deck_geom)  # no board: -1, no geom's id
+        pos, frames = (con.pos, con.frame) if d.ncon else (np.zeros((0, 3)), np.zeros((0, 9)))
+        for k in np.nonzero(floor | on_deck)[0]:
             base = self.floor if floor[k] else self.deck_geom
             first = int(g1[k]) == base  # the floor or the deck is geom1
             other = int(g2[k]) if first else int(g1[k])
