@@ -1,5 +1,5 @@
 """A humanoid run on the twin as a video (:mod:`skatelib.sim.video`, as the quadruped's): the
-twin's configurations at 50 frames a second, the plan's pose beside it as a ghost (its waist and
+twin's configurations at 25 frames a second, the plan's pose beside it as a ghost (its waist and
 joints where the plan has them, the board where the twin's is); on each frame the entry and the
 model errors, the time, the contact ZMP's and the COM's distance from the plan's and, for a skate,
 the board's speed beside the label; at the end the verdict (pass or fail, and why)."""
@@ -14,7 +14,7 @@ from skatelib.sim.overlay import Caption
 from skatelib.sim.render import View
 from skatelib.sim.video import Footage
 
-FPS = 50.0
+FPS = 25.0  # a README's GIF (every second frame) stays a few MB
 # The camera: from the robot's right, a little ahead, far enough for a 1.5 m robot and its board.
 CAMERA = View(distance_m=4.0, azimuth_deg=60.0, elevation_deg=-8.0, smooth_s=0.5, height_m=0.8, follow="waist")
 
