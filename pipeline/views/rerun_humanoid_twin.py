@@ -20,6 +20,7 @@ from skatelib.runtime import MotionLibrary
 BESIDE_M = 1.2  # the twin this far to the plan's left (+y)
 ENTRY_SPACING_M = 3.0  # entries this far apart along y
 TWIN_RGB = (230, 120, 20)  # the twin's COM and ZMP: orange (the plan's: red COM, green ZMP)
+BOARD_RGB = (150, 100, 50)
 SOLE_THICKNESS_M = 0.02
 
 
@@ -72,8 +73,10 @@ def log_twin(rec: rr.RecordingStream, lib: MotionLibrary, run: Any, root: str, o
                              ("zmp_x", run.zmp[:, 0], "ZMP x (contact forces) [m]"),
                              ("zmp_y", run.zmp[:, 1], "ZMP y (contact forces) [m]")):
         series(rec, root, name, t, col, label)
+        rec.log(f"{root}/plots/{name}", rr.SeriesLines.from_fields(colors=[TWIN_RGB]), static=True)  # beside the plan's
     if run.deck_v is not None:
         series(rec, root, "com_vx/board", t, np.linalg.norm(run.deck_v[:, 0:2], axis=1), "board speed [m/s]")
+        rec.log(f"{root}/plots/com_vx/board", rr.SeriesLines.from_fields(colors=[BOARD_RGB]), static=True)
 
 
 def save_humanoid_runs(lib: MotionLibrary, runs: list[Any], save: Path) -> list[str]:
