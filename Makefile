@@ -133,6 +133,7 @@ figures: venv
 	$(BIN)/skatelib build configs/hrp2_skate.toml -o out/hrp2-skate.h5 --no-progress
 	$(BIN)/skatelib plot out/hrp2-skate.h5 -o build/figures/hrp2-skate -f png
 	cp build/figures/hrp2-skate/zmp_wholebody.png docs/figures/hrp2-skate-zmp.png
+	$(BIN)/skatelib track out/hrp2-skate.h5 --plant mujoco --entry skate_v1.00 --video docs/figures/hrp2-skate-twin.gif --no-progress
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .mypy_cache .ruff_cache .skatelib-cache

@@ -3,7 +3,7 @@ the table of ``docs/benchmarks.md``.
 
 One module per subject, each with its figures (name, target, baseline) as data and a ``measure``
 function: :mod:`benchmarks.pushoff`, :mod:`benchmarks.library`, :mod:`benchmarks.runtime`,
-:mod:`benchmarks.humanoid`, :mod:`benchmarks.rerun_log`, :mod:`benchmarks.mpc`,
+:mod:`benchmarks.humanoid`, :mod:`benchmarks.humanoid_twin`, :mod:`benchmarks.rerun_log`, :mod:`benchmarks.mpc`,
 :mod:`benchmarks.fatrop`, :mod:`benchmarks.sim`, :mod:`benchmarks.wbc`, :mod:`benchmarks.estimator`,
 :mod:`benchmarks.certify`.
 
@@ -32,6 +32,7 @@ PARTS: dict[str, tuple[str, bool]] = {
     "library": ("benchmarks.library", True),
     "runtime": ("benchmarks.runtime", True),
     "humanoid": ("benchmarks.humanoid", False),
+    "humanoid-twin": ("benchmarks.humanoid_twin", False),
     "rerun": ("benchmarks.rerun_log", True),
     "mpc": ("benchmarks.mpc", True),
     "fatrop": ("benchmarks.fatrop", False),

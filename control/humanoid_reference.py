@@ -15,21 +15,21 @@ from skatelib.runtime.entry import Entry
 GROUND_M = 0.002  # a planned sole this close to the ground supports
 
 
+def _cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
 def _hull(points: np.ndarray) -> np.ndarray:
     """Counter-clockwise convex hull (monotone chain) of (N, 2) points."""
-    pts = sorted({(float(x), float(y)) for x, y in np.round(points, 12)})
-
-    def cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
+    pts = sorted(set(map(tuple, np.round(points, 12).tolist())))
     lower: list[tuple[float, float]] = []
     upper: list[tuple[float, float]] = []
     for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+        while len(lower) >= 2 and _cross(lower[-2], lower[-1], p) <= 0:
             lower.pop()
         lower.append(p)
     for p in reversed(pts):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+        while len(upper) >= 2 and _cross(upper[-2], upper[-1], p) <= 0:
             upper.pop()
         upper.append(p)
     return np.array(lower[:-1] + upper[:-1])
@@ -37,12 +37,15 @@ def _hull(points: np.ndarray) -> np.ndarray:
 
 def polygon_margin(poly: np.ndarray, p: np.ndarray) -> float:
     """The distance of ``p`` inside the counter-clockwise polygon (negative: outside) [m]."""
-    out = np.inf
-    for i in range(len(poly)):
-        a, b = poly[i], poly[(i + 1) % len(poly)]
-        e = b - a
-        out = min(out, float((e[0] * (p[1] - a[1]) - e[1] * (p[0] - a[0])) / np.linalg.norm(e)))
-    return out
+    e = np.empty_like(poly)
+    e[:-1] = poly[1:] - poly[:-1]
+    e[-1:] = poly[:1] - poly[-1:]
+    d = (e[:, 0] * (p[1] - poly[:, 1]) - e[:, 1] * (p[0] - poly[:, 0])) / np.sqrt(e[:, 0] ** 2 + e[:, 1] ** 2)
+    return float(d.min()) if len(d) else float("inf")
+
+
+HULLS_KEPT = 16  # a reference keeps its last hulls, by their soles
+_CORNERS = np.array([(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)])  # a sole's corners, in half sizes
 
 
 @dataclass(frozen=True)
@@ -66,6 +69,8 @@ class ReferenceSample:
     anchored: np.ndarray | None = None  # (2,) the soles whose planned place anchors the estimate (None: support)
     sole_vel: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))  # (2, 3) the soles' planned velocity
     sole_pitch: np.ndarray = field(default_factory=lambda: np.zeros(2))  # (2,) heel up: a toe-off [rad]
+    # the hulls made (read-only; shared by the samples of one reference and their replacements)
+    hulls: dict[tuple, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def anchors(self) -> np.ndarray:
@@ -74,15 +79,27 @@ class ReferenceSample:
         return self.support if self.anchored is None else self.anchored
 
     def polygon(self, margin: float = 0.0) -> np.ndarray:
-        """The support soles' convex hull, each sole shrunk by ``margin``."""
-        hx, hy = self.sole_size[0] / 2 - margin, self.sole_size[1] / 2 - margin
-        corners = []
-        for s in (0, 1):
-            if self.support[s]:
-                c, sn = np.cos(self.sole_yaw[s]), np.sin(self.sole_yaw[s])
-                for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)):
-                    corners.append(self.soles[s][0:2] + np.array([c * dx - sn * dy, sn * dx + c * dy]))
-        return _hull(np.array(corners))
+        """The support soles' convex hull, each sole shrunk by ``margin`` (the same soles give the
+        same hull: kept, a few of them, for the ticks that stand on them)."""
+        key = (self.support.tobytes(), self.soles.tobytes(), self.sole_yaw.tobytes(), margin, self.sole_size)
+        hull = self.hulls.get(key)
+        if hull is None:
+            if len(self.hulls) >= HULLS_KEPT:
+                self.hulls.pop(next(iter(self.hulls)))
+            hull = self.hulls[key] = self._polygon(margin)
+        return hull
+
+    def _polygon(self, margin: float) -> np.ndarray:
+        half = np.array([self.sole_size[0] / 2 - margin, self.sole_size[1] / 2 - margin])
+        on = np.nonzero(self.support)[0]
+        if len(on) == 0:
+            return np.zeros((0, 2))
+        d = _CORNERS * half  # (4, 2)
+        c, sn = np.cos(self.sole_yaw[on])[:, None], np.sin(self.sole_yaw[on])[:, None]
+        corners = np.stack([c * d[:, 0] - sn * d[:, 1], sn * d[:, 0] + c * d[:, 1]], axis=-1)  # (k, 4, 2)
+        hull = _hull((self.soles[on, None, 0:2] + corners).reshape(-1, 2))
+        hull.setflags(write=False)
+        return hull
 
     def with_landed(self, load_N: np.ndarray, min_load_N: float, window_m: float) -> ReferenceSample:
         """This sample with the soles landed early among its support: those the plan still swings
@@ -141,6 +158,7 @@ class HumanoidReference:
         self.com_acc = np.gradient(self.com_vel, self.t, axis=0)
         self.zmp = np.asarray(a[schema.D_ZMP])
         self.model = model
+        self.hulls: dict[tuple, np.ndarray] = {}  # its samples' support polygons, by their soles
         self.duration_s = float(self.t[-1])
         # The surface under each sole at each knot: a skate's deck where the sole is over it (under
         # the board sole, where its deck is), else the ground; a planned sole on it supports.
@@ -157,27 +175,33 @@ class HumanoidReference:
         pitch = feet[..., 4] if feet.shape[-1] > 4 else np.zeros(feet.shape[:-1])
         return np.asarray(feet[..., 2] - self.model.foot_length_m / 2 * np.abs(np.sin(pitch)))
 
-    def _at(self, x: np.ndarray, t: float) -> np.ndarray:
-        k = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2))
-        w = float(np.clip((t - self.t[k]) / (self.t[k + 1] - self.t[k]), 0.0, 1.0))
+    def _knot(self, t: float) -> tuple[int, float]:
+        """The knot interval ``t`` [s] falls in and the weight of its end (clamped to the entry)."""
+        k = min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 2)
+        w = min(max(float((t - self.t[k]) / (self.t[k + 1] - self.t[k])), 0.0), 1.0)
+        return k, w
+
+    def _at(self, x: np.ndarray, t: float, at: tuple[int, float] | None = None) -> np.ndarray:
+        k, w = self._knot(t) if at is None else at
         return np.asarray((1 - w) * x[k] + w * x[k + 1])
 
     def sample(self, t: float) -> ReferenceSample:
         """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
         the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
-        feet = self._at(self.feet, t)
-        base = self._at(self.base, t)
+        at = self._knot(t)
+        feet = self._at(self.feet, t, at)
+        base = self._at(self.base, t, at)
         m = self.model
         still = t >= self.duration_s
-        plane = self.plane[int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1))]
+        plane = self.plane[min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 1)]
         support = self._lowest(feet) - plane < GROUND_M
-        return ReferenceSample(q=self._at(self.q, t), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
+        return ReferenceSample(q=self._at(self.q, t, at), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
             base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=support,
-            com=self._at(self.com, t), com_vel=np.zeros(3) if still else self._at(self.com_vel, t),
-            com_acc=np.zeros(3) if still else self._at(self.com_acc, t),
-            zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t), gravity=m.gravity_mps2,
+            com=self._at(self.com, t, at), com_vel=np.zeros(3) if still else self._at(self.com_vel, t, at),
+            com_acc=np.zeros(3) if still else self._at(self.com_acc, t, at),
+            zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t, at), gravity=m.gravity_mps2,
             sole_size=(m.foot_length_m, m.foot_width_m),
             ground_z=float(plane[support].mean()) if support.any() else 0.0,
             sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
-            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t), sole_plane=plane.copy(),
-            anchored=_ground_anchors(support, plane))
+            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t, at), sole_plane=plane.copy(),
+            anchored=_ground_anchors(support, plane), hulls=self.hulls)

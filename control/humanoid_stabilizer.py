@@ -72,6 +72,11 @@ class StabilizerOutput:
     support: np.ndarray  # (2,) the soles the stabilizer took as support (the plan's, and any landed early)
 
 
+def _mean(rows: list[np.ndarray]) -> np.ndarray:
+    """The mean of one or two rows (as ``np.mean(rows, axis=0)``, without its cost at every tick)."""
+    return rows[0] if len(rows) == 1 else (rows[0] + rows[1]) / 2
+
+
 class LipStabilizer:
     """One robot's stabilizer state, ticked at a fixed rate."""
 
@@ -93,8 +98,8 @@ class LipStabilizer:
         CoP relative to its centre (foot frame: x, y)."""
         c, soles, pts, rots = self.kin.measure(qfull)
         sup = r.anchors
-        anchor = np.mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]], axis=0)
-        rel = c - np.mean([soles[s] for s in (0, 1) if sup[s]], axis=0)
+        anchor = _mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]])
+        rel = c - _mean([soles[s] for s in (0, 1) if sup[s]])
         self.swing_z = soles[:, 2] + anchor[2]
         if self.rel_prev is not None and tuple(sup) == self.support_prev:
             a = 1.0 - math.exp(-2 * math.pi * self.g.velocity_cutoff_hz * self.dt)
@@ -102,7 +107,7 @@ class LipStabilizer:
         self.rel_prev, self.support_prev = rel, (bool(sup[0]), bool(sup[1]))
         # The COM's velocity over the anchor soles, plus theirs as planned (a board sole rides at
         # the board's speed): the estimate's frame moves as the anchor soles' planned places do.
-        self.v_world = self.v + np.mean([r.sole_vel[s] for s in (0, 1) if sup[s]], axis=0)
+        self.v_world = self.v + _mean([r.sole_vel[s] for s in (0, 1) if sup[s]])
         fz, num = 0.0, np.zeros(2)
         loads, cops = np.zeros(2), np.zeros((2, 2))
         for s in (0, 1):

@@ -97,14 +97,11 @@ class PlannedTorques:
             start += B.shape[1]
         return np.asarray(tau)
 
-    def _at(self, x: np.ndarray, t: float) -> np.ndarray:
-        k = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2))
-        w = float(np.clip((t - self.t[k]) / (self.t[k + 1] - self.t[k]), 0.0, 1.0))
-        return np.asarray((1 - w) * x[k] + w * x[k + 1])
-
     def sample(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """The joints' planned speeds [rad/s] and feed-forward torques [N m] at ``t``."""
+        """The joints' planned speeds [rad/s] and feed-forward torques [N m] at ``t`` (linear between knots)."""
         if t >= self.t[-1]:
             return np.zeros(self.qd.shape[1]), self.hold.copy()
-        return self._at(self.qd, t), self._at(self.tau, t)
+        k = min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 2)
+        w = min(max(float((t - self.t[k]) / (self.t[k + 1] - self.t[k])), 0.0), 1.0)
+        return (1 - w) * self.qd[k] + w * self.qd[k + 1], (1 - w) * self.tau[k] + w * self.tau[k + 1]
 

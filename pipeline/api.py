@@ -110,8 +110,10 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
         library: The library file (.h5).
         closed_loop: Also track every successful entry in closed loop and store the verdicts in the
             file (it must be writable; it keeps its permissions).
-        plant: With ``closed_loop``: ``model`` or ``mujoco`` (the twin; needs the ``[sim]`` extra).
-        perturb: With ``closed_loop``: the plant's model errors, ``KEY=VALUE,...`` (``none``: as planned).
+        plant: With ``closed_loop``: ``model`` or ``mujoco`` (the twin; needs the ``[sim]`` extra; a
+            humanoid library's only).
+        perturb: With ``closed_loop``: the plant's model errors, ``KEY=VALUE,...`` (``none``: as planned;
+            a humanoid library left at the default takes the humanoid's default set).
         jobs: Entries ridden in parallel (1 to 256).
         on_entry: Called with each entry's :class:`~skatelib.pipeline.validate.EntryVerdict` as it is checked.
 
@@ -124,11 +126,19 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
         ValueError: An argument out of its range (naming it).
     """
     require_pipeline("skatelib.validate")
-    from skatelib.pipeline.validate import EntryVerdict, ValidationReport, closed_loop_jobs, validate_library
+    from skatelib.pipeline.validate import (
+        EntryVerdict,
+        ValidationReport,
+        closed_loop_jobs,
+        closed_loop_perturbation,
+        validate_library,
+    )
 
     check_range("skatelib.validate", "jobs", jobs, 1, MAX_JOBS)
     check_choice("skatelib.validate", "plant", plant, ("model", "mujoco"))
     path = Path(library)
+    if closed_loop:
+        perturb = closed_loop_perturbation(path, perturb, DEFAULT_PLANT_PERTURBATION)
     rides = closed_loop_jobs(path, perturb, plant) if closed_loop else []  # refused before any check or ride
     verdicts: list[EntryVerdict] = []
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from skatelib.library import schema
+from skatelib.library.errors import SkatelibError
 from skatelib.library.reader import read_library
 from skatelib.pipeline.kinds import ReportFn, kind_named
 from skatelib.runtime import MotionLibrary
@@ -56,21 +57,41 @@ def validate_library(path: Path | str, report: ReportFn) -> int:
     return kind_named(lib.kind, lib.path).validate_entries(lib, report)
 
 
+def closed_loop_perturbation(path: Path, perturb: str, default: str) -> str:
+    """The model errors ``validate --closed-loop`` rides with: ``perturb``, except that a humanoid
+    library given the quadruped's ``default`` takes the humanoid's default set (its keys differ)."""
+    if perturb != default or MotionLibrary.open(path).kind != "humanoid":
+        return perturb
+    from skatelib.sim.humanoid.errors import DEFAULT_HUMANOID_PERTURBATION
+
+    return DEFAULT_HUMANOID_PERTURBATION
+
+
 def closed_loop_jobs(path: Path, perturb: str, plant: str = "model") -> list[Any]:
     """The rides of ``validate --closed-loop``: every successful entry against the plant ``perturb``
-    ('none': as planned), on the model plant or (``plant="mujoco"``) the twin; made before any work,
-    so that what would stop them stops the command at once.
+    ('none': as planned), on the model plant or (``plant="mujoco"``) the twin (a humanoid library's
+    on its own twin, under the stabilizer); made before any work, so that what would stop them
+    stops the command at once.
 
     Raises:
         OutputError: The file is not to be rewritten (read-only, another user's).
-        SkatelibError: A bad perturbation (a key out of its range), naming it.
+        SkatelibError: A bad perturbation (a key out of its range), naming it; a humanoid library
+            asked for the model plant.
         ImportError: The controller's packages are missing (names the extra).
     """
     from skatelib.library.amend import check_amendable
 
     check_amendable(path)  # the verdicts are stored in the file
     errors = "" if perturb == "none" else perturb
+    humanoid = MotionLibrary.open(path).kind == "humanoid"
+    if humanoid and plant != "mujoco":
+        raise SkatelibError(f"{path}: a humanoid library is executed on its physical twin: add --plant mujoco "
+                            "(the model plant is the quadruped's)")
     try:
+        if humanoid:
+            from skatelib.proving.humanoid.track import humanoid_jobs
+
+            return list(humanoid_jobs(path, None, errors))
         if plant == "mujoco":
             from skatelib.proving.twin.track import twin_jobs
 
@@ -93,7 +114,8 @@ def closed_loop_verdicts(path: Path, perturb: str, calls: list[Any], jobs: int, 
     from skatelib.library.amend import amend_library
     from skatelib.pipeline.build.sweep import run_calls
 
-    results = [out[0] for out in run_calls(calls, jobs)]
+    # a quadruped's job returns its verdict with its run (None here), a humanoid's the verdict alone
+    results = [out[0] if isinstance(out, tuple) else out for out in run_calls(calls, jobs)]
     prefix, attr = ("closed_loop_twin", schema.A_CLOSED_LOOP_TWIN) if plant == "mujoco" else (
         "closed_loop", schema.A_CLOSED_LOOP)
     amend_library(path, {f"{prefix}_plant": perturb,

@@ -31,7 +31,8 @@ class View:
             side, square to a run along x) [deg].
         elevation_deg: Below the horizon [deg].
         smooth_s: Standard deviation of the Gaussian that smooths the trunk's path [s].
-        height_m: Height of the point looked at above the deck's top [m].
+        height_m: Height of the point looked at above the deck's top (the floor without a board) [m].
+        follow: The body whose path the camera follows (the quadruped's trunk, the humanoid's waist).
     """
 
     width: int = 1280
@@ -41,6 +42,7 @@ class View:
     elevation_deg: float = -14.0
     smooth_s: float = 0.5
     height_m: float = 0.12
+    follow: str = "trunk"
 
 
 def follow(path: np.ndarray, fps: float, smooth_s: float) -> np.ndarray:
@@ -63,7 +65,8 @@ def render_frames(m: mujoco.MjModel, qpos: np.ndarray | Sequence[np.ndarray], vi
     import mujoco
 
     d = mujoco.MjData(m)
-    trunk, deck = m.body("trunk").id, m.body("deck").id
+    trunk = m.body(view.follow).id
+    deck = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "deck")  # -1: no board (a humanoid's walk)
     path = np.empty((len(qpos), 2))
     for k, q in enumerate(qpos):
         d.qpos[:] = q
@@ -72,7 +75,7 @@ def render_frames(m: mujoco.MjModel, qpos: np.ndarray | Sequence[np.ndarray], vi
     lookat = follow(path, fps, view.smooth_s)
     d.qpos[:] = qpos[0]
     mujoco.mj_kinematics(m, d)
-    z = float(d.xpos[deck][2]) + view.height_m
+    z = (float(d.xpos[deck][2]) if deck >= 0 else 0.0) + view.height_m
     cam = mujoco.MjvCamera()
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
     cam.distance, cam.azimuth, cam.elevation = view.distance_m, view.azimuth_deg, view.elevation_deg

@@ -32,6 +32,8 @@ class RollingResistance:
         self.actuators = np.array([m.actuator(f"rolling_{w}").id for w in WHEELS])
         self.radius = np.array([m.geom_size[g][0] for g in self.geoms])
         self.floor = m.geom("floor").id
+        self.wheel_of = np.full(m.ngeom, -1)  # each geom's wheel (-1: none)
+        self.wheel_of[self.geoms] = np.arange(len(WHEELS))
         self._force = np.zeros(6)
 
     def floor_forces(self, d: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -40,16 +42,23 @@ class RollingResistance:
         import mujoco
 
         loads, total = np.zeros(4), np.zeros(3)
-        for k in range(d.ncon):
-            c = d.contact[k]
-            if c.geom1 != self.floor and c.geom2 != self.floor:
-                continue
-            hit = np.nonzero((self.geoms == c.geom1) | (self.geoms == c.geom2))[0]
-            if len(hit):
-                mujoco.mj_contactForce(self.m, d, k, self._force)
-                loads[hit[0]] += self._force[0]
-                force = c.frame.reshape(3, 3).T @ self._force[:3]  # on geom2 (the wheel, or the floor)
-                total += force if c.geom2 == self.geoms[hit[0]] else -force
+        if d.ncon == 0:
+            return loads, total
+        con = d.contact
+        g1, g2 = con.geom1, con.geom2
+        # the contacts of a wheel with the floor, picked from the arrays (a Python loop over every
+        # contact of a robot on a board costs more than the physics step)
+        w1, w2 = self.wheel_of[g1], self.wheel_of[g2]
+        picked = np.nonzero(((g1 == self.floor) & (w2 >= 0)) | ((g2 == self.floor) & (w1 >= 0)))[0]
+        if len(picked) == 0:
+            return loads, total
+        frames = con.frame
+        for k in picked:
+            hit = int(max(w1[k], w2[k]))
+            mujoco.mj_contactForce(self.m, d, int(k), self._force)
+            loads[hit] += self._force[0]
+            force = frames[k].reshape(3, 3).T @ self._force[:3]  # on geom2 (the wheel, or the floor)
+            total += force if w2[k] == hit else -force
         return loads, total
 
     def apply(self, d: Any) -> None:

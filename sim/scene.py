@@ -25,6 +25,26 @@ FLOOR_RGB = ((0.80, 0.82, 0.84), (0.58, 0.61, 0.65))  # the checker's two square
 SKY_RGB = ((0.62, 0.75, 0.92), (0.97, 0.98, 1.0))
 
 
+def add_scenery(spec: mujoco.MjSpec) -> str:
+    """What a video sees besides the robot, nothing that moves or touches: a checkered floor
+    material (0.5 m squares: the motion shows under a camera that follows), a sky, a light and a
+    headlight that light the robot wherever it goes, and the offscreen buffer's size. Returns the
+    floor's material name."""
+    import mujoco
+
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = OFFSCREEN_SIZE
+    spec.add_texture(name="floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+                     rgb1=list(FLOOR_RGB[0]), rgb2=list(FLOOR_RGB[1]), width=256, height=256)
+    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX, builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+                     rgb1=list(SKY_RGB[0]), rgb2=list(SKY_RGB[1]), width=64, height=384)
+    grid = spec.add_material(name="floor", texrepeat=[4, 4], texuniform=True)
+    grid.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
+    spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
+    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
+    spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
+    return "floor"
+
+
 def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     """Floor, board and (``with_robot``) the robot, as an ``MjSpec``."""
     import mujoco
@@ -36,19 +56,9 @@ def scene_spec(f: TwinFigures, with_robot: bool = True) -> mujoco.MjSpec:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = 10
-    spec.visual.global_.offwidth, spec.visual.global_.offheight = OFFSCREEN_SIZE
-    spec.add_texture(name="floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
-                     rgb1=list(FLOOR_RGB[0]), rgb2=list(FLOOR_RGB[1]), width=256, height=256)
-    spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX, builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
-                     rgb1=list(SKY_RGB[0]), rgb2=list(SKY_RGB[1]), width=64, height=384)
-    grid = spec.add_material(name="floor", texrepeat=[4, 4], texuniform=True)  # 0.5 m squares: the motion shows
-    grid.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
                             contype=FLOOR_BIT, conaffinity=0, condim=3,
-                            friction=[f.friction_mu, 0.0, 0.0], material="floor")
-    spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
-    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]  # lit wherever the board rides
-    spec.visual.headlight.diffuse = [0.5, 0.5, 0.5]
+                            friction=[f.friction_mu, 0.0, 0.0], material=add_scenery(spec))
     add_board(spec, f.board, f.friction_mu)
     spec.geom("deck").rgba = list(DECK_RGBA)
     if with_robot:

@@ -11,7 +11,7 @@ import signal
 import subprocess
 import tempfile
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, cast
@@ -34,7 +34,8 @@ GIF_STRIDE = 2  # a GIF shows every second frame: a README's file stays a few MB
 @dataclass(frozen=True)
 class Footage:
     """A run to film: configurations (N, nq) at ``fps``, the plan's at the same times (the ghost;
-    None for none), a caption per frame; the last frame held ``hold_s`` [s] with ``ending``."""
+    None for none), a caption per frame; the last frame held ``hold_s`` [s] with ``ending``;
+    ``camera``: the camera's settings (None: the quadruped's; the frame size is the format's)."""
 
     qpos: np.ndarray
     fps: float
@@ -42,6 +43,7 @@ class Footage:
     ghost: np.ndarray | None = None
     ending: Caption | None = None
     hold_s: float = 3.0
+    camera: View | None = None
 
 
 def write_video(frames: Iterable[np.ndarray], out: Path, fps: float) -> Path:
@@ -141,6 +143,8 @@ def write_run(m: mujoco.MjModel, footage: Footage, out: Path) -> Path:
     at :data:`GIF_VIEW` and every :data:`GIF_STRIDE`-th frame."""
     gif = out.suffix.lower() == ".gif"
     view, stride = (GIF_VIEW, GIF_STRIDE) if gif else (MP4_VIEW, 1)
+    if footage.camera is not None:
+        view = replace(footage.camera, width=view.width, height=view.height)
     return write_video(film(m, footage, view, stride), out, footage.fps / stride)
 
 

@@ -51,3 +51,46 @@ def test_by_default_the_walk_runs_under_the_humanoid_error_set_and_stands(hrp2_w
     cells = _row(r.stdout, "walk_v0.375_n6")
     out = float(cells[2].split()[0])
     assert cells[1] == "no" and out <= 2.0 and cells[-1] == "pass", cells
+
+
+@pytest.mark.slow
+def test_validate_closed_loop_stores_the_twin_verdicts_and_info_shows_them(hrp2_walk_path, tmp_path):
+    """`validate --closed-loop --plant mujoco` on a humanoid library stores each entry's verdict on
+    the twin in the file, with the figures of the same run made here in-process (the loop and the
+    verdict called directly); `info` counts them and `info --wide` shows their figures."""
+    import json
+
+    from skatelib.proving.humanoid.loop import run_entry
+    from skatelib.proving.humanoid.verdict import verdict
+    from skatelib.runtime import MotionLibrary
+
+    from tests.helpers import copy_of
+
+    path = copy_of(hrp2_walk_path, tmp_path)
+    r = run_cli(["validate", str(path), "--closed-loop", "--plant", "mujoco", "--perturb", "none", "-j", "1"])
+    assert r.returncode == 0 and "stored 1 closed-loop verdicts" in r.stdout, r.stdout + r.stderr
+    lib = MotionLibrary.open(path)
+    stored = json.loads(str(lib["walk_v0.375_n6"].attrs["closed_loop_twin_json"]))
+    assert lib.attrs["closed_loop_twin_plant"] == "none"
+    v = verdict(run_entry(lib, "walk_v0.375_n6"))
+    assert stored["passed"] is True and stored["reasons"] == "" and stored["delivered_mps"] is None
+    for k in ("zmp_rms_m", "zmp_max_m", "com_rms_m", "zmp_outside_m", "slip_m", "torque_ratio"):
+        assert stored[k] == pytest.approx(getattr(v, k), rel=1e-12), k
+    info = run_cli(["info", str(path)])
+    assert "closed loop on the twin: 1 of 1 stored verdict pass (plant errors none" in info.stdout, info.stdout
+    row = _row(run_cli(["info", str(path), "--wide"]).stdout.split("balance stabilizer")[1], "walk_v0.375_n6")
+    assert row[1] == "no" and row[6] == f"{100 * v.zmp_rms_m:.1f}/{100 * v.zmp_max_m:.1f}" and row[8] == "pass", row
+
+
+def test_validate_closed_loop_on_a_humanoid_refuses_the_model_plant_and_quadruped_keys(hrp2_walk_path, tmp_path):
+    """A humanoid library's closed loop is its twin's: the model plant is refused naming --plant
+    mujoco, a quadruped's error key names the humanoid's; neither rides nor touches the file."""
+    from tests.helpers import copy_of
+
+    path = copy_of(hrp2_walk_path, tmp_path)
+    before = path.read_bytes()
+    r = run_cli(["validate", str(path), "--closed-loop"])
+    assert r.returncode != 0 and "--plant mujoco" in r.stderr and "walk_v0.375_n6" not in r.stdout, r.stdout + r.stderr
+    r = run_cli(["validate", str(path), "--closed-loop", "--plant", "mujoco", "--perturb", "kb=-20%"])
+    assert r.returncode == 2 and "com_x" in r.stderr, r.stderr
+    assert path.read_bytes() == before

@@ -90,14 +90,23 @@ def validate(
     as_json: Annotated[bool, typer.Option("--json", help="Print the verdicts as one JSON document instead.")] = False,
     plant: Annotated[PlantKind, typer.Option(
         help="With --closed-loop: model (the verdicts in closed_loop_json) or mujoco (the twin under the "
-             "whole-body controller, in closed_loop_twin_json).")] = PlantKind.model,
+             "whole-body controller, in closed_loop_twin_json; a humanoid library's twin under its balance "
+             "stabilizer, with the humanoid's --perturb keys: the only plant for it).")] = PlantKind.model,
 ) -> None:
     """Re-check a library's integrity (checksum, fields) and every entry's physics."""
     from skatelib.pipeline.api import validate as validate_api
-    from skatelib.pipeline.validate import closed_loop_jobs
+    from skatelib.pipeline.validate import closed_loop_jobs, closed_loop_perturbation
 
     # the rides made (the file writable, --perturb parsed) before any check or ride
-    rides = closed_loop_jobs(library, perturb, plant.value) if closed_loop else []
+    rides = []
+    if closed_loop:
+        from skatelib.sim.humanoid.errors import HumanoidPerturbationError
+
+        perturb = closed_loop_perturbation(library, perturb, DEFAULT_PERTURB)
+        try:
+            rides = closed_loop_jobs(library, perturb, plant.value)
+        except HumanoidPerturbationError as e:
+            raise typer.BadParameter(str(e), param_hint="--perturb") from None
 
     def show(v: Any) -> None:
         if not as_json:
@@ -132,7 +141,11 @@ def _closed_loop(library: Path, rides: tuple[str, list[Any]], jobs: int, plant: 
     if plant is PlantKind.mujoco:
         mesh_note(library)
     results = closed_loop_verdicts(library, perturb, calls, jobs, plant.value)
-    table = twin_table if plant is PlantKind.mujoco else track_table
+    from skatelib.pipeline.cli.track_humanoid import is_humanoid
+    from skatelib.pipeline.views.humanoid_table import humanoid_table
+
+    table = (humanoid_table if is_humanoid(library) else twin_table if plant is PlantKind.mujoco
+             else track_table)
     failed = sum(not r.passed for r in results) if as_json else table(results, perturb)
     if not as_json:
         console.print(escape(f"stored {len(results)} closed-loop verdicts in {library} ({failed} failed)"))

@@ -82,9 +82,9 @@ def track(
     """Closed loop: the paper's MPC (30 Hz) drives a plant with model error through each entry, the transfer
     and 1.5 s of riding (exit 1 if any fails): the model plant, the twin (--plant mujoco), a humanoid's twin."""
     if is_humanoid(library):
-        quadruped_only = ride is not None or maneuver is not Maneuver.entries or (save, video, report) != (None,) * 3
+        quadruped_only = ride is not None or maneuver is not Maneuver.entries or (report, draw) != (None, None)
         return track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
-                              (plant is PlantKind.mujoco, quadruped_only or draw is not None), (jobs, progress, seed))
+                              (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed), (save, video))
     mpc, settings = _controller(solver, mpc_mu, seed, state)
     if draw is not None:
         return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)

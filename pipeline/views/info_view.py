@@ -96,8 +96,11 @@ def _closed_loop_summary(lib: Any) -> None:
         stored = {e.key: json.loads(str(e.attrs[attr])) for e in lib if attr in e.attrs}
         if not stored:
             continue
-        where = "the twin (MuJoCo, whole-body controller)" if name.endswith("twin") else "the model plant"
         plant, when = lib.attrs.get(f"{name}_plant", "?"), lib.attrs.get(f"{name}_utc", "?")
+        if lib.kind == "humanoid":
+            _humanoid_twin_summary(stored, plant, when)
+            continue
+        where = "the twin (MuJoCo, whole-body controller)" if name.endswith("twin") else "the model plant"
         rows = []
         for key, v in stored.items():
             target = schema.A_TARGET_VELOCITY if schema.A_TARGET_VELOCITY in v else "label_mps"  # (older files)
@@ -106,3 +109,25 @@ def _closed_loop_summary(lib: Any) -> None:
                          "[green]pass[/]" if v.get("passed") else "[red]FAIL[/]", escape(str(v.get("reasons") or ""))])
         print_table(console, f"closed loop on {where}, plant errors {plant} ({when})",
                     ("entry", "label [m/s]", "delivered [m/s]", "error [%]", "verdict", Col("why", text=True)), rows)
+
+
+def _humanoid_twin_summary(stored: dict[str, Any], plant: str, when: str) -> None:
+    """A humanoid's verdicts on its twin: the fall, the ZMP and COM against the plan, the board's
+    speed at the push's end for a skate (the figures of ``track HUMANOID_LIB --plant mujoco``)."""
+    def cm(v: dict[str, Any], a: str, b: str) -> str:
+        return f"{100 * v[a]:.1f}/{100 * v[b]:.1f}" if a in v and b in v else "-"
+
+    def board(v: dict[str, Any]) -> list[str]:  # a walk has none
+        if v.get("delivered_mps") is None:
+            return ["-", "-"]
+        return [f"{v['delivered_mps']:.3f}", label_error(v.get(schema.A_TARGET_VELOCITY, 0.0), v["delivered_mps"])]
+
+    rows = [[escape(key), escape(str(v.get("fell") or "no")), fmt(v, schema.A_TARGET_VELOCITY, "{:.3f}"), *board(v),
+             f"{100 * v['zmp_outside_m']:.1f}" if "zmp_outside_m" in v else "-", cm(v, "zmp_rms_m", "zmp_max_m"),
+             cm(v, "com_rms_m", "com_max_m"),
+             "[green]pass[/]" if v.get("passed") else "[red]FAIL[/]", escape(str(v.get("reasons") or ""))]
+            for key, v in stored.items()]
+    print_table(console, f"closed loop on the twin (MuJoCo, balance stabilizer), errors {plant} ({when})",
+                ("entry", Col("fell", text=True), "label [m/s]", "board at push end [m/s]", "error [%]",
+                 "ZMP out [cm]", "ZMP err RMS/max [cm]", "COM err RMS/max [cm]", "verdict", Col("why", text=True)),
+                rows)

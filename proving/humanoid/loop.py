@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
-from skatelib.control.humanoid_reference import HumanoidReference, polygon_margin
+from skatelib.control.humanoid_reference import HumanoidReference, ReferenceSample, polygon_margin
 from skatelib.control.humanoid_stabilizer import LipStabilizer, StabilizerGains
 from skatelib.control.humanoid_torques import PlannedTorques
 from skatelib.library import schema
@@ -57,6 +57,15 @@ class HumanoidRun:
     sole_deck_yaw: np.ndarray | None = None
     deck_v: np.ndarray | None = None
     push_end_s: float | None = None
+    # Where the plan's board sole is from the twin's (N, 2): what a skate's COM and ZMP above were
+    # moved by (zeros for a walk). With RunOptions.keep_poses: the twin's configurations (N, nq) in
+    # its MuJoCo model's layout, and the plan's (N, nq) in the same layout (its waist, joints, the
+    # twin's board), for a recording or a video; ``layout``: where in them the waist's free joint,
+    # the joints (in the library's order) and the board's deck (-1: none) are.
+    board_shift: np.ndarray | None = None
+    qpos: np.ndarray | None = None
+    qpos_plan: np.ndarray | None = None
+    layout: tuple[int, np.ndarray, int] | None = None
 
 
 def figures_for(lib: MotionLibrary, key: str) -> HumanoidFigures:
@@ -93,6 +102,23 @@ def _deck_rows(rows: dict[str, list[np.ndarray]], tr: Truth) -> None:
         rows["deck_v"].append(tr.deck_v)
 
 
+def _margins(s: ReferenceSample, tr: Truth, zmp: np.ndarray, shift: np.ndarray | None) -> tuple[float, float]:
+    """The contact ZMP's distance inside the polygon of the soles down (the plan's, and any landed
+    early) and inside that of the plan's clock alone (-inf: airborne); a skate's (``shift``: the
+    plan's board sole from the twin's) with its soles where they are, moved by ``shift``."""
+    if np.isnan(tr.zmp).any():
+        return -np.inf, -np.inf
+    down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
+    clock = s
+    if shift is not None:
+        placed = np.column_stack([tr.sole_pos[:, 0:2] + shift, s.soles[:, 2]])
+        down, clock = replace(down, soles=placed, sole_yaw=tr.sole_yaw), replace(s, soles=placed,
+                                                                                 sole_yaw=tr.sole_yaw)
+    margin = polygon_margin(down.polygon(), zmp)
+    # the clock's soles are the same soles, most ticks the same ones down: the same polygon
+    return margin, margin if np.array_equal(down.support, clock.support) else polygon_margin(clock.polygon(), zmp)
+
+
 @dataclass(frozen=True)
 class RunOptions:
     """How a run goes besides the plant's errors and the stabilizer's gains.
@@ -101,11 +127,13 @@ class RunOptions:
         seed: The sensors' noise seed.
         hold_s: How long the robot holds the entry's last posture after it [s].
         feedforward: Feed the servos the plan's joint speeds and torques (else the angles alone).
+        keep_poses: Keep the twin's and the plan's configurations at every tick (a recording, a video).
     """
 
     seed: int = 0
     hold_s: float = HOLD_S
     feedforward: bool = True
+    keep_poses: bool = False
 
 
 def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None,
@@ -123,7 +151,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     skate = f.board is not None
     rows: dict[str, list[np.ndarray]] = {k: [] for k in (
         "t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref", "margin", "margin_clock", "support", "sole_pos",
-        "sole_yaw", "sole_fz", "torque", "plane", "deck_pos", "deck_yaw", "deck_v")}
+        "sole_yaw", "sole_fz", "torque", "plane", "deck_pos", "deck_yaw", "deck_v", "shift", "qpos", "qpos_plan")}
     fell_at, reason = None, ""
     for _ in range(n):
         r = plant.readings()
@@ -147,15 +175,13 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
                      ("plane", s.sole_plane)):
             rows[k].append(np.asarray(v))
         _deck_rows(rows, tr)
-        airborne = np.isnan(tr.zmp).any()
-        down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
-        clock = s
-        if skate:
-            placed = np.column_stack([tr.sole_pos[:, 0:2] + shift, s.soles[:, 2]])
-            down, clock = replace(down, soles=placed, sole_yaw=tr.sole_yaw), replace(s, soles=placed,
-                                                                                     sole_yaw=tr.sole_yaw)
-        rows["margin"].append(np.asarray(-np.inf if airborne else polygon_margin(down.polygon(), zmp)))
-        rows["margin_clock"].append(np.asarray(-np.inf if airborne else polygon_margin(clock.polygon(), zmp)))
+        rows["shift"].append(shift)
+        if o.keep_poses:
+            rows["qpos"].append(plant.d.qpos.copy())
+            rows["qpos_plan"].append(plant.pose_qpos(s.base_pos, np.roll(s.base_quat_xyzw, 1), s.q))
+        margin, margin_clock = _margins(s, tr, zmp, shift if skate else None)
+        rows["margin"].append(np.asarray(margin))
+        rows["margin_clock"].append(np.asarray(margin_clock))
         reason = _fallen(tr)
         if reason:
             fell_at = tr.t
@@ -165,4 +191,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
                        a["margin_clock"], a["support"], a["sole_pos"], a["sole_yaw"], a["sole_fz"], a["torque"],
                        f.torque_limit_Nm, fell_at, reason, sole_plane=a["plane"] if skate else None,
                        sole_deck_pos=a["deck_pos"] if skate else None, sole_deck_yaw=a["deck_yaw"] if skate else None,
-                       deck_v=a["deck_v"] if skate else None, push_end_s=push_end_s(lib, key))
+                       deck_v=a["deck_v"] if skate else None, push_end_s=push_end_s(lib, key),
+                       board_shift=a["shift"], qpos=a["qpos"] if o.keep_poses else None,
+                       qpos_plan=a["qpos_plan"] if o.keep_poses else None,
+                       layout=plant.layout() if o.keep_poses else None)

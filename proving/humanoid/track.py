@@ -4,8 +4,9 @@ twin under the stabilizer, as picklable jobs (one per entry) that return the ent
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 from skatelib.library import schema
 from skatelib.library.errors import SkatelibError
@@ -21,6 +22,8 @@ class HumanoidTrackResult:
         motion: ``walk`` or ``skate``.
         label_mps: The entry's target speed (the board's at the push's end for a skate) [m/s].
         failures: What failed (empty: passed).
+        video: The video written of the run (None: none asked for).
+        run: The run itself, with its poses, when kept for a recording (else None).
     """
 
     key: str
@@ -29,10 +32,21 @@ class HumanoidTrackResult:
     verdict: HumanoidVerdict
     failures: tuple[str, ...]
     duration_s: float
+    video: str | None = None
+    run: Any = field(default=None, repr=False, compare=False)
 
     @property
     def passed(self) -> bool:
         return not self.failures
+
+    def as_dict(self) -> dict[str, float | str | bool | None]:
+        """The verdict as ``validate --closed-loop`` stores it (the quadruped's names where they
+        mean the same: ``target_velocity_mps``, ``delivered_mps`` (a skate's board at the push's
+        end), ``passed``, ``reasons``), with every figure of :class:`HumanoidVerdict`."""
+        figures = {k: v for k, v in asdict(self.verdict).items() if k != "key"}
+        return {"key": self.key, "motion": self.motion, schema.A_TARGET_VELOCITY: self.label_mps,
+                "delivered_mps": self.verdict.board_mps, "passed": self.passed, "reasons": "; ".join(self.failures),
+                "duration_s": self.duration_s, **figures}
 
 
 @dataclass(frozen=True)
@@ -44,6 +58,8 @@ class HumanoidJob:
     perturb: str
     stabilizer: bool = True
     seed: int = 0
+    video: str | None = None  # render the run to this .mp4 or .gif
+    keep_run: bool = False  # return the run with its poses (a recording)
 
     def __call__(self) -> HumanoidTrackResult:
         from skatelib.control.humanoid_stabilizer import StabilizerGains
@@ -54,16 +70,30 @@ class HumanoidJob:
         lib = MotionLibrary.open(self.path)
         e = lib[self.key]
         errors = parse_humanoid_perturbation(self.perturb) if self.perturb else None
-        run = run_entry(lib, self.key, errors, StabilizerGains(enabled=self.stabilizer), RunOptions(seed=self.seed))
-        v = verdict(run, float(e.attrs[schema.A_TARGET_VELOCITY]))
-        return HumanoidTrackResult(self.key, lib.humanoid_model.motion, float(e.attrs[schema.A_TARGET_VELOCITY]),
-                                   v, tuple(v.failures()),
-                                   float(run.t[-1]) if len(run.t) else 0.0)
+        poses = self.keep_run or self.video is not None
+        run = run_entry(lib, self.key, errors, StabilizerGains(enabled=self.stabilizer),
+                        RunOptions(seed=self.seed, keep_poses=poses))
+        label = float(e.attrs[schema.A_TARGET_VELOCITY])
+        v = verdict(run, label)
+        failures = tuple(v.failures())
+        written = None
+        if self.video is not None:
+            from skatelib.proving.humanoid.footage import film_humanoid
+            from skatelib.proving.humanoid.loop import figures_for
+            from skatelib.sim.humanoid.plant import HumanoidPlant
+
+            m = HumanoidPlant(figures_for(lib, self.key), errors, self.seed).m
+            written = film_humanoid(m, run, (self.perturb, not failures, "; ".join(failures),
+                                             label if v.label_mps is not None else None), Path(self.video))
+        return HumanoidTrackResult(self.key, lib.humanoid_model.motion, label, v, failures,
+                                   float(run.t[-1]) if len(run.t) else 0.0, written, run if self.keep_run else None)
 
 
 def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabilizer: bool = True,
-                  seed: int = 0) -> list[HumanoidJob]:
-    """One job per entry (``entries``, or every successful one).
+                  seed: int = 0, outputs: tuple[Path | None, bool] = (None, False)) -> list[HumanoidJob]:
+    """One job per entry (``entries``, or every successful one); ``outputs``: a video to render
+    each run to (with several entries ``NAME-<key>.EXT``), and whether to keep the runs for a
+    recording.
 
     Raises:
         SkatelibError: Not a humanoid library, a skate library planned without a board, an entry it
@@ -86,4 +116,12 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
     for k in keys:
         if not lib[k].success:
             raise SkatelibError(f"{path}: entry {k} is stored as failed (no motion to execute)")
-    return [HumanoidJob(str(path), k, perturb, stabilizer, seed) for k in keys]
+    video, keep = outputs
+    if video is not None:
+        from skatelib.proving.twin.track import video_path
+        from skatelib.sim.video import FORMATS
+
+        if video.suffix.lower() not in FORMATS:
+            raise SkatelibError(f"--video {video}: give a file ending in {' or '.join(FORMATS)}")
+    return [HumanoidJob(str(path), k, perturb, stabilizer, seed,
+                        None if video is None else str(video_path(video, k, len(keys) > 1)), keep) for k in keys]

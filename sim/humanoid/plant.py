@@ -132,6 +132,20 @@ class HumanoidPlant:
                 self.rolling.apply(self.d)
             mujoco.mj_step(self.m, self.d)
 
+    def layout(self) -> tuple[int, np.ndarray, int]:
+        """Where in ``qpos`` the waist's free joint, the joints (the figures' order) and a skate's
+        deck's free joint (-1: no board) begin."""
+        deck = int(self.m.joint("deck_free").qposadr[0]) if self.f.board is not None else -1
+        return int(self.m.joint("root_free").qposadr[0]), self.qadr.copy(), deck
+
+    def pose_qpos(self, base_pos: np.ndarray, base_quat_wxyz: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """A configuration (nq,) of this twin: its waist at ``base_pos`` turned ``base_quat_wxyz``,
+        its joints at ``q`` [rad], the rest (a skate's board) as the twin has it now."""
+        out = self.d.qpos.copy()
+        a = self.m.joint("root_free").qposadr[0]
+        out[a:a + 3], out[a + 3:a + 7], out[self.qadr] = base_pos, base_quat_wxyz, q
+        return out
+
     def _s(self, name: str) -> np.ndarray:
         a, n = self.sensor[name]
         return np.array(self.d.sensordata[a:a + n])
@@ -155,23 +169,29 @@ class HumanoidPlant:
         force, moment = np.zeros((2, 3)), np.zeros((2, 3))  # moment about the world origin
         others: set[str] = set()
         frame, w = np.zeros(6), np.zeros(6)
-        for k in range(d.ncon):
-            c = d.contact[k]
-            pair = (int(c.geom1), int(c.geom2))
-            base = self.floor if self.floor in pair else self.deck_geom if self.deck_geom in pair else None
-            if base is None:
-                continue
-            other = pair[1] if pair[0] == base else pair[0]
+        con = d.contact
+        empty = np.zeros(0, int)
+        g1, g2 = (con.geom1, con.geom2) if d.ncon else (empty, empty)
+        # the contacts with the floor or the deck, picked from the arrays (a Python loop over every
+        # contact, the board's wheels among them, cost as much as the physics step)
+        floor = (g1 == self.floor) | (g2 == self.floor)
+        on_deck = (g1 == self.deck_geom) | (g2 == self.deck_geom)  # no board: -1, no geom's id
+        pos, frames = (con.pos, con.frame) if d.ncon else (np.zeros((0, 3)), np.zeros((0, 9)))
+        for k in np.nonzero(floor | on_deck)[0]:
+            base = self.floor if floor[k] else self.deck_geom
+            first = int(g1[k]) == base  # the floor or the deck is geom1
+            other = int(g2[k]) if first else int(g1[k])
             if other not in self.soles:
                 if base == self.floor and other not in self.wheels:
                     others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
                 continue
-            mujoco.mj_contactForce(m, d, k, frame)
-            fw = c.frame.reshape(3, 3).T @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
-            fw = fw if pair[0] == base else -fw
+            mujoco.mj_contactForce(m, d, int(k), frame)
+            R = frames[k].reshape(3, 3).T
+            fw = R @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
+            fw = fw if first else -fw
             s = self.soles.index(other)
             force[s] += fw
-            moment[s] += _cross(c.pos, fw) + (c.frame.reshape(3, 3).T @ frame[3:6] * (1 if pair[0] == base else -1))
+            moment[s] += _cross(pos[k], fw) + (R @ frame[3:6] * (1 if first else -1))
         zmp = np.full((2, 2), np.nan)
         for s in (0, 1):
             if force[s, 2] > 1.0:

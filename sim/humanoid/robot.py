@@ -28,6 +28,7 @@ from skatelib.sim.humanoid.figures import (
     TIMESTEP_S,
     HumanoidFigures,
 )
+from skatelib.sim.scene import add_scenery
 
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
@@ -73,8 +74,7 @@ def humanoid_spec(f: HumanoidFigures) -> mujoco.MjSpec:
                     objname=imu.name)
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
                             contype=FLOOR_BIT, conaffinity=0, condim=4,
-                            friction=[f.friction_mu, f.torsional_friction_m, 0.0], rgba=[0.4, 0.43, 0.48, 1])
-    spec.worldbody.add_light(pos=[0, -1, 3], dir=[0, 0.3, -1])
+                            friction=[f.friction_mu, f.torsional_friction_m, 0.0], material=add_scenery(spec))
     if f.board is not None:  # the skate's board under the board sole, its deck's top at the deck height
         add_board(spec, f.board, f.deck_mu, (f.deck_xy[0], f.deck_xy[1], 0.0))
     key = spec.add_key(name="initial")
