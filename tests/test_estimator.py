@@ -119,6 +119,38 @@ def test_gyro_bias_calibrated_at_standstill():
             assert math.atan2(f.R[1, 0], f.R[0, 0]) - math.atan2(R0[1, 0], R0[0, 0]) == pytest.approx(0.2, abs=0.01)
 
 
+def test_a_known_deceleration_does_not_tilt_the_attitude():
+    """A level trunk slowing down at 0.2 m/s^2 for 10 s with a perfect gyroscope: given the
+    deceleration (the position filter's), the attitude stays level within 1e-9 rad; taken for
+    gravity (negative control) it tilts towards atan(a / g) = 0.0204 rad at k_P, by
+    0.0204 (1 - exp(-k_P 10 s)) = 3.7 mrad (the first-order law of the tilt correction)."""
+    a_world = np.array([-0.2, 0.0, 0.0])
+    R0 = exp_so3(np.array([0.0, 0.0, 0.3]))
+    accel = R0.T @ (a_world + np.array([0.0, 0.0, G]))
+    tilts = {}
+    for known in (a_world, None):
+        f = AttitudeFilter(R0)
+        for _ in range(5100):
+            f.update(np.zeros(3), accel, 1 / 510, known)
+        tilts[known is None] = math.acos(min(1.0, float(f.R[2, 2])))
+    assert tilts[False] < 1e-9
+    k = AttitudeFilter(R0).s.k_tilt
+    assert tilts[True] == pytest.approx(math.atan(0.2 / G) * (1 - math.exp(-k * 10.0)), rel=0.02)
+
+
+def test_a_tilt_error_is_pulled_back_by_the_known_acceleration():
+    """The attitude started 0.01 rad pitched off a level, decelerating trunk, the deceleration
+    known: the tilt correction pulls the error back at k_P (0.01 exp(-k_P 10 s) after 10 s),
+    as the reading's gravity is the residual once the acceleration is taken out."""
+    a_world = np.array([-0.2, 0.0, 0.0])
+    accel = a_world + np.array([0.0, 0.0, G])
+    f = AttitudeFilter(exp_so3(np.array([0.0, 0.01, 0.0])))
+    for _ in range(5100):
+        f.update(np.zeros(3), accel, 1 / 510, a_world)
+    err = math.acos(min(1.0, float(f.R[2, 2])))
+    assert err == pytest.approx(0.01 * math.exp(-f.s.k_tilt * 10.0), rel=0.02)
+
+
 def test_calibration_levels_the_filter_on_the_accelerometer():
     """Started level on a trunk rolled by 0.05 rad and pitched by -0.03 rad, the standstill
     calibration turns the filter's vertical onto the measured gravity (its heading kept)."""

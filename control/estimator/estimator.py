@@ -67,7 +67,9 @@ class EstimatorSettings:
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
     the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
-    lift-off (its load going, it slips back) [s]."""
+    lift-off (its load going, it slips back) [s]; ``tilt_from_velocity``: the attitude's tilt
+    reference is the accelerometer's reading less the trunk's acceleration as the position filter
+    has it (:mod:`.attitude`; False: the reading itself, which takes a deceleration for gravity)."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -76,6 +78,7 @@ class EstimatorSettings:
     settle_s: float = 0.02
     mount_from_legs: bool = True
     liftoff_s: float = 0.1
+    tilt_from_velocity: bool = True
 
 
 class StateEstimator:
@@ -122,6 +125,7 @@ class StateEstimator:
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
         self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
+        self.accel_world = np.zeros(3)  # the trunk's acceleration over the last tick as the filter has it [m/s^2]
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -135,8 +139,11 @@ class StateEstimator:
         """The state after one tick's readings."""
         dt = 0.0 if self.last_t is None else reading.t - self.last_t
         self.last_t = self.now = reading.t
-        R, omega = self.attitude.update(reading.gyro, reading.accel, dt)
         odo = self.odometry
+        known = self.accel_world if self.s.tilt_from_velocity else None
+        R, omega = self.attitude.update(reading.gyro, reading.accel, dt, known,
+                                        odo.x[7:10] if known is not None else None)
+        v_before = odo.v.copy()
         if dt > 0:
             odo.predict(R, self.attitude.accel, dt, self.g)
         r, J, Jw = self.legs(reading.q)
@@ -155,6 +162,8 @@ class StateEstimator:
         rigid = centres + self.give * normals  # where the centres would be on rigid feet
         self.deck = update_deck(self.deck, board & self.stance, rigid, odo.v[:, None] + rel, dt, self.s.deck)
         self.used = self._correct(plan, centres, rel, r, R)
+        if dt > 0:
+            self.accel_world = (odo.v - v_before) / dt
         return self._state(reading, R, omega, r, plan)
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
