@@ -69,7 +69,12 @@ class EstimatorSettings:
     the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
     lift-off (its load going, it slips back) [s]; ``tilt_from_velocity``: the attitude's tilt
     reference is the accelerometer's reading less the trunk's acceleration as the position filter
-    has it (:mod:`.attitude`; False: the reading itself, which takes a deceleration for gravity)."""
+    has it (:mod:`.attitude`; False: the reading itself, which takes a deceleration for gravity);
+    ``mounted_bias_mps2``: with the mounting from the legs, what is left of the accelerometer's
+    horizontal bias (1 sigma, trunk x and y) [m/s^2]: the mounting holds the rest (levelled on
+    the standstill's reading, the bias cancels in the horizontal acceleration), so the filter's
+    bias state may not take up there what a slipping floor foot reads (it would then drift the
+    velocity through every coast after)."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
@@ -79,6 +84,7 @@ class EstimatorSettings:
     mount_from_legs: bool = True
     liftoff_s: float = 0.1
     tilt_from_velocity: bool = True
+    mounted_bias_mps2: float = 1e-3
 
 
 class StateEstimator:
@@ -134,6 +140,7 @@ class StateEstimator:
         if self.s.mount_from_legs and still and int(self.stance.sum()) >= 3:
             r, _, _ = self.legs(still[-1].q)
             self.attitude.align_mount(plane_normal(r[:, self.stance]))
+            self.odometry.horizontal_bias_known(self.s.mounted_bias_mps2)
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
