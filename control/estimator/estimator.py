@@ -63,7 +63,8 @@ class BoardGeometry:
 @dataclass(frozen=True)
 class EstimatorSettings:
     """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
-    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
+    ``settle_s``: a deck foot's velocity is used this long after it touches down (its impact over)
+    [s]; ``floor_settle_s``: a floor foot's, this long (it slides while its load builds) [s];
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
     the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
@@ -81,8 +82,9 @@ class EstimatorSettings:
     deck: DeckSettings = field(default_factory=DeckSettings)
     touch_m: float = 0.005
     settle_s: float = 0.02
+    floor_settle_s: float = 0.06
     mount_from_legs: bool = True
-    liftoff_s: float = 0.1
+    liftoff_s: float = 0.15
     tilt_from_velocity: bool = True
     mounted_bias_mps2: float = 1e-3
 
@@ -182,7 +184,8 @@ class StateEstimator:
         # a floor foot about to lift off pushes with its load going: it slips back, where its row
         # has it stay put
         lifting = (plan == GROUND) & (self.schedule(self.now + self.s.liftoff_s) != GROUND)
-        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s) & ~lifting)
+        settle = np.where(board, self.s.settle_s, self.s.floor_settle_s)
+        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= settle) & ~lifting)
         if not len(idx):
             return used
         deck, b = self.deck, self.board
