@@ -3,12 +3,26 @@ standing still before it rides, the tilt held to the accelerometer's gravity by 
 nonlinear complementary filter (Mahony et al. 2008, "Nonlinear complementary filters on the
 special orthogonal group", Eq. 13 without the bias integrator):
 
-    R_{k+1} = R_k Exp((omega_m - b_g + k_P e) dt),   e = (a_m / |a_m|) x (R_k^T e_z)
+    R_{k+1} = R_k Exp((omega_m - b_g + k_P e) dt)
 
 The accelerometer reads gravity plus the trunk's acceleration: a board coasting down at 0.2 m/s^2
-tilts its gravity 0.02 rad, so the gain is low (a time constant of ``1 / k_P`` = 50 s) and
-readings more than 10 % from g (a push, a touchdown) are left out. The gyroscope carries the
-attitude between; after the standstill calibration its bias is the calibration's residual.
+tilts its gravity 0.02 rad. A ride on a board slows down nearly all the time (rolling friction,
+brakes), so taken for gravity that tilt would pull the attitude backwards at every tick, by
+k_P * a / g (0.4 mrad/s at 0.2 m/s^2), and the tilt would read the deceleration as gravity (g times
+the attitude's error: 4-13 mm/s^2 after 1-3 s, a coast that seems to slow down less than it does).
+So the reference is the reading less the trunk's acceleration as the position filter knows it
+(``accel_world``, its velocity's change over the last tick, world frame) and its estimate of the
+accelerometer's bias ``b_a``:
+
+    e = (f / |f|) x (R_k^T e_z),   f = a_m - b_a - R_k^T a_world
+
+Where only the IMU knows the acceleration (no foot on the floor) f is the gravity the filter
+already holds and e is zero: the gyroscope carries the attitude. Where the legs correct the
+velocity (a foot on the floor, the robot standing), what they correct is the tilt's error (an
+attitude off by d makes the integrated velocity drift by g d), and e pulls the attitude back.
+The gain is low (a time constant of ``1 / k_P`` = 50 s) and references more than 10 % from g
+are left out. After the standstill calibration the gyroscope's bias is the calibration's
+residual.
 
 The calibration (the robot standing still before it rides) also levels the filter: its roll and
 pitch are those that put the mean accelerometer reading on gravity (its heading is kept). The
@@ -80,15 +94,21 @@ class AttitudeFilter:
         if angle > 1e-12:
             self.R = self.R @ exp_so3(-w / np.linalg.norm(w) * angle)
 
-    def update(self, gyro: np.ndarray, accel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """One reading (IMU frame) over ``dt`` [s]: the rotation and the angular velocity."""
+    def update(self, gyro: np.ndarray, accel: np.ndarray, dt: float, accel_world: np.ndarray | None = None,
+               accel_bias: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """One reading (IMU frame) over ``dt`` [s], with the trunk's acceleration as known besides
+        (world frame [m/s^2]; None: taken as zero) and the accelerometer's bias as estimated
+        besides (trunk frame [m/s^2]; None: zero): the rotation and the angular velocity."""
         omega, a = gyro - self.gyro_bias, accel
         if self._turn:
             omega, a = self.mount @ omega, self.mount @ a
-        norm = math.sqrt(float(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]))
+        f = a if accel_world is None else a - self.R.T @ accel_world
+        if accel_bias is not None:
+            f = f - accel_bias
+        norm = math.sqrt(float(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]))
         w = omega
         if abs(norm - self.s.gravity_mps2) < self.s.gate * self.s.gravity_mps2:
-            w = omega + self.s.k_tilt * cross(a / norm, self.R[2])  # R^T e_z is R's third row
+            w = omega + self.s.k_tilt * cross(f / norm, self.R[2])  # R^T e_z is R's third row
         self.R = self.R @ exp_so3(w * dt)
         self.omega, self.accel = omega, a
         return self.R, omega

@@ -63,19 +63,30 @@ class BoardGeometry:
 @dataclass(frozen=True)
 class EstimatorSettings:
     """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
-    ``settle_s``: a foot's velocity is used this long after it touches down (its impact over) [s];
+    ``settle_s``: a deck foot's velocity is used this long after it touches down (its impact over)
+    [s]; ``floor_settle_s``: a floor foot's, this long (it slides while its load builds) [s];
     ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
     deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
     the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
-    lift-off (its load going, it slips back) [s]."""
+    lift-off (its load going, it slips back) [s]; ``tilt_from_velocity``: the attitude's tilt
+    reference is the accelerometer's reading less the trunk's acceleration as the position filter
+    has it (:mod:`.attitude`; False: the reading itself, which takes a deceleration for gravity);
+    ``mounted_bias_mps2``: with the mounting from the legs, what is left of the accelerometer's
+    horizontal bias (1 sigma, trunk x and y) [m/s^2]: the mounting holds the rest (levelled on
+    the standstill's reading, the bias cancels in the horizontal acceleration), so the filter's
+    bias state may not take up there what a slipping floor foot reads (it would then drift the
+    velocity through every coast after)."""
 
     attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
     odometry: OdometrySettings = field(default_factory=OdometrySettings)
     deck: DeckSettings = field(default_factory=DeckSettings)
     touch_m: float = 0.005
     settle_s: float = 0.02
+    floor_settle_s: float = 0.06
     mount_from_legs: bool = True
-    liftoff_s: float = 0.1
+    liftoff_s: float = 0.15
+    tilt_from_velocity: bool = True
+    mounted_bias_mps2: float = 1e-3
 
 
 class StateEstimator:
@@ -122,6 +133,7 @@ class StateEstimator:
         self.used = np.zeros(4, dtype=bool)
         self.legs = LegTermsBuffer(kin)
         self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
+        self.accel_world = np.zeros(3)  # the trunk's acceleration over the last tick as the filter has it [m/s^2]
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -130,13 +142,17 @@ class StateEstimator:
         if self.s.mount_from_legs and still and int(self.stance.sum()) >= 3:
             r, _, _ = self.legs(still[-1].q)
             self.attitude.align_mount(plane_normal(r[:, self.stance]))
+            self.odometry.horizontal_bias_known(self.s.mounted_bias_mps2)
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
         dt = 0.0 if self.last_t is None else reading.t - self.last_t
         self.last_t = self.now = reading.t
-        R, omega = self.attitude.update(reading.gyro, reading.accel, dt)
         odo = self.odometry
+        known = self.accel_world if self.s.tilt_from_velocity else None
+        R, omega = self.attitude.update(reading.gyro, reading.accel, dt, known,
+                                        odo.x[7:10] if known is not None else None)
+        v_before = odo.v.copy()
         if dt > 0:
             odo.predict(R, self.attitude.accel, dt, self.g)
         r, J, Jw = self.legs(reading.q)
@@ -155,6 +171,8 @@ class StateEstimator:
         rigid = centres + self.give * normals  # where the centres would be on rigid feet
         self.deck = update_deck(self.deck, board & self.stance, rigid, odo.v[:, None] + rel, dt, self.s.deck)
         self.used = self._correct(plan, centres, rel, r, R)
+        if dt > 0:
+            self.accel_world = (odo.v - v_before) / dt
         return self._state(reading, R, omega, r, plan)
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
@@ -166,7 +184,8 @@ class StateEstimator:
         # a floor foot about to lift off pushes with its load going: it slips back, where its row
         # has it stay put
         lifting = (plan == GROUND) & (self.schedule(self.now + self.s.liftoff_s) != GROUND)
-        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= self.s.settle_s) & ~lifting)
+        settle = np.where(board, self.s.settle_s, self.s.floor_settle_s)
+        idx = np.flatnonzero((board | (plan == GROUND)) & (self.now - self.down_since >= settle) & ~lifting)
         if not len(idx):
             return used
         deck, b = self.deck, self.board

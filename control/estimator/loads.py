@@ -39,10 +39,31 @@ def static_loads(feet_xy: np.ndarray, com_xy: np.ndarray, weight_N: float) -> np
     n = feet_xy.shape[1]
     if n == 0:
         return np.zeros(0)
+    if n >= 3:
+        f = _min_norm_loads(feet_xy, com_xy, weight_N)
+        if f is not None:
+            return np.maximum(f, 0.0)
     A = np.vstack([np.ones(n), feet_xy - com_xy[:, None]])
     b = np.array([weight_N, 0.0, 0.0])
     f = np.linalg.lstsq(A, b, rcond=None)[0]
     return np.asarray(np.maximum(f, 0.0))
+
+
+def _min_norm_loads(feet_xy: np.ndarray, com_xy: np.ndarray, weight_N: float) -> np.ndarray | None:
+    """:func:`static_loads`' solution for three or more feet not in a line, f = A^T (A A^T)^-1 b
+    with A A^T's 3 x 3 inverse's first column by cofactors (b = (W, 0, 0)); None when the feet
+    are (nearly) in a line. The hot path's form of ``np.linalg.lstsq``: same loads to rounding."""
+    dx = feet_xy[0] - float(com_xy[0])
+    dy = feet_xy[1] - float(com_xy[1])
+    n = float(len(dx))
+    sx, sy = float(dx.sum()), float(dy.sum())
+    sxx, syy, sxy = float(dx @ dx), float(dy @ dy), float(dx @ dy)
+    c0, c1, c2 = sxx * syy - sxy * sxy, sy * sxy - sx * syy, sx * sxy - sy * sxx  # cofactors of row 0
+    det = n * c0 + sx * c1 + sy * c2
+    if abs(det) <= 1e-12 * max(1.0, n * sxx * syy):
+        return None
+    w = weight_N / det
+    return np.asarray(w * (c0 + c1 * dx + c2 * dy))
 
 
 def compressions(feet: np.ndarray, stance: np.ndarray, com: np.ndarray, body: BodyFigures,

@@ -112,6 +112,13 @@ class LegOdometry:
     def u(self) -> float:
         return float(self.x[6])
 
+    def horizontal_bias_known(self, sd: float) -> None:
+        """The accelerometer's bias along the trunk's x and y known to ``sd`` [m/s^2] (1 sigma): its
+        uncertainty there set to it, before any update."""
+        self.P[7:9, :] = 0.0
+        self.P[:, 7:9] = 0.0
+        self.P[7, 7] = self.P[8, 8] = sd * sd
+
     def predict(self, R: np.ndarray, accel: np.ndarray, dt: float, gravity: float) -> None:
         x, F = self.x, self._F
         a = R @ (accel - x[7:10])
