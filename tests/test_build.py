@@ -204,7 +204,8 @@ def test_retry_ladder_goes_cold_then_other_guesses():
     assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]
     assert ("mu_strategy", "adaptive") in ladder[-1].ipopt
     assert solver_options(ladder[-1])["bound_mult_init_val"] == 1.0
-    assert solver_options(ladder[-1])["mu_max"] == 1e5 and solver_options(ladder[1])["mu_max"] == cfg.optimization.mu_max
+    assert solver_options(ladder[-1])["mu_max"] == 1e5
+    assert solver_options(ladder[1])["mu_max"] == cfg.optimization.mu_max
     assert solver_options(ladder[1])["bound_mult_init_val"] == cfg.optimization.bound_mult_init
 
 
