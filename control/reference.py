@@ -73,6 +73,11 @@ class EntryReference:
         self.pushes = push_intervals(self._t, contact[:, p.push_leg] == GROUND, self.t_end, list(self.stage_ends))
         drag = np.tanh(p.tanh_scale_s_per_m * momentum_speed(np.asarray(entry.state), p.mass_kg, p.board_mass_kg))
         self._friction_integral = np.r_[0.0, np.cumsum(0.5 * (drag[1:] + drag[:-1]) * np.diff(self._t))]
+        # The push foot's planned normal force, integrated: how much friction (mu f_n) it has to
+        # spare is what can change the momentum, so a push's extra impulse follows it.
+        control = np.asarray(entry.control, dtype=np.float64)
+        push_fn = np.maximum(control[:len(self._t) - 1, 3 * p.push_leg + 2], 0.0)
+        self._push_impulse = np.r_[0.0, np.cumsum(push_fn * np.diff(self._t))]
 
     @property
     def plan_coast_mps2(self) -> float:
@@ -103,14 +108,26 @@ class EntryReference:
         label when rolling friction slows robot and board by ``coast_mps2`` (:class:`CoastObserver`)
         instead of the plan's. Only a foot on the ground changes their momentum, so each push aims
         at the speed that the following coast (to the next push, or to the end) turns into the
-        plan's; friction acts as tanh(k v) of the plan's speed over that coast."""
+        plan's; friction acts as tanh(k v) of the plan's speed over that coast. Within a push the
+        move grows from nothing at its start to its full size at its end in proportion to the push
+        foot's planned normal force so far: momentum changes only as fast as the foot's friction
+        allows, so a speed reference that stepped at touch-down would ask for what no force can do."""
         easier = self.plan_coast_mps2 - coast_mps2  # > 0: the board rolls easier than planned
         for start, end, coast_end in self.pushes:
             if t < start:
                 return 0.0
             if t < coast_end:
-                return -easier * (self._friction_time(coast_end) - self._friction_time(max(t, end)))
+                full = -easier * (self._friction_time(coast_end) - self._friction_time(max(t, end)))
+                return full * self._push_share(start, end, t) if t < end else full
         return 0.0
+
+    def _push_share(self, start: float, end: float, t: float) -> float:
+        """The share of the push [start, end) done at ``t``: its planned normal-force impulse so far
+        over all of it (the share of its time where the plan puts no load on the foot)."""
+        total = float(np.interp(end, self._t, self._push_impulse) - np.interp(start, self._t, self._push_impulse))
+        if total <= 0.0:
+            return (t - start) / (end - start)
+        return float(np.interp(t, self._t, self._push_impulse) - np.interp(start, self._t, self._push_impulse)) / total
 
     def _friction_time(self, t: float) -> float:
         """integral of tanh(k v_plan) from the start to ``t`` [s] (v_plan: the plan's momentum speed)."""

@@ -376,6 +376,42 @@ def test_coast_compensation_delivers_the_label_on_an_easier_board(lib):
     assert plain.speed_error > 0.05, plain
 
 
+def test_a_push_moves_the_speed_reference_as_its_foot_can(lib):
+    """The coast compensation's move of the speed reference starts at nothing when the push foot
+    touches down and reaches its full size (what the coast after the push gains on the board as it
+    is, from the plan's speeds independently integrated) when it lifts, growing with the planned
+    normal-force impulse of that foot in between. A move that stepped at touch-down (the negative
+    control: its value just after touch-down) asks for a momentum change in no time, which the MPC
+    chased with its hardest braking and then overshot."""
+    from skatelib.control.reference import EntryReference
+    from skatelib.library.margins import momentum_speed
+
+    e = lib[lib.keys()[0]]
+    p = SkateParams.from_library(lib)
+    ref = EntryReference(lib, e, p, TrackSettings())
+    start, end, coast_end = ref.pushes[-1]
+    coast = p.rolling_N / (p.mass_kg + p.board_mass_kg)  # the board as it is: half the plan's
+    t = np.asarray(e.t, float)
+    v = momentum_speed(np.asarray(e.state), p.mass_kg, p.board_mass_kg)
+    fine = np.linspace(end, coast_end, 2001)
+    drag = np.tanh(p.tanh_scale_s_per_m * np.interp(fine, t, v))
+    full = -(ref.plan_coast_mps2 - coast) * float(np.sum(0.5 * (drag[1:] + drag[:-1]) * np.diff(fine)))
+    assert full < -0.01  # the easier board keeps more speed: the push aims lower
+    assert ref.speed_offset(start, coast) == pytest.approx(0.0, abs=1e-12)
+    assert ref.speed_offset(end - 1e-9, coast) == pytest.approx(full, rel=1e-3)
+    assert ref.speed_offset(end, coast) == pytest.approx(full, rel=1e-3)
+    fn = np.asarray(e.control, float)[:, 3 * p.push_leg + 2]
+    k0, k1 = int(np.searchsorted(t, start)), int(np.searchsorted(t, end))
+    km = (k0 + k1) // 2
+    share = float(np.sum(fn[k0:km] * np.diff(t)[k0:km]) / np.sum(fn[k0:k1] * np.diff(t)[k0:k1]))
+    assert 0.05 < share < 0.95
+    assert ref.speed_offset(float(t[km]), coast) == pytest.approx(share * full, rel=1e-6)
+    moves = [ref.speed_offset(float(tk), coast) for tk in np.linspace(start, end, 50)]
+    assert np.all(np.diff(moves) <= 1e-12)  # one way, as the foot pushes
+    just_after = ref.speed_offset(start + 1e-3, coast)
+    assert abs(just_after) < 0.1 * abs(full)  # a step would be the full move already
+
+
 def test_coast_observer_measures_a_constant_deceleration():
     """Momentum speeds falling by a dt each update while coasting: the estimate is a; updates
     outside coasts or below the speed floor leave it alone."""

@@ -86,3 +86,45 @@ def test_missing_foot_frame_is_a_clear_error(cfg):
     """A foot frame that the URDF lacks raises ModelError listing the frames."""
     with pytest.raises(ModelError, match="no frame 'FL_toe'"):
         Quadruped(Path(cfg.urdf_path), cfg.robot.joint_names, ("FL_toe", "FR_foot", "RL_foot", "RR_foot"))
+
+
+def test_damped_newton_settles_at_the_nearest_reachable_point(system):
+    """Toward a foot target out of the leg's reach, with the knee at its limit on the way (the
+    cold guess's held push foot as the trunk rides on), the damped Newton ends at the point of the
+    joint box nearest the target (a fine grid over the box, searched independently, finds none
+    nearer) and does not move when its start moves by 1e-12 rad. The plain clipped Newton step
+    (the negative control) bounces between the limit and the far side and stops twice as far;
+    where it stops follows the last bits of its 3 x 3 solves, which differ between BLAS kernels
+    (the cold guess's push leg differed by up to 0.45 rad between OpenBLAS's Haswell and Prescott
+    kernels)."""
+    import casadi as ca
+    from skatelib.pipeline.quadruped.model.robot import DampedNewton, foot_position_leg
+
+    p = system.push_index
+    leg = slice(3 * p, 3 * p + 3)
+    q_sym = ca.SX.sym("q", 3)
+    pos = foot_position_leg(system.robot.chains[p], q_sym)
+    fk = ca.Function("fk", [q_sym], [pos, ca.jacobian(pos, q_sym)])
+    lo, hi = system.robot.lower_limits[leg], system.robot.upper_limits[leg]
+    q0 = np.asarray(system.stance.q_push[leg], float)
+    home = np.asarray(fk(q0)[0]).reshape(-1)
+    goal = np.array([-0.3602, home[1], -0.2369])  # behind the hip, out of reach (a guess knot's)
+    newton = DampedNewton(damping=1e-6, tol=1e-9, max_iter=20)
+    q, residual = newton.solve(fk, goal, q0, (lo, hi))
+    q_b, _ = newton.solve(fk, goal, q0 + 1e-12, (lo, hi))
+    assert np.abs(q - q_b).max() < 1e-6
+    grid = np.stack(np.meshgrid(*(np.linspace(a, b, 41) for a, b in zip(lo, hi, strict=True)), indexing="ij"), -1)
+    reach = np.asarray(ca.Function("p", [q_sym], [pos]).map(grid.size // 3)(grid.reshape(-1, 3).T)).T
+    nearest = float(np.min(np.linalg.norm(reach - goal, axis=1)))
+    assert residual > 0.02  # really out of reach
+    assert residual <= nearest + 1e-4, (residual, nearest)
+
+    def plain(start: np.ndarray) -> np.ndarray:
+        qq = start.copy()
+        for _ in range(20):
+            f, J = (np.asarray(v) for v in fk(qq))
+            qq = np.clip(qq + np.linalg.solve(J.T @ J + 1e-6 * np.eye(3), J.T @ (goal - f.reshape(-1))), lo, hi)
+        return qq
+
+    far = float(np.linalg.norm(np.asarray(fk(plain(q0))[0]).reshape(-1) - goal))
+    assert far > residual + 0.01, (far, residual)

@@ -179,26 +179,58 @@ def foot_position_leg(chain: LegChain, q_leg: Sym) -> Sym:
 
 @dataclass(frozen=True)
 class DampedNewton:
-    """Damped (Levenberg) Newton steps on joint angles toward a foot target."""
+    """Damped (Levenberg-Marquardt) Newton steps on joint angles toward a foot target.
 
-    damping: float
+    A step is kept only when it brings the foot closer; otherwise the damping grows tenfold and
+    the step is tried again shorter (and it shrinks back after a kept step). Toward a target out of
+    reach, or one behind a joint limit, the plain clipped Newton step overshoots and bounces
+    between the limit and the far side without settling, so its last iterate (and a cold initial
+    guess built from it) followed the last bits of the 3 x 3 solves, which differ between BLAS
+    kernels; the kept steps settle at the nearest reachable point instead.
+    """
+
+    damping: float  # the smallest damping, used while steps are kept [m^2]
     tol: float  # residual norm at which to stop [m]
-    max_iter: int
+    max_iter: int  # evaluations of ``fn`` after the first
 
     def solve(self, fn: Any, goal: np.ndarray, q0: np.ndarray,
               limits: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, float]:
         """Steps toward ``fn(q)[0] == goal``, where ``fn(q) -> (p, dp/dq)``, each clipped to ``limits``
-        when given. Returns the joints and the last residual norm [m]."""
+        when given. Returns the joints and their residual norm [m] (the smallest reached)."""
         q = np.array(q0, dtype=float)
         goal = np.asarray(goal, dtype=float).reshape(-1)
-        residual = np.inf
+        pos, J = (np.asarray(v) for v in fn(q))
+        err = goal - pos.reshape(-1)
+        residual = float(np.linalg.norm(err))
+        damping = self.damping
         for _ in range(self.max_iter):
-            pos, J = (np.asarray(v) for v in fn(q))
-            err = goal - pos.reshape(-1)
-            residual = float(np.linalg.norm(err))
             if residual < self.tol:
                 break
-            q = q + np.linalg.solve(J.T @ J + self.damping * np.eye(len(q)), J.T @ err)
+            trial = q + self._step(q, J, err, damping, limits)
             if limits is not None:
-                q = np.clip(q, *limits)
+                trial = np.clip(trial, *limits)
+            pos_t, J_t = (np.asarray(v) for v in fn(trial))
+            err_t = goal - pos_t.reshape(-1)
+            residual_t = float(np.linalg.norm(err_t))
+            if residual_t < residual:
+                q, J, err, residual = trial, J_t, err_t, residual_t
+                damping = max(damping / 10.0, self.damping)
+            else:
+                damping *= 10.0
         return q, residual
+
+    @staticmethod
+    def _step(q: np.ndarray, J: np.ndarray, err: np.ndarray, damping: float,
+              limits: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+        """The damped Newton step on the joints not held at a limit they would leave outwards
+        (the others stay put: a step through the limit, clipped, is no Newton step)."""
+        free = np.ones(len(q), dtype=bool)
+        if limits is not None:
+            descent = J.T @ err
+            free = ~(((q <= limits[0]) & (descent < 0)) | ((q >= limits[1]) & (descent > 0)))
+        step = np.zeros(len(q))
+        if not free.any():
+            return step
+        Jf = J[:, free]
+        step[free] = np.linalg.solve(Jf.T @ Jf + damping * np.eye(int(free.sum())), Jf.T @ err)
+        return step

@@ -111,7 +111,7 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
                                "mu_init": opt.mu_init}
     if spec.warm is None:
-        options["bound_mult_init_val"] = opt.bound_mult_init
+        options.update({"bound_mult_init_val": opt.bound_mult_init, "mu_max": opt.mu_max})
     else:
         options.update({"warm_start_init_point": "yes", "mu_strategy": opt.warm_mu_strategy,
                         "mu_init": opt.warm_mu_init, "warm_start_bound_push": opt.warm_bound_push,
