@@ -20,6 +20,7 @@ class _Entry:
 
 class _Library(list):
     attrs: ClassVar[dict[str, str]] = {"closed_loop_plant": "none"}
+    kind = "quadruped"
 
 
 def _row(out: str) -> list[str]:
