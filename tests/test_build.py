@@ -245,7 +245,7 @@ def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     monkeypatch.setattr(frontier_module, "FrontierSearch",
                         lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.2, max_mps=1.75))
     cfg = load_config(TINY)  # a probe past the frontier runs to the iteration limit: a lower one keeps it short
-    cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, max_iter=120))
+    cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, max_iter=60))
     report = build_library(cfg, tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
     stored = json.loads(MotionLibrary.open(report.path).attrs["frontier_json"])
     (point,) = stored["points"]
