@@ -134,3 +134,18 @@ def hrp2_walk_motion():
 def hrp2_skate_build(tmp_path_factory) -> CliBuild:
     """``skatelib build configs/hrp2_skate.toml -j 2`` (0.5, 0.75 and 1.0 m/s) from an empty cache."""
     return _cli_build(tmp_path_factory.mktemp("hrp2_skate"), CONFIG_DIR / "hrp2_skate.toml", "-j", "2")
+
+
+@pytest.fixture(scope="session")
+def hrp2_skate_v100(tmp_path_factory) -> Path:
+    """The shipped skate config's 1.0 m/s entry alone, as a library (built without the cache)."""
+    from skatelib.pipeline.build.contract import BuildOptions
+    from skatelib.pipeline.build.orchestrate import build_library
+
+    folder = tmp_path_factory.mktemp("hrp2_skate_v100")
+    cfg = folder / "skate.toml"
+    cfg.write_text(f'extends = "{(CONFIG_DIR / "hrp2_skate.toml").as_posix()}"\n[sweep]\nvelocities_mps = [1.0]\n')
+    out = folder / "skate.h5"
+    assert not build_library(load_config(cfg), out, BuildOptions(jobs=1, cache=False)).failed
+    return out
+

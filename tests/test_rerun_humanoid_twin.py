@@ -19,18 +19,9 @@ KEY = "skate_v1.00"
 
 
 @pytest.fixture(scope="module")
-def skate(tmp_path_factory):
-    """The shipped skate config's 1.0 m/s entry alone, as a library."""
-    from skatelib.pipeline.build.contract import BuildOptions
-    from skatelib.pipeline.build.orchestrate import build_library
-    from skatelib.pipeline.config import CONFIG_DIR, load_config
-
-    folder = tmp_path_factory.mktemp("hrp2_skate")
-    cfg = folder / "skate.toml"
-    cfg.write_text(f'extends = "{(CONFIG_DIR / "hrp2_skate.toml").as_posix()}"\n[sweep]\nvelocities_mps = [1.0]\n')
-    out = folder / "skate.h5"
-    assert not build_library(load_config(cfg), out, BuildOptions(jobs=1, cache=False)).failed
-    return out
+def skate(hrp2_skate_v100):
+    """The shipped skate config's 1.0 m/s entry alone, as a library (tests/conftest.py)."""
+    return hrp2_skate_v100
 
 
 @pytest.fixture(scope="module")

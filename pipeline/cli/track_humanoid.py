@@ -9,6 +9,7 @@ from typing import Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.cli.track_outputs import recording
 from skatelib.pipeline.views.console import console, count, run_with_progress, viewer_hint
 
 
@@ -67,11 +68,10 @@ def _outputs_checked(library: Path, save: Path | None, video: Path | None) -> An
 
     if video is not None:
         check_output(video, [library], what="video")
-    if save is None:
-        return None
-    try:
-        from skatelib.pipeline.views.rerun_humanoid_twin import save_humanoid_runs
-    except ImportError as e:
-        raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
-    check_output(save, [library], what="recording")
+    return recording(library, save, _humanoid_writer)
+
+
+def _humanoid_writer() -> Any:
+    from skatelib.pipeline.views.rerun_humanoid_twin import save_humanoid_runs
+
     return save_humanoid_runs

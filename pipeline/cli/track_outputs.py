@@ -3,6 +3,7 @@ report (``--report``), their paths checked before any run."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -35,15 +36,22 @@ def write_report(library: Path, report: Path | None, runs: list[tuple[Any, Any]]
     console.print(escape(f"wrote {report}"))
 
 
-def recording(library: Path, save: Path | None) -> Any:
-    """``save_closed_loop`` when a recording is asked for, its output checked before the runs."""
+def recording(library: Path, save: Path | None, writer: Callable[[], Any] | None = None) -> Any:
+    """The recording's writer (``writer()``; by default ``save_closed_loop``) when a recording is
+    asked for, its output checked before the runs; None when none is."""
     if save is None:
         return None
     from skatelib.pipeline.build.preflight import check_output
 
     try:
-        from skatelib.pipeline.views.rerun_inspect import save_closed_loop
+        save_runs = (writer or _closed_loop_writer)()
     except ImportError as e:
         raise ImportError(f"Rerun is not installed ({e}); pip install 'skatelib[viz]'") from e
     check_output(save, [library], what="recording")
+    return save_runs
+
+
+def _closed_loop_writer() -> Any:
+    from skatelib.pipeline.views.rerun_inspect import save_closed_loop
+
     return save_closed_loop
