@@ -1,6 +1,6 @@
 """Rotations in numpy, for every part of skatelib that is not a CasADi expression (the runtime,
 the physics checks, the views and the reference controller): the trunk's Z-Y-X Euler angles, the
-deck's yaw-then-roll (Eq. 7), the Euler-rate map of Eq. (3) and the cross-product matrix. The
+deck's yaw-then-roll (Eq. 7), unit quaternions, the Euler-rate map of Eq. (3) and the cross-product matrix. The
 optimizer's symbolic twins are in ``skatelib.pipeline.ocp.rotations``; a test holds the two equal."""
 
 from __future__ import annotations
@@ -32,6 +32,14 @@ def board_rotations(yaw: np.ndarray | float, roll: np.ndarray | float) -> np.nda
     z = np.zeros_like(yaw)
     return np.stack([np.stack([cy, -sy * cr, sy * sr], -1), np.stack([sy, cy * cr, -cy * sr], -1),
                      np.stack([z, sr, cr], -1)], axis=-2)
+
+
+def quaternion_matrices(q_xyzw: np.ndarray) -> np.ndarray:
+    """Rotation matrices (K, 3, 3) of unit quaternions (K, 4) given as x, y, z, w."""
+    x, y, z, w = (np.asarray(q_xyzw, dtype=np.float64)[:, i] for i in range(4))
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def euler_rate_map(rpy: np.ndarray) -> np.ndarray:

@@ -33,7 +33,7 @@ from skatelib.library.channels import I_BOARD_ROLL, S_Q, S_RPY
 from skatelib.library.errors import ModelError, SkatelibError
 from skatelib.library.reader import LibraryData
 from skatelib.library.records import EntryRecord
-from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.library.rotations import board_rotations, quaternion_matrices, rpy_matrices
 from skatelib.pipeline import ros_messages as msg
 from skatelib.pipeline.urdf_kinematics import joint_transforms, root_link, urdf_joints
 from skatelib.runtime import MotionLibrary
@@ -107,7 +107,7 @@ def robot_motion(lib: MotionLibrary, e: EntryRecord) -> RobotMotion | None:
     if schema.D_JOINTS not in e.arrays or schema.D_BASE_POSE not in e.arrays:
         return None
     pose = np.asarray(e.arrays[schema.D_BASE_POSE], dtype=np.float64)
-    base[:, :3, :3] = msg.quaternion_matrices(pose[:, 3:7])
+    base[:, :3, :3] = quaternion_matrices(pose[:, 3:7])
     base[:, :3, 3] = pose[:, 0:3]
     rates = e.arrays.get(schema.D_JOINT_VELOCITIES)
     return RobotMotion(base, list(e.columns[schema.D_JOINTS]), np.asarray(e.arrays[schema.D_JOINTS], dtype=np.float64),

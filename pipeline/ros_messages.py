@@ -82,14 +82,6 @@ def quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     return out if out[3] >= 0 else -out
 
 
-def quaternion_matrices(q_xyzw: np.ndarray) -> np.ndarray:
-    """Rotation matrices (K, 3, 3) of unit quaternions (K, 4) given as x, y, z, w."""
-    x, y, z, w = (np.asarray(q_xyzw, dtype=np.float64)[:, i] for i in range(4))
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
-
-
 def transform(stamp: dict[str, Any], parent: str, child: str, M: np.ndarray) -> dict[str, Any]:
     """A ``geometry_msgs/TransformStamped``: the pose of ``child`` in ``parent`` (a 4x4 transform)."""
     q = quaternion_xyzw(M[:3, :3])

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 from skatelib.library import schema
+from skatelib.library.rotations import quaternion_matrices
 from skatelib.pipeline.humanoid.feet import sole_poses
 from skatelib.pipeline.views.rerun_parts import ground, series, time_index
 from skatelib.runtime import Entry, MotionLibrary
@@ -66,7 +67,7 @@ def _log_body(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
     from skatelib.pipeline.views.rerun_robot import Robot, log_robot
 
     t, base = e.t, e.arrays[schema.D_BASE_POSE]
-    log_robot(rec, Robot(lib.urdf), f"{root}/robot", t, (base[:, 0:3] + offset, _matrices(base[:, 3:7]),
+    log_robot(rec, Robot(lib.urdf), f"{root}/robot", t, (base[:, 0:3] + offset, quaternion_matrices(base[:, 3:7]),
                                                           e.arrays[schema.D_JOINTS]))
     feet = sole_poses(e.arrays[schema.D_FEET])
     rec.log(f"{root}/sole_paths", rr.LineStrips3D([feet[:, s, 0:3] + offset for s in (0, 1)],
@@ -80,14 +81,6 @@ def _log_body(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, root: str, 
         rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[BOARD_HALF_M], colors=[(160, 110, 60)]), static=True)
         centre = feet[:, 0, 0:3] + offset + np.array([BOARD_HALF_M[0] / 3, 0.0, -BOARD_HALF_M[2]])
         rec.send_columns(f"{root}/board", indexes=time_index(t), columns=rr.Transform3D.columns(translation=centre))
-
-
-def _matrices(quat_xyzw: np.ndarray) -> np.ndarray:
-    """Rotation matrices (K, 3, 3) of unit quaternions (K, 4) given as x, y, z, w."""
-    x, y, z, w = (quat_xyzw[:, i] for i in range(4))
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def logger(lib: MotionLibrary) -> Any:

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 import rerun as rr
+from skatelib.library.rotations import quaternion_matrices
 from skatelib.pipeline.humanoid.rerun import log_entry
 from skatelib.pipeline.views.rerun_inspect import _log_summary, _write_stream, blueprint
 from skatelib.pipeline.views.rerun_parts import ground, series, time_index
@@ -22,14 +23,6 @@ ENTRY_SPACING_M = 3.0  # entries this far apart along y
 TWIN_RGB = (230, 120, 20)  # the twin's COM and ZMP: orange (the plan's: red COM, green ZMP)
 BOARD_RGB = (150, 100, 50)
 SOLE_THICKNESS_M = 0.02
-
-
-def _quat_matrices(wxyz: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) given as w, x, y, z."""
-    w, x, y, z = (wxyz[:, i] for i in range(4))
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def log_twin(rec: rr.RecordingStream, lib: MotionLibrary, run: Any, root: str, offset: np.ndarray) -> None:
@@ -60,7 +53,7 @@ def log_twin(rec: rr.RecordingStream, lib: MotionLibrary, run: Any, root: str, o
         root_adr, qadr, deck_adr = run.layout
         base = run.qpos[:, root_adr:root_adr + 7]
         log_robot(rec, Robot(lib.urdf), f"{root}/robot", t,
-                  (base[:, 0:3] + offset, _quat_matrices(base[:, 3:7]), run.qpos[:, qadr]))
+                  (base[:, 0:3] + offset, quaternion_matrices(base[:, [4, 5, 6, 3]]), run.qpos[:, qadr]))
         if m.board is not None and deck_adr >= 0:
             b, deck = m.board, run.qpos[:, deck_adr:deck_adr + 7]  # the deck's top centre, quaternion w, x, y, z
             rec.log(f"{root}/board", rr.Boxes3D(half_sizes=[[b.deck_length_m / 2, b.deck_width_m / 2, 0.0075]],
