@@ -92,8 +92,10 @@ def shove_0p3(small_cfg):
 
 @pytest.fixture(scope="session")
 def tiny_build(tmp_path_factory) -> CliBuild:
-    """``skatelib build tests/configs/tiny.toml --jobs 2``: 0.3 and 0.4 m/s, one stride each."""
-    return _cli_build(tmp_path_factory.mktemp("tiny_build"), TINY, "--jobs", "2")
+    """``skatelib build tests/configs/tiny.toml --jobs 2 --profile``: 0.3 and 0.4 m/s, one stride each;
+    its profile is ``profile.json`` beside the library."""
+    folder = tmp_path_factory.mktemp("tiny_build")
+    return _cli_build(folder, TINY, "--jobs", "2", "--profile", str(folder / "profile.json"))
 
 
 @pytest.fixture(scope="session")

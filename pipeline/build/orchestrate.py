@@ -20,6 +20,7 @@ from typing import Any
 
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build.contract import BuildOptions, Outcome, ProgressFn, Written
+from skatelib.pipeline.build.profile import span
 from skatelib.pipeline.build.sweep import run_sweep
 from skatelib.pipeline.kinds import KindConfig, kind_of
 
@@ -62,9 +63,13 @@ def build_library(config: Any, out: Path | None = None, options: BuildOptions | 
     out = out or default_output(config)
     options = options or BuildOptions()
     kind = kind_of(config)
-    kind.prepare(config, options)
-    outcomes = run_sweep(kind.tasks(config, ipopt), options, on_entry)
-    written: Written = kind.write(config, out, outcomes, options)
+    with span("build", jobs=options.jobs, backend=options.backend):
+        with span("prepare"):
+            kind.prepare(config, options)
+        with span("sweep"):
+            outcomes = run_sweep(kind.tasks(config, ipopt), options, on_entry)
+        with span("write"):
+            written: Written = kind.write(config, out, outcomes, options)
     return BuildReport(written, time.perf_counter() - t0)
 
 

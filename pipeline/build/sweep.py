@@ -22,6 +22,7 @@ from typing import Any, TypeVar
 
 from skatelib.library.errors import ConfigError
 from skatelib.pipeline.build.contract import BuildOptions, BuildTask, EntryEvent, EventSink, Outcome, ProgressFn
+from skatelib.pipeline.build.profile import ENV, profile_to, span
 
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -47,20 +48,24 @@ _WATCHDOG_STARTED = False  # per process: workers start one watchdog thread
 
 
 def run_task(task: BuildTask, use_cache: bool = True, events: EventSink | None = None,
-             parent_pid: int | None = None, worker: bool = False) -> list[Outcome]:
+             parent_pid: int | None = None, worker: bool = False, profile_dir: str | None = None) -> list[Outcome]:
     """Run one task (a module-level function, so worker processes can import it).
 
     ``events`` is an optional queue that receives an :class:`EntryEvent` as an entry starts and
     when it is finished; ``parent_pid``: the build process, whose death ends this worker
     (:func:`exit_with_parent`); ``worker``: this is a worker process of a cluster, whose BLAS and
     OpenMP threads this sets to 1 (loky workers start with them at 1; a serial build leaves the
-    user's process as it is).
+    user's process as it is); ``profile_dir``: the build's profile folder in a worker ('' when it
+    is not profiled; a reused worker may have been started under another build's), None: as it is.
     """
     exit_with_parent(parent_pid)
+    if profile_dir is not None:
+        profile_to(profile_dir)
     if worker:
         for var in THREAD_VARS:
             os.environ[var] = "1"
-    return list(task.run(use_cache, events))
+    with span("task", task=type(task).__name__):
+        return list(task.run(use_cache, events))
 
 
 def run_sweep(tasks: Sequence[BuildTask], options: BuildOptions | None = None,
@@ -125,7 +130,8 @@ def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: 
             # BLAS and OpenMP at 1 thread in the workers, from their start; the caller's process untouched.
             with parallel_config(backend="loky", inner_max_num_threads=1):
                 results = Parallel(n_jobs=min(jobs, len(tasks)), backend="loky", return_as="generator_unordered")(
-                    delayed(run_task)(task, use_cache, events, os.getpid()) for task in tasks)
+                    delayed(run_task)(task, use_cache, events, os.getpid(), profile_dir=os.environ.get(ENV, ""))
+                    for task in tasks)
                 outcomes = [o for task_out in results for o in task_out]
         finally:
             stop.set()

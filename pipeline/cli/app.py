@@ -12,7 +12,14 @@ import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.build import interrupt
-from skatelib.pipeline.cli import build_commands, certify_commands, diff_commands, library_commands, track_commands
+from skatelib.pipeline.cli import (
+    build_commands,
+    certify_commands,
+    diff_commands,
+    frontier_commands,
+    library_commands,
+    track_commands,
+)
 from skatelib.pipeline.views.console import console, err_console
 from typer._click.core import Context
 from typer.core import TyperArgument, TyperCommand, TyperOption
@@ -83,8 +90,8 @@ class _Command(TyperCommand):
 app = typer.Typer(add_completion=True, no_args_is_help=True, rich_markup_mode=None,
                   context_settings={"help_option_names": ["-h", "--help"]},
                   help="Offline motion-library pipeline for legged robots on skateboards.")
-for _command in (*build_commands.COMMANDS, *library_commands.COMMANDS, *diff_commands.COMMANDS,
-                 *track_commands.COMMANDS, *certify_commands.COMMANDS):
+for _command in (*build_commands.COMMANDS, *frontier_commands.COMMANDS, *library_commands.COMMANDS,
+                 *diff_commands.COMMANDS, *track_commands.COMMANDS, *certify_commands.COMMANDS):
     app.command(cls=_Command)(_command)
 
 __all__ = ["app", "main"]

@@ -51,3 +51,17 @@ def run_build(cfg: Any, out: Path, opts: BuildOptions, force: bool | None = None
             console.print(f"[yellow]note:[/] {escape(o.note)}")
     console.print(f"wrote {escape(str(report.path))} in {report.wall_time_s:.1f} s")
     return BuildRun(report.path, len(report.failed))
+
+
+def profiled_build(cfg: Any, out: Path, opts: BuildOptions, force: bool, profile: Path) -> BuildRun:
+    """``build --profile``: the build with every process's spans recorded, written to ``profile``
+    and printed by phase."""
+    from skatelib.pipeline.build.profile import profiling, write_profile
+    from skatelib.pipeline.views.console import phase_table
+
+    with profiling() as spans:
+        run = run_build(cfg, out, opts, force)
+    rows, wall = write_profile(profile, spans, opts.jobs)
+    phase_table(rows, wall, opts.jobs)
+    console.print(escape(f"wrote the profile {profile}"))
+    return run

@@ -13,6 +13,7 @@ from skatelib.library import schema
 from skatelib.pipeline.build import codec
 from skatelib.pipeline.build.cache import cache_key, cached_or_solved
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
+from skatelib.pipeline.build.profile import span
 from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem.attempts import solve_with_retries
@@ -109,7 +110,8 @@ class BuildTask:
             result, attempts = payload["result"], payload["attempts"]
             if result.success:
                 solved[v] = (result.warm, key)
-            judged, physics = judge(self.config, result)
+            with span("checks", key=schema.entry_key(v, self.n_strides)):
+                judged, physics = judge(self.config, result)
             outcome = EntryOutcome(replace(judged, warm=None), attempts, cached, physics, key, note)
             out.append(outcome)
             if events is not None:

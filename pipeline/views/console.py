@@ -134,3 +134,16 @@ def label_error(label: float, speed: float | None, digits: int = 1) -> str:
 def jsonable(v: Any) -> Any:
     """A ``json.dumps`` default: numpy scalars and arrays as JSON numbers and lists."""
     return v.tolist() if hasattr(v, "tolist") else str(v)
+
+
+def phase_table(rows: list[Any], wall_s: float, jobs: int) -> None:
+    """Print a build profile's phases (:class:`skatelib.pipeline.build.profile.PhaseRow`): seconds of
+    one process each, their share of the build's process time (``jobs`` workers x the wall time)."""
+    t = Table(title=f"where the build's time went: {wall_s:.1f} s wall, {count(jobs, 'worker')}")
+    for col in ("phase", "seconds", "share", "spans", "what"):
+        t.add_column(col, justify="right" if col in ("seconds", "share", "spans") else "left")
+    total = max(jobs, 1) * wall_s
+    for r in rows:
+        t.add_row(escape(r.phase), f"{r.seconds:.1f}", f"{100 * r.seconds / total:.0f} %" if total else "-",
+                  str(r.count) if r.count else "", escape(r.note))
+    console.print(t)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from skatelib.library import schema
 from skatelib.pipeline.build import interrupt
+from skatelib.pipeline.build.profile import span
 from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult, solve
 
 
@@ -28,10 +30,17 @@ def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
     attempts = 0
     for s in ladder:
         interrupt.check()  # an interrupted attempt is no failure to retry
-        result = solve(s)
+        with span("attempt", key=_key(spec), n=attempts + 1,
+                  task="transition" if spec.from_velocity_mps else "start-up") as fields:
+            result = solve(s)
+            fields.update(success=result.success, iterations=result.iterations)
         attempts += 1
         build, total = build + result.build_time_s, total + result.solve_time_s
         if result.success:
             break
     assert result is not None
     return replace(result, build_time_s=build, solve_time_s=total), attempts
+
+
+def _key(spec: PushoffSpec) -> str:
+    return schema.entry_key(spec.target_velocity_mps, spec.n_strides, spec.from_velocity_mps)

@@ -12,7 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any
 
+from skatelib.library import schema
 from skatelib.pipeline.build.contract import EntryEvent, EventSink
+from skatelib.pipeline.build.profile import span
 from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem.problem import Window
@@ -56,27 +58,39 @@ class TransitionTask:
         v0 = self.from_velocity_mps
         refused: list[str] = []
         for n in self.config.transitions.strides:
-            spec = PushoffSpec(self.config, v, n, ipopt=self.ipopt, from_velocity_mps=v0)
-            cell = (n, spec.window)
-            start, start_key = warm.get(cell, (None, None)) if self.config.sweep.warm_start else (None, None)
-            spec = replace(spec, warm=start)
-            key = entry_key(spec, start_key)
-            payload, cached, note = cached_solve(spec, key, use_cache)
-            result = payload["result"]
-            if result.success and result.warm is not None:
-                warm[cell] = (result.warm, key)
-            judged, physics = judge(self.config, result)
-            if judged.success and self.config.transitions.twin_judge:
-                reasons = twin_refusals(self.config, judged, key, use_cache)
-                if reasons:
-                    judged = replace(judged, success=False, status=f"{TWIN_REFUSED}: {reasons}")
-                    refused.append(f"v{v0:.2f}-{v:.2f}: the twin refused {count(n, 'stride')} ({reasons})")
-            outcome = EntryOutcome(replace(judged, warm=None), payload["attempts"], cached, physics, key,
-                                   "; ".join(filter(None, [note, *refused])))
-            if judged.success:
+            with span("candidate", key=schema.entry_key(v, n, v0)) as profiled:
+                outcome = self._candidate(v, n, warm, use_cache, refused)
+                profiled["accepted"] = outcome.success
+            if outcome.success:
                 break
         assert outcome is not None  # strides is never empty (config check)
         return outcome
+
+    def _candidate(self, v: float, n: int, warm: dict[tuple[int, Window], tuple[WarmStart, str]], use_cache: bool,
+                   refused: list[str]) -> EntryOutcome:
+        """The transition to ``v`` in ``n`` strides: solved (or read from the cache), judged by the
+        physics checks and, when they pass, by the twin; a refusal is added to ``refused``."""
+        v0 = self.from_velocity_mps
+        spec = PushoffSpec(self.config, v, n, ipopt=self.ipopt, from_velocity_mps=v0)
+        cell = (n, spec.window)
+        start, start_key = warm.get(cell, (None, None)) if self.config.sweep.warm_start else (None, None)
+        spec = replace(spec, warm=start)
+        key = entry_key(spec, start_key)
+        payload, cached, note = cached_solve(spec, key, use_cache)
+        result = payload["result"]
+        if result.success and result.warm is not None:
+            warm[cell] = (result.warm, key)
+        with span("checks", key=schema.entry_key(v, n, v0)):
+            judged, physics = judge(self.config, result)
+        if judged.success and self.config.transitions.twin_judge:
+            with span("twin", key=schema.entry_key(v, n, v0)) as profiled:
+                reasons = twin_refusals(self.config, judged, key, use_cache)
+                profiled["refused"] = bool(reasons)
+            if reasons:
+                judged = replace(judged, success=False, status=f"{TWIN_REFUSED}: {reasons}")
+                refused.append(f"v{v0:.2f}-{v:.2f}: the twin refused {count(n, 'stride')} ({reasons})")
+        return EntryOutcome(replace(judged, warm=None), payload["attempts"], cached, physics, key,
+                            "; ".join(filter(None, [note, *refused])))
 
 
 def transition_tasks(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[TransitionTask]:
