@@ -13,7 +13,7 @@ OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
 CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library test test-fast lint bench clean help cpp figures reference check-library check-default docs
+.PHONY: all venv venv-build relink library certify test test-fast lint bench clean help cpp figures reference check-library check-default docs
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build], [control] and [sim] extras (the twin judges the transitions)"
@@ -26,6 +26,7 @@ help:
 	@echo "make figures   regenerate docs/figures (skatelib plot, the twin's videos and a still) and docs/inspect.png (Rerun) from the default library"
 	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
 	@echo "make check-default build the default library and validate it (physics checks, chain continuity)"
+	@echo "make certify   certify the default library: each entry ridden 100 times on the twin under drawn errors and shoves (about 90 min on 2 cores; resumes)"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 define install
@@ -66,6 +67,13 @@ endif
 
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))
+
+# The robustness certificate of a library (LIB, the default library by default) stored in it;
+# an interrupted run resumes from its cached rides (docs/certify.md).
+LIB ?= out/cyberdog2-default.h5
+JOBS ?= 2
+certify: venv-build
+	$(BIN)/skatelib certify $(LIB) -j $(JOBS)
 
 # The suite in TEST_WORKERS processes (pytest-xdist), a test file's tests in one process so that
 # each file's shared libraries are made once per process (docs/benchmarks.md, "The test suite").
