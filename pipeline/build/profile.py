@@ -3,9 +3,9 @@
 While :data:`ENV` names a folder, every process of the build (the build's own and its loky
 workers, to which the sweep hands the folder with each task) appends a line per finished span
 to ``<folder>/<pid>.jsonl``: its phase, wall-clock start and end (``time.time()``, comparable
-between processes of one machine), the process and what the phase knows (an entry's key, an attempt's success). Without
-the variable a span costs one dictionary lookup. A dask cluster's workers are not handed the
-folder: a profile is of a build on this machine.
+between processes of one machine), the process and what the phase knows (an entry's key, an
+attempt's success). Without the variable a span costs one dictionary lookup. A dask cluster's
+workers are not handed the folder: a profile is of a build on this machine.
 
 :func:`summarize` cuts the spans into the phases a user asks about: the compile, the start-ups'
 and transitions' solves, failed attempts, physics checks, twin rides, the candidates the checks
