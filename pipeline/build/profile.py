@@ -44,6 +44,12 @@ def span(phase: str, **fields: Any) -> Iterator[dict[str, Any]]:
             f.write(json.dumps(record, default=str) + "\n")
 
 
+def profiled() -> bool:
+    """Whether this process records spans (a span's fields that cost something to make are added
+    only then)."""
+    return bool(os.environ.get(ENV))
+
+
 def profile_to(folder: str) -> None:
     """Record this process's spans in ``folder`` ('': record none)."""
     if folder:

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from skatelib.library import schema
 from skatelib.pipeline.build import interrupt
-from skatelib.pipeline.build.profile import span
+from skatelib.pipeline.build.profile import profiled, span
 from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult, solve
 
 
@@ -30,10 +30,11 @@ def solve_with_retries(spec: PushoffSpec) -> tuple[SolveResult, int]:
     attempts = 0
     for s in ladder:
         interrupt.check()  # an interrupted attempt is no failure to retry
-        with span("attempt", key=_key(spec), n=attempts + 1,
-                  task="transition" if spec.from_velocity_mps else "start-up") as fields:
+        with span("attempt", n=attempts + 1) as fields:
             result = solve(s)
-            fields.update(success=result.success, iterations=result.iterations)
+            if profiled():
+                fields.update(key=_key(spec), task="transition" if spec.from_velocity_mps else "start-up",
+                              success=result.success, iterations=result.iterations)
         attempts += 1
         build, total = build + result.build_time_s, total + result.solve_time_s
         if result.success:
