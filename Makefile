@@ -26,7 +26,7 @@ help:
 	@echo "make figures   regenerate docs/figures (skatelib plot, the twin's videos and a still) and docs/inspect.png (Rerun) from the default library"
 	@echo "make reference rebuild tests/data/tiny-reference.h5, the library CI's build --check compares with"
 	@echo "make check-default build the default library and validate it (physics checks, chain continuity)"
-	@echo "make certify   certify the default library: each entry ridden 100 times on the twin under drawn errors and shoves (about 90 min on 2 cores; resumes)"
+	@echo "make certify   certify the default library: each entry ridden 100 times on the twin under drawn errors and shoves (about 100 min on 2 cores; resumes)"
 	@echo "make cpp       build the C++ reader's tools in build/cpp (installs cmake, g++, HDF5, nlohmann-json if missing)"
 
 define install
