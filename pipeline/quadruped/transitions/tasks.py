@@ -58,9 +58,9 @@ class TransitionTask:
         v0 = self.from_velocity_mps
         refused: list[str] = []
         for n in self.config.transitions.strides:
-            with span("candidate", key=schema.entry_key(v, n, v0)) as profiled:
+            with span("candidate", key=schema.entry_key(v, n, v0)) as fields:
                 outcome = self._candidate(v, n, warm, use_cache, refused)
-                profiled["accepted"] = outcome.success
+                fields["accepted"] = outcome.success
             if outcome.success:
                 break
         assert outcome is not None  # strides is never empty (config check)
@@ -71,6 +71,7 @@ class TransitionTask:
         """The transition to ``v`` in ``n`` strides: solved (or read from the cache), judged by the
         physics checks and, when they pass, by the twin; a refusal is added to ``refused``."""
         v0 = self.from_velocity_mps
+        entry = schema.entry_key(v, n, v0)
         spec = PushoffSpec(self.config, v, n, ipopt=self.ipopt, from_velocity_mps=v0)
         cell = (n, spec.window)
         start, start_key = warm.get(cell, (None, None)) if self.config.sweep.warm_start else (None, None)
@@ -80,12 +81,12 @@ class TransitionTask:
         result = payload["result"]
         if result.success and result.warm is not None:
             warm[cell] = (result.warm, key)
-        with span("checks", key=schema.entry_key(v, n, v0)):
+        with span("checks", key=entry):
             judged, physics = judge(self.config, result)
         if judged.success and self.config.transitions.twin_judge:
-            with span("twin", key=schema.entry_key(v, n, v0)) as profiled:
+            with span("twin", key=entry) as fields:
                 reasons = twin_refusals(self.config, judged, key, use_cache)
-                profiled["refused"] = bool(reasons)
+                fields["refused"] = bool(reasons)
             if reasons:
                 judged = replace(judged, success=False, status=f"{TWIN_REFUSED}: {reasons}")
                 refused.append(f"v{v0:.2f}-{v:.2f}: the twin refused {count(n, 'stride')} ({reasons})")
