@@ -18,7 +18,7 @@ from skatelib.pipeline.quadruped.model.system import SkateSystem  # noqa: E402
 from skatelib.pipeline.twin import twin_figures  # noqa: E402
 from skatelib.sim.robot import JOINTS  # noqa: E402
 from skatelib.sim.rolling import WHEELS  # noqa: E402
-from skatelib.sim.scene import twin_model  # noqa: E402
+from skatelib.sim.scene import NOSLIP_ITERATIONS, set_options, twin_model  # noqa: E402
 from skatelib.sim.stand import StandController  # noqa: E402
 
 from tests.helpers import CLI  # noqa: E402
@@ -83,6 +83,53 @@ def test_standing_on_the_deck_stays_put(built):
         ctl(d)
         mujoco.mj_step(m, d)
     assert height0 - d.xpos[m.body("trunk").id][2] > 0.003
+
+
+def _foot_creep_m(f, share: float, noslip: int) -> float:
+    """How far a foot of the twin's radius and friction, on the floor under a quarter of the
+    robot's weight, moves in 10 s (after 1 s of settling) under a constant sideways force of
+    ``share`` of its friction cone, with the twin's options and ``noslip`` no-slip iterations."""
+    spec = mujoco.MjSpec()
+    set_options(spec, f.gravity_mps2)
+    spec.option.noslip_iterations = noslip
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], friction=[f.friction_mu, 0, 0])
+    foot = spec.worldbody.add_body(name="foot", pos=[0, 0, f.foot_radius_m])
+    for axis in ([1, 0, 0], [0, 1, 0], [0, 0, 1]):
+        foot.add_joint(type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis)
+    weight_N = f.robot_mass_kg * f.gravity_mps2 / 4
+    foot.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[f.foot_radius_m, 0, 0],
+                  mass=f.robot_mass_kg / 4, friction=[f.friction_mu, 0.005, 0.0001])
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    body = m.body("foot").id
+    x = []
+    for k in range(11_000):
+        d.xfrc_applied[body, 1] = share * f.friction_mu * weight_N if k >= 1000 else 0.0
+        mujoco.mj_step(m, d)
+        if k in (999, 10_999):
+            x.append(d.xpos[body].copy())
+    return float(np.linalg.norm(x[1][:2] - x[0][:2]))
+
+
+@pytest.mark.parametrize("share", [0.1, 0.3, 0.6])
+def test_a_foot_inside_its_friction_cone_does_not_creep(built, share):
+    """A foot pushed sideways with less force than its friction cone holds stays put, as Coulomb
+    says: with the twin's options it moves less than 0.05 mm in 10 s at 10, 30 and 60 % of the
+    cone. Negative control: without the no-slip pass MuJoCo's soft friction lets it creep, at a
+    speed proportional to the force (more than 0.3 mm at 10 % of the cone, 3x more at 30 %)."""
+    _, _, f, _ = built
+    assert NOSLIP_ITERATIONS > 0
+    assert _foot_creep_m(f, share, NOSLIP_ITERATIONS) < 5e-5
+    soft = _foot_creep_m(f, share, 0)
+    assert soft > 3e-4 * share / 0.1, soft
+
+
+def test_a_foot_pushed_past_its_friction_cone_slides_as_coulomb_says(built):
+    """The no-slip pass holds only what friction can hold: a foot pushed sideways with 1.2 times
+    what its cone holds slides with Coulomb's acceleration, (1.2 - 1) mu g, over 10 s within 0.1 %."""
+    _, _, f, _ = built
+    analytic_m = 0.5 * 0.2 * f.friction_mu * f.gravity_mps2 * 10.0**2
+    assert _foot_creep_m(f, 1.2, NOSLIP_ITERATIONS) == pytest.approx(analytic_m, rel=1e-3)
 
 
 def test_model_twin_writes_a_loadable_mjcf(tmp_path):

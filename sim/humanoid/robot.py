@@ -28,7 +28,7 @@ from skatelib.sim.humanoid.figures import (
     TIMESTEP_S,
     HumanoidFigures,
 )
-from skatelib.sim.scene import add_scenery
+from skatelib.sim.scene import add_scenery, set_options
 
 if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
     import mujoco
@@ -57,11 +57,7 @@ def humanoid_spec(f: HumanoidFigures) -> mujoco.MjSpec:
     urdf = re.sub(r"(<robot[^>]*>)", r"\1" + _IMPORT, without_meshes(f.urdf), count=1)
     spec = mujoco.MjSpec.from_string(urdf)
     spec.modelname = "skatelib humanoid twin"
-    spec.option.timestep = TIMESTEP_S
-    spec.option.gravity = [0, 0, -f.gravity_mps2]
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10
+    set_options(spec, f.gravity_mps2, TIMESTEP_S)
     spec.body(ROOT).add_freejoint(name="root_free")
     for g in spec.geoms:  # the links' shapes: drawn, and touching the floor only in a fall
         g.contype, g.conaffinity = 0, FLOOR_BIT
