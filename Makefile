@@ -131,10 +131,10 @@ figures: venv
 	mkdir -p build/figures
 	$(BIN)/skatelib inspect $(LIB) --entry v0.50_s2 --entry v1.00_s4 --save build/figures/inspect.rrd --force
 	tools/rrd-screenshot build/figures/inspect.rrd docs/inspect.png 1400x850
-	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.mp4
+	$(BIN)/skatelib track $(LIB) --plant mujoco --state true --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.mp4
 	$(BIN)/python tools/video_still.py docs/figures/twin-v0.50_s2.mp4 docs/figures/twin-v0.50_s2.png $(STILL_AT)
-	$(BIN)/skatelib track $(LIB) --plant mujoco --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.gif
-	$(BIN)/skatelib track $(LIB) --plant mujoco --ride 0:0.5,0.5:0.8,0.8:0.3,0.3:0 --video docs/figures/twin-ride.gif
+	$(BIN)/skatelib track $(LIB) --plant mujoco --state true --perturb none --entry v0.50_s2 --video docs/figures/twin-v0.50_s2.gif
+	$(BIN)/skatelib track $(LIB) --plant mujoco --state true --ride 0:0.5,0.5:0.8,0.8:0.3,0.3:0 --video docs/figures/twin-ride.gif
 	$(BIN)/skatelib build configs/hrp2_walk.toml -o out/hrp2-walk.h5 --no-progress
 	$(BIN)/skatelib plot out/hrp2-walk.h5 -o build/figures/hrp2-walk -f png
 	cp build/figures/hrp2-walk/zmp_wholebody.png docs/figures/hrp2-walk-zmp.png

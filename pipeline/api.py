@@ -158,7 +158,7 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
 
 def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Plant = "model",  # noqa: PLR0913
           perturb: str = DEFAULT_PLANT_PERTURBATION, solver: QpSolver = "daqp", mpc_mu: float | None = None,
-          seed: int = 0, state: StateSource = "true", jobs: int = 2,
+          seed: int = 0, state: StateSource = "estimate", jobs: int = 2,
           progress: bool | Callable[[int, int], None] = False) -> list[TrackResult] | list[TwinResult]:
     """Ride a quadruped library's entries in closed loop, as ``skatelib track`` does: the paper's
     linear MPC (30 Hz), fed by the runtime, drives a plant with model errors through each entry, the
@@ -174,7 +174,8 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
         solver: The MPC's QP solver.
         mpc_mu: The friction coefficient the MPC assumes; the library's planning value when None.
         seed: Seed of the feedback noise (0 to 2**32 - 1).
-        state: On the twin, what the controller is fed: ``true`` or ``estimate``.
+        state: On the twin, what the controller is fed: ``estimate`` (the robot's estimator on the
+            twin's sensors, as on the robot) or ``true`` (the twin's own state).
         jobs: Entries run in parallel (1 to 256).
         progress: A function called with (runs done, runs in all) as each run finishes, True for the
             command's progress bar, False for nothing.

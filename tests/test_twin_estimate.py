@@ -81,6 +81,51 @@ def test_an_entry_passes_on_the_estimate(estimated):
     assert estimated.passed, estimated.reasons
 
 
+def test_a_kept_run_records_estimate_and_truth(lib_path, estimated, tmp_path):
+    """A run on the estimate kept for a recording (`track --save`) rides as one not kept (the same
+    verdict to the last digit, the controllers' times aside) and records at each MPC update the
+    twin's true state and, beside it, the estimate the controller was fed: their board speeds differ
+    by about what the estimator's error says (sampled at every tick), and the recording plots the
+    estimate's board speed and deck roll in the entry's tab. Negative control: a run on the true
+    state records no estimate."""
+    from skatelib.library.margins import forward_speed
+    from skatelib.pipeline.views.rerun_inspect import save_closed_loop
+    from skatelib.proving.twin.record import ESTIMATE_STATE
+
+    from tests.test_inspect_rerun import _columns
+
+    lib = MotionLibrary.open(lib_path)
+    key = lib.keys()[0]
+    p = SkateParams.from_library(lib)
+    errors = parse_twin_perturbation(DEFAULT_TWIN_PERTURBATION, p.mu)
+
+    def ride(state: str):
+        plant = TwinPlant(TwinFigures.from_library(lib), errors)
+        loop = TwinLoop(lib, key, ClosedLoop(p, p), plant,
+                        TwinLoopSettings(state=state, sensor_errors=errors.sensors), keep=True)
+        run = loop.ride()
+        return run, run.record.as_entry(key, float(lib[key].attrs[schema.A_TARGET_VELOCITY]))
+
+    run, entry = ride("estimate")
+    kept = twin_result(key, float(lib[key].attrs[schema.A_TARGET_VELOCITY]), run)
+    timings = ("wbc_median_ms", "mpc_median_ms")
+    assert {k: v for k, v in kept.as_dict().items() if k not in timings} == \
+        {k: v for k, v in estimated.as_dict().items() if k not in timings}
+    est = entry.arrays[ESTIMATE_STATE]
+    assert est.shape == entry.state.shape
+    off = float(np.sqrt(np.mean((forward_speed(est) - forward_speed(entry.state)) ** 2)))
+    assert 0.5 * estimated.est_board_speed_rms < off < 2.0 * estimated.est_board_speed_rms, (off, estimated)
+    out = tmp_path / "run.rrd"
+    roots = save_closed_loop(lib, [(key, entry)], out)
+    assert f"/{key}/estimate" in roots
+    cols = _columns(out)
+    plotted = [v[0] for v in cols[f"/{key}/estimate/plots/board_speed/estimate"]["Scalars:scalars"]]
+    assert np.allclose(plotted, forward_speed(est))
+    assert cols[f"/{key}/estimate/plots/board_roll"]["SeriesLines:names"][0][0] == "estimate deck roll [rad]"
+    _, true_entry = ride("true")
+    assert ESTIMATE_STATE not in true_entry.arrays
+
+
 def test_feet_assumed_put_misread_the_velocity(lib_path):
     """Negative control: the classical estimator (a deck foot stays put) reads the robot's velocity
     several times worse on the rolling deck."""

@@ -32,8 +32,8 @@ from skatelib.pipeline.views.console import (
 )
 from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twin_table
 
-STATE_HELP = ("With --plant mujoco: what the controller is fed: true (the twin's state) or estimate (the robot's "
-              "estimator on the twin's IMU and joint encoders; the verdict adds its error).")
+STATE_HELP = ("With --plant mujoco: what the controller is fed: estimate (the robot's estimator on the twin's IMU "
+              "and joint encoders, as on the robot; the verdict adds its error) or true (the twin's own state).")
 
 REPORT_HELP = ("Write an HTML report (.html): per entry the plan against the closed loop (board speed, heading, deck "
                "roll, Coulomb margin) and the verdict with its reasons (either plant).")
@@ -75,7 +75,7 @@ def track(
     ride: Annotated[str | None, typer.Option(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
-    state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.true,
+    state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.estimate,
     draw: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help=DRAW_HELP)] = None,
     report: Annotated[Path | None, typer.Option(help=REPORT_HELP)] = None,
 ) -> None:

@@ -72,6 +72,13 @@ def log_entry(rec: rr.RecordingStream, lib: MotionLibrary, e: Entry, robot: Robo
     series(rec, root, "margins/torque_Nm", t[:-1], torque, "torque margin [N m]")
 
 
+def log_estimate(rec: rr.RecordingStream, root: str, t: np.ndarray, x: np.ndarray) -> None:
+    """What the controller was fed on the estimate (its model state ``x`` at ``t``), plotted beside
+    the plant's truth in the entry's tab: the board's speed and the deck's roll."""
+    series(rec, root, "board_speed/estimate", t, forward_speed(x), "board speed [m/s]")
+    series(rec, root, "board_roll", t, x[:, I_BOARD_ROLL], "deck roll [rad]")
+
+
 def _log_board(rec: rr.RecordingStream, b: BoardModel, e: Entry, root: str, offset: np.ndarray) -> None:
     """The board: the deck rolls about its x axis on two trucks that stay on the ground, four
     wheels on the trucks' axles; all of it moves and yaws with the board (``board_pos``: the deck

@@ -21,6 +21,7 @@ from skatelib.library import schema
 from skatelib.library.atomic import write_atomic
 from skatelib.library.errors import LibraryFormatError
 from skatelib.pipeline.kinds import RobotKind, kind_named
+from skatelib.proving.twin.record import ESTIMATE_STATE
 from skatelib.runtime import Entry, MotionLibrary
 
 SPACING_M = 1.2  # side-by-side entries are this far apart along y
@@ -97,8 +98,9 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
                      references: dict[str, Entry] | None = None) -> list[str]:
     """Each entry's reference beside its closed-loop run (``skatelib track --save``), with the views
     of ``inspect``: the reference at ``/<key>/reference``, the run 0.6 m beside it at
-    ``/<key>/closed_loop``. ``references``: the references that are not the library's entries (a
-    ride's joined entries). Written atomically."""
+    ``/<key>/closed_loop``; a run on the estimate, its estimate's board speed and deck roll at
+    ``/<key>/estimate`` in the same plots as the run's true ones. ``references``: the references
+    that are not the library's entries (a ride's joined entries). Written atomically."""
     log = kind_rerun(lib).rerun_logger(lib)
     rec = rr.RecordingStream(f"skatelib-track-{lib.path.stem}")
     roots = []
@@ -113,6 +115,11 @@ def save_closed_loop(lib: MotionLibrary, runs: list[tuple[str, Entry]], save: Pa
         beside = offset + np.array([0.0, SPACING_M / 2, 0.0])
         log(rec, run, f"/{key}/closed_loop", beside)
         roots += [f"/{key}/reference", f"/{key}/closed_loop"]
+        if ESTIMATE_STATE in run.arrays:  # a quadruped's run on the estimate
+            from skatelib.pipeline.quadruped.rerun import log_estimate
+
+            log_estimate(rec, f"/{key}/estimate", run.t, run.arrays[ESTIMATE_STATE])
+            roots.append(f"/{key}/estimate")
     rec.send_blueprint(blueprint(lib, roots))
     _write_stream(stream, save)
     return roots

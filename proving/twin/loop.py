@@ -22,8 +22,9 @@ import numpy as np
 from skatelib.control.body_plan import BodyPlan, Plan
 from skatelib.control.controller import Rates, SkateController
 from skatelib.control.estimator.estimator import EstimatorSettings
-from skatelib.control.feedback import quat_wxyz
+from skatelib.control.feedback import mpc_state, quat_wxyz
 from skatelib.control.kinematics import LegKinematics
+from skatelib.control.multibody import RobotDynamics
 from skatelib.control.qp import QpSolveFailed
 from skatelib.control.reference import EntryReference, Reference
 from skatelib.control.steering import BoardPath, LineKeeper, SteeringGains
@@ -136,6 +137,7 @@ class TwinLoop:
         self.board_end = ride.board_end
         self._start(ride)
         self.feedback: Callable[[Any], Any] = self.sensed
+        self._truth_dyn: RobotDynamics | None = None
         if self.cfg.state == "estimate":
             on_deck = self.ref.contact(self.ref.t0) == BOARD
             start = start_state(ride.x0, ride.board0, ride.from_velocity_mps, on_deck, p.com_offset_m)
@@ -143,6 +145,9 @@ class TwinLoop:
                                           loop.settings.seed, self.cfg.estimator)
             self.run.estimator = estimated.errors
             self.feedback = estimated
+            # a kept run records the plant's true state beside the estimate: the truth's centre of
+            # mass by a model of its own (the controller's pinocchio data stay the controller's)
+            self._truth_dyn = RobotDynamics.from_library(lib) if keep else None
         elif self.cfg.state != "true":
             raise ValueError(f"state {self.cfg.state!r}: give 'estimate' or 'true'")
 
@@ -192,7 +197,11 @@ class TwinLoop:
                 if applied is not None:
                     self.run.record.applied(applied)
                 self.run.qpos.append(np.array(self.plant.qpos()))
-                self.run.record.add(self.t, tick.x, st)
+                if self.cfg.state == "estimate":
+                    self.run.record.add(self.t, self._true_model_state(), self._true)
+                    self.run.record.estimated(tick.x)
+                else:
+                    self.run.record.add(self.t, tick.x, st)
         self.run.wbc_times_s.append(tick.wbc_s)
         limit = self.kin.torque_limit_Nm
         shove = self.cfg.shove
@@ -211,6 +220,13 @@ class TwinLoop:
         self.run.ticks.append((self.t, after.deck_roll, float(side @ (after.trunk_pos[0:2] - after.deck_pos[0:2])),
                                int(np.sum(after.foot_touch > 0)), float(np.min(after.foot_load_N))))
         self.run.fall = self._fall(after)
+
+    def _true_model_state(self) -> np.ndarray:
+        """The MPC's 28 channels of the plant's true state now (a kept run on the estimate)."""
+        s, dyn = self._true, self._truth_dyn
+        assert dyn is not None
+        T = dyn.terms(*dyn.configuration(s.trunk_pos, s.trunk_R, s.q, s.trunk_v, s.trunk_omega, s.qd))
+        return mpc_state(s, T.com, T.com_v)
 
     def _fall(self, st: Any) -> str:
         height = float(st.trunk_pos[2] - st.deck_pos[2])

@@ -1,8 +1,9 @@
 """A run on a multibody plant as a library entry, for the viewers (``skatelib track --plant mujoco
 --save OUT.rrd`` shows it beside the plan, with the views of ``inspect``): at every MPC update the
-model state of the sensed plant (its 28 channels), the whole-body QP's forces over the update,
-the joint velocities, each foot's contact (on the deck, on the floor, none) and where it touches,
-and the deck's pose."""
+model state of the plant as sensed (its 28 channels; on the estimate, the plant's true state), the
+whole-body QP's forces over the update, the joint velocities, each foot's contact (on the deck, on
+the floor, none) and where it touches, and the deck's pose; on the estimate, the estimate's model
+state beside them (:data:`ESTIMATE_STATE`)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,10 @@ from skatelib.control.feedback import ON_FLOOR
 from skatelib.library import schema
 from skatelib.library.channels import BOARD, CONTROL_NAMES, GROUND, LEGS, NX, STATE_NAMES, SWING
 from skatelib.runtime import Entry
+
+# The dataset of a run's entry that holds the estimate's model state at each row (a run on the
+# estimate); the entry's own state is the plant's true one.
+ESTIMATE_STATE = "estimate_state"
 
 
 @dataclass
@@ -27,6 +32,7 @@ class TwinRecord:
     contact: list[np.ndarray] = field(default_factory=list)
     feet: list[np.ndarray] = field(default_factory=list)  # (3, 4) contact points
     board: list[np.ndarray] = field(default_factory=list)  # (4,) deck x, y, z, yaw
+    estimate: list[np.ndarray] = field(default_factory=list)  # the estimate's model state (on the estimate)
 
     def add(self, t: float, x: np.ndarray, st: Any) -> None:
         self.t.append(t)
@@ -36,6 +42,10 @@ class TwinRecord:
         self.contact.append(np.where(touch == ON_FLOOR, GROUND, np.where(touch > 0, BOARD, SWING)).astype(np.int8))
         self.feet.append(np.array(st.contact_points, dtype=np.float64))
         self.board.append(np.r_[st.deck_pos, st.deck_yaw])
+
+    def estimated(self, x: np.ndarray) -> None:
+        """The estimate's model state at the row just added (a run on the estimate)."""
+        self.estimate.append(np.asarray(x[:NX], dtype=np.float64).copy())
 
     def applied(self, forces: np.ndarray) -> None:
         """The forces the ticks after the last update applied (the row of that update)."""
@@ -55,6 +65,9 @@ class TwinRecord:
         }
         columns = {schema.D_STATE: STATE_NAMES, schema.D_CONTROL: CONTROL_NAMES, schema.D_CONTACT: LEGS,
                    schema.D_FOOT_POS: LEGS, schema.D_BOARD_POS: ("board_x", "board_y", "board_z", "board_yaw")}
+        if len(self.estimate) >= n:
+            arrays[ESTIMATE_STATE] = np.array(self.estimate[:n])
+            columns[ESTIMATE_STATE] = STATE_NAMES
         attrs = {schema.A_TARGET_VELOCITY: target_velocity_mps, schema.A_N_STRIDES: 0, schema.A_SUCCESS: True,
                  schema.A_STATUS: "full physics"}
         return Entry(key, attrs, arrays, columns)
