@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from skatelib.library.perturb import DEFAULT_PLANT_PERTURBATION
 from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED, check_choice, check_range
-from skatelib.pipeline.track_setup import controller, run_jobs
+from skatelib.pipeline.track_setup import controller, run_jobs, sensed_keys_checked
 
 if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import EntryEvent
@@ -201,6 +201,7 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
     errors = "" if perturb == "none" else perturb
     keys = list(entries) if entries is not None else None
     if plant == "mujoco":
+        sensed_keys_checked(errors, state, "skatelib.track(perturb=...)")
         from skatelib.proving.twin.track import twin_jobs
 
         calls: list[Any] = list(twin_jobs(Path(library), keys, errors, mpc, settings))

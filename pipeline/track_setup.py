@@ -24,6 +24,31 @@ def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tupl
     return MpcConfig(solver=solver, mu=mpc_mu), TrackSettings(seed=seed, state=state)
 
 
+# The twin's --perturb keys that act on the twin's own state fed to the controller, and the
+# sensors' keys that do the same on the estimate.
+SENSED_KEYS = {"noise": "imu_noise", "delay": "sensor_delay"}
+
+
+def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> None:
+    """On the estimate, refuse the keys that add noise and delay to the twin's own state (the
+    estimate never reads that state: they would change nothing).
+
+    Raises:
+        SkatelibError: Naming the keys, their sensors' counterparts and ``--state true``.
+    """
+    if state != "estimate":
+        return
+    given = {item.split("=", 1)[0].strip() for item in perturb.split(",") if "=" in item}
+    bad = sorted(given & set(SENSED_KEYS))
+    if bad:
+        from skatelib.library.errors import SkatelibError
+
+        instead = ", ".join(SENSED_KEYS[k] for k in bad)
+        raise SkatelibError(f"{option} {', '.join(bad)}: noise and delay on the twin's own state, which the "
+                            f"controller does not read on the estimate (the default): give the sensors' "
+                            f"{instead}, or add --state true")
+
+
 def run_jobs(calls: Sequence[Callable[[], Any]], jobs: int, progress: bool | Callable[[int, int], None],
              label: str) -> list[Any]:
     """Run the picklable ``calls`` on ``jobs`` workers (the build's runner); progress goes to a

@@ -99,3 +99,29 @@ def test_validate_refuses_a_bad_perturbation_before_checking(lib_copy):
                        text=True, timeout=300)
     assert r.returncode == 2 and "noise would be -1" in r.stderr, r.stdout + r.stderr
     assert "valid" not in r.stdout and Path(lib_copy).read_bytes() == before
+
+
+def test_the_twin_rides_on_the_estimate_unless_told_and_refuses_noise_it_would_not_read(lib_copy):
+    """`track --plant mujoco` and `skatelib.track(plant="mujoco")` feed the controller the estimate
+    unless `--state true`; there `--perturb noise=`/`delay=` (noise and delay on the twin's own
+    state, which the estimate never reads) are refused naming the sensors' keys, exit 2, before any
+    ride; with `--state true` they are accepted (the command goes on to its entries, stopped here by
+    an unknown entry key)."""
+    import inspect
+
+    import skatelib
+    from skatelib.pipeline.cli.app import app
+    from skatelib.pipeline.cli.track_commands import StateKind, track
+    from typer.testing import CliRunner
+
+    assert inspect.signature(track).parameters["state"].default is StateKind.estimate
+    assert inspect.signature(skatelib.track).parameters["state"].default == "estimate"
+    for text, instead in (("noise=0.001", "imu_noise"), ("mass=+5%,delay=0.004", "sensor_delay")):
+        r = subprocess.run([*CLI, "track", lib_copy, "--plant", "mujoco", "--perturb", text], capture_output=True,
+                           text=True, timeout=120)
+        assert r.returncode == 2 and instead in r.stderr and "--state true" in r.stderr, r.stdout + r.stderr
+        with pytest.raises(skatelib.SkatelibError, match=instead):
+            skatelib.track(lib_copy, plant="mujoco", perturb=text)
+        told = CliRunner().invoke(app, ["track", lib_copy, "--plant", "mujoco", "--state", "true", "--perturb", text,
+                                        "-e", "v9.99_s9"])
+        assert "v9.99_s9" in str(told.exception) + told.output and instead not in told.output, told.output

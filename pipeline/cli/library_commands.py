@@ -72,8 +72,9 @@ def info(
 PerturbOpt = Annotated[str, typer.Option(
     help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
          "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
-         "armature payload payload_x payload_y payload_z noise delay, and with --state estimate the sensors' gyro_bias "
-         "accel_bias imu_noise encoder_offset imu_tilt sensor_delay (omitted: "
+         "armature payload payload_x payload_y payload_z, with --state true noise delay (on the twin's own state), "
+         "and on the estimate (track's default) the sensors' gyro_bias accel_bias imu_noise encoder_offset imu_tilt "
+         "sensor_delay (omitted: "
          f"{DEFAULT_SENSOR_PERTURBATION}). 'none' for the plant as planned. Ranges: "
          f"{bounds_text(BOUNDS)}.", callback=perturbation)]
 DEFAULT_PERTURB = DEFAULT_PLANT_PERTURBATION
@@ -82,7 +83,8 @@ DEFAULT_PERTURB = DEFAULT_PLANT_PERTURBATION
 def validate(
     library: LibArg,
     closed_loop: Annotated[bool, typer.Option(
-        "--closed-loop", help="Also track every successful entry in closed loop (as `track`) and store each "
+        "--closed-loop", help="Also track every successful entry in closed loop (as `track`; on the twin fed the "
+                              "twin's own state, as `track --state true`) and store each "
                               "verdict in the library (entry attribute closed_loop_json); the file must be "
                               "writable and keeps its permissions.")] = False,
     perturb: PerturbOpt = DEFAULT_PERTURB,

@@ -33,7 +33,8 @@ from skatelib.pipeline.views.console import (
 from skatelib.pipeline.views.verdict_tables import steer_table, track_table, twin_table
 
 STATE_HELP = ("With --plant mujoco: what the controller is fed: estimate (the robot's estimator on the twin's IMU "
-              "and joint encoders, as on the robot; the verdict adds its error) or true (the twin's own state).")
+              "and joint encoders, as on the robot; the verdict adds its error) or true (the twin's own state). "
+              "--draw rides on the certificate's own state; a humanoid's twin on its ankle sensors and IMU.")
 
 REPORT_HELP = ("Write an HTML report (.html): per entry the plan against the closed loop (board speed, heading, deck "
                "roll, Coulomb margin) and the verdict with its reasons (either plant).")
@@ -89,6 +90,10 @@ def track(
     if draw is not None:
         return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
     plant_error = "" if perturb == "none" else perturb
+    if plant is PlantKind.mujoco:
+        from skatelib.pipeline.track_setup import sensed_keys_checked
+
+        sensed_keys_checked(plant_error, state.value)
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco,
                      (report, ride if maneuver is Maneuver.entries else "the steering maneuver"))
     if ride is not None:
