@@ -3,6 +3,7 @@ options, and the closed-loop runner with its progress (a function of yours, or t
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -34,14 +35,23 @@ def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> 
     estimate never reads that state: they would change nothing).
 
     Raises:
-        SkatelibError: Naming the keys, their sensors' counterparts and ``--state true``.
+        SkatelibError: Naming the keys, their sensors' counterparts and ``--state true`` (or a value
+            of theirs out of its range, naming the range).
     """
     if state != "estimate":
         return
-    given = {item.split("=", 1)[0].strip() for item in perturb.split(",") if "=" in item}
-    bad = sorted(given & set(SENSED_KEYS))
+    from skatelib.library.errors import SkatelibError
+    from skatelib.library.perturb import bounded
+
+    given: set[str] = set()
+    for item in filter(None, (s.strip() for s in perturb.split(","))):
+        key, _, value = (s.strip() for s in item.partition("="))
+        if key in SENSED_KEYS:
+            given.add(key)
+            with contextlib.suppress(ValueError):  # a value out of its range is refused as such first
+                bounded(item, key, float(value), SkatelibError)
+    bad = sorted(given)
     if bad:
-        from skatelib.library.errors import SkatelibError
 
         instead = ", ".join(SENSED_KEYS[k] for k in bad)
         raise SkatelibError(f"{option} {', '.join(bad)}: noise and delay on the twin's own state, which the "
