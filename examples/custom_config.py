@@ -11,7 +11,8 @@ shipped default wherever skatelib is installed), so that you can edit and rebuil
 ``skatelib build out/custom.toml``. Each entry is printed as it starts and finishes; pass
 ``progress=True`` to ``skatelib.build`` for the command line's progress bar instead. The entries
 are then ridden in closed loop on the plant as planned (``--perturb`` adds model errors, as
-``skatelib track`` does by default); the exit code is 1 when a build, a check or a ride failed.
+``skatelib track`` does by default; on the twin the controller rides on its estimator, the sensors'
+default errors included); the exit code is 1 when a build, a check or a ride failed.
 """
 
 from __future__ import annotations
