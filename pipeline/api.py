@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from skatelib.library.perturb import DEFAULT_PLANT_PERTURBATION
 from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED, check_choice, check_range
-from skatelib.pipeline.track_setup import controller, run_jobs, sensed_keys_checked
+from skatelib.pipeline.track_setup import controller, plant_errors, run_jobs
 
 if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import EntryEvent
@@ -198,10 +198,9 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
     check_range("skatelib.track", "seed", seed, 0, MAX_SEED)
     mpc, settings = controller(check_choice("skatelib.track", "solver", solver, ("daqp", "proxqp", "osqp")),
                                mpc_mu, seed, check_choice("skatelib.track", "state", state, ("true", "estimate")))
-    errors = "" if perturb == "none" else perturb
+    errors = plant_errors(perturb, plant == "mujoco", state, "skatelib.track(perturb=...)")
     keys = list(entries) if entries is not None else None
     if plant == "mujoco":
-        sensed_keys_checked(errors, state, "skatelib.track(perturb=...)")
         from skatelib.proving.twin.track import twin_jobs
 
         calls: list[Any] = list(twin_jobs(Path(library), keys, errors, mpc, settings))

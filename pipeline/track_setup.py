@@ -30,6 +30,15 @@ def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tupl
 SENSED_KEYS = {"noise": "imu_noise", "delay": "sensor_delay"}
 
 
+def plant_errors(perturb: str, on_twin: bool, state: str, option: str = "--perturb") -> str:
+    """``track``'s model-error text (``none``: none), its sensed-state keys checked on the twin
+    (:func:`sensed_keys_checked`)."""
+    errors = "" if perturb == "none" else perturb
+    if on_twin:
+        sensed_keys_checked(errors, state, option)
+    return errors
+
+
 def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> None:
     """On the estimate, refuse the keys that add noise and delay to the twin's own state (the
     estimate never reads that state: they would change nothing).

@@ -22,7 +22,7 @@ from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
-from skatelib.pipeline.track_setup import run_jobs
+from skatelib.pipeline.track_setup import plant_errors, run_jobs
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -89,11 +89,7 @@ def track(
     mpc, settings = _controller(solver, mpc_mu, seed, state)
     if draw is not None:
         return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
-    plant_error = "" if perturb == "none" else perturb
-    if plant is PlantKind.mujoco:
-        from skatelib.pipeline.track_setup import sensed_keys_checked
-
-        sensed_keys_checked(plant_error, state.value)
+    plant_error = plant_errors(perturb, plant is PlantKind.mujoco, state.value)
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco,
                      (report, ride if maneuver is Maneuver.entries else "the steering maneuver"))
     if ride is not None:
