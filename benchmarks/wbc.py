@@ -20,7 +20,7 @@ UPDATE = Figure("wbc-update", "whole-body update (terms + tasks + QP), v0.50_s2 
 # above, not a replacement.
 REPLAY = Figure("wbc-replay", "the same whole-body updates replayed back to back", "ms", 0.3,
                 "the updates in the loop (above)")
-TRACK = Figure("track-twin", "skatelib track --plant mujoco, default library, 2 workers", "s", 300.0,
+TRACK = Figure("track-twin", "skatelib track --plant mujoco --state true, default library, 2 workers", "s", 300.0,
                "one worker")
 FIGURES = (UPDATE, REPLAY, TRACK)
 
