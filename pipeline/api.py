@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from skatelib.library.perturb import DEFAULT_PLANT_PERTURBATION
 from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED, check_choice, check_range
-from skatelib.pipeline.track_setup import controller, plant_errors, run_jobs
+from skatelib.pipeline.track_setup import DEFAULT_TWIN_STATE, controller, plant_errors, run_jobs
 
 if TYPE_CHECKING:
     from skatelib.pipeline.build.contract import EntryEvent
@@ -158,7 +158,7 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
 
 def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Plant = "model",  # noqa: PLR0913
           perturb: str = DEFAULT_PLANT_PERTURBATION, solver: QpSolver = "daqp", mpc_mu: float | None = None,
-          seed: int = 0, state: StateSource = "estimate", jobs: int = 2,
+          seed: int = 0, state: StateSource = DEFAULT_TWIN_STATE, jobs: int = 2,
           progress: bool | Callable[[int, int], None] = False) -> list[TrackResult] | list[TwinResult]:
     """Ride a quadruped library's entries in closed loop, as ``skatelib track`` does: the paper's
     linear MPC (30 Hz), fed by the runtime, drives a plant with model errors through each entry, the

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Final
 
 
 def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tuple[Any, Any]:
@@ -24,6 +24,11 @@ def controller(solver: str, mpc_mu: float | None, seed: int, state: str) -> tupl
         raise ImportError(f"the controller's packages are missing ({e}); pip install 'skatelib[control]'") from e
     return MpcConfig(solver=solver, mu=mpc_mu), TrackSettings(seed=seed, state=state)
 
+
+# What `track --plant mujoco` feeds the controller unless told: the robot's estimator on the twin's
+# sensors, as on the robot ("true": the twin's own state, what the build's twin judge, `validate
+# --closed-loop` and `TrackSettings` ride on).
+DEFAULT_TWIN_STATE: Final = "estimate"
 
 # The twin's --perturb keys that act on the twin's own state fed to the controller, and the
 # sensors' keys that do the same on the estimate.

@@ -22,7 +22,7 @@ from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
-from skatelib.pipeline.track_setup import plant_errors, run_jobs
+from skatelib.pipeline.track_setup import DEFAULT_TWIN_STATE, plant_errors, run_jobs
 from skatelib.pipeline.views.console import (
     console,
     count,
@@ -45,6 +45,9 @@ DRAW_HELP = "With --plant mujoco and one --entry: ride a certificate's draw of t
 class StateKind(enum.StrEnum):
     true = "true"
     estimate = "estimate"
+
+
+DEFAULT_STATE = StateKind(DEFAULT_TWIN_STATE)
 
 
 def track(
@@ -76,7 +79,7 @@ def track(
     ride: Annotated[str | None, typer.Option(
         help="Ride a chain of stages FROM:TO,... in m/s (e.g. 0:0.5,0.5:0.8,0.8:0.3,0.3:0), each by the "
              "library's entries (a route of several where no single one gets there), on either plant.")] = None,
-    state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = StateKind.estimate,
+    state: Annotated[StateKind, typer.Option(help=STATE_HELP)] = DEFAULT_STATE,
     draw: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help=DRAW_HELP)] = None,
     report: Annotated[Path | None, typer.Option(help=REPORT_HELP)] = None,
 ) -> None:
