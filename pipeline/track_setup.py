@@ -66,7 +66,6 @@ def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> 
                 bounded(item, key, float(value), SkatelibError)
     bad = sorted(given)
     if bad:
-
         instead = ", ".join(SENSED_KEYS[k] for k in bad)
         raise SkatelibError(f"{option} {', '.join(bad)}: noise and delay on the twin's own state, which the "
                             f"controller does not read on the estimate (the default): give the sensors' "
