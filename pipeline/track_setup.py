@@ -3,7 +3,6 @@ options, and the closed-loop runner with its progress (a function of yours, or t
 
 from __future__ import annotations
 
-import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
@@ -49,21 +48,20 @@ def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> 
     estimate never reads that state: they would change nothing).
 
     Raises:
-        SkatelibError: Naming the keys, their sensors' counterparts and ``--state true`` (or a value
-            of theirs out of its range, naming the range).
+        SkatelibError: Naming the keys, their sensors' counterparts and ``--state true``; a text
+            the twin's parser refuses (an unknown key, a value out of its range), as it does.
     """
     if state != "estimate":
         return
     from skatelib.library.errors import SkatelibError
-    from skatelib.library.perturb import bounded
+    from skatelib.library.perturb import bounded, perturbation_items
+    from skatelib.sim.errors import TWIN_KEYS, TwinPerturbationError
 
     given: set[str] = set()
-    for item in filter(None, (s.strip() for s in perturb.split(","))):
-        key, _, value = (s.strip() for s in item.partition("="))
+    for item, key, number, _ in perturbation_items(perturb, TWIN_KEYS, TwinPerturbationError):
         if key in SENSED_KEYS:
+            bounded(item, key, number, TwinPerturbationError)  # a value out of its range is refused as such first
             given.add(key)
-            with contextlib.suppress(ValueError):  # a value out of its range is refused as such first
-                bounded(item, key, float(value), SkatelibError)
     bad = sorted(given)
     if bad:
         instead = ", ".join(SENSED_KEYS[k] for k in bad)
