@@ -34,7 +34,7 @@ define install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip setuptools wheel
 	$(BIN)/python -m pip install -q -e '.[$(1)]' --config-settings editable_mode=strict
-	@find api pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules
+	@find api pipeline library runtime control sim proving \( -name '*.py' -o -name '*.c' \) | sort > $(VENV)/.skatelib-modules
 endef
 
 $(STAMP): pyproject.toml
@@ -59,11 +59,11 @@ ifneq ($(origin PYTHON),file)
 	   echo "rebuilding $(VENV) with $(PYTHON) ($$want; it had $$have)"; rm -rf $(VENV); \
 	   $(MAKE) --no-print-directory $(STAMP); fi
 endif
-	@{ find api pipeline library runtime control sim proving -name '*.py' | sort | cmp -s - $(VENV)/.skatelib-modules && \
+	@{ find api pipeline library runtime control sim proving \( -name '*.py' -o -name '*.c' \) | sort | cmp -s - $(VENV)/.skatelib-modules && \
 	   $(BIN)/python -c 'import skatelib.pipeline.cli.app, skatelib.library.reader' 2>/dev/null; } || { \
 	  echo "relinking the editable install"; \
 	  $(BIN)/python -m pip install -q --no-deps --no-build-isolation -e . --config-settings editable_mode=strict && \
-	  find api pipeline library runtime control sim proving -name '*.py' | sort > $(VENV)/.skatelib-modules; }
+	  find api pipeline library runtime control sim proving \( -name '*.py' -o -name '*.c' \) | sort > $(VENV)/.skatelib-modules; }
 
 library: venv-build
 	$(BIN)/skatelib build $(CONFIG) $(if $(OUT),-o $(OUT))

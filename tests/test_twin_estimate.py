@@ -6,7 +6,7 @@ control shows a large velocity error on the deck."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +17,7 @@ pytest.importorskip("daqp")
 
 from skatelib.control.estimator.deck import DeckSettings
 from skatelib.control.estimator.estimator import EstimatorSettings
+from skatelib.control.estimator.native import tick_library
 from skatelib.control.estimator.odometry import OdometrySettings
 from skatelib.control.params import SkateParams
 from skatelib.library import schema
@@ -161,13 +162,20 @@ def test_feet_assumed_put_fail_the_entry(two_strides):
 
 class _Side:
     """An estimator riding along on its own sensors while the controller is fed the truth: its
-    errors (:class:`EstimatorErrors`) and the trunk's attitude error, tilt and heading [rad]."""
+    errors (:class:`EstimatorErrors`) and the trunk's attitude error, tilt and heading [rad]; with
+    ``python``, the same estimator on its Python tick beside it on the same readings and the
+    largest gap between their states (``python_gap``)."""
 
-    def __init__(self, feedback: EstimatedFeedback):
+    def __init__(self, feedback: EstimatedFeedback, python: EstimatedFeedback | None = None):
         self.fb, self.tilt, self.yaw, self.over_deck, self.height = feedback, [], [], [], []
+        self.python, self.python_gap = python, 0.0
 
     def __call__(self, true) -> None:
-        est = self.fb(true)
+        est = self.last = self.fb(true)
+        if self.python is not None:
+            ref = self.python(true)
+            self.python_gap = max(self.python_gap, *(float(np.max(np.abs(getattr(est, f.name) - getattr(ref, f.name))))
+                                                     for f in fields(est)))
         self.tilt.append(math.acos(min(1.0, float(est.trunk_R[:, 2] @ true.trunk_R[:, 2]))))
         self.yaw.append(math.remainder(yaw_of(est.trunk_R) - yaw_of(true.trunk_R), math.tau))
         # the trunk's place on the deck (deck frame): what the feet's kinematics carry
@@ -178,11 +186,18 @@ class _Side:
                                  - true.deck_R[:, 2] @ (true.trunk_pos - true.deck_pos)))
 
     def summary(self) -> dict[str, float]:
-        return {**self.fb.errors.summary(), "tilt_mean": float(np.mean(self.tilt)),
+        estimator = self.fb.estimator
+        estimator.sync()  # the C tick's state back in the Python parts
+        synced = max(float(np.max(np.abs(estimator.odometry.v - self.last.trunk_v))),
+                     float(np.max(np.abs(estimator.deck.R - self.last.deck_R))))
+        return {**self.fb.errors.summary(), "tilt_mean": float(np.mean(self.tilt)), "sync_gap": synced,
+                "python_gap": self.python_gap, "compiled": float(estimator.native is not None),
                 "yaw_end": abs(self.yaw[-1]), "on_deck_mean": float(np.mean(self.over_deck)),
                 "height_mean": float(np.mean(self.height))}
 
 
+PAIRED = ("default", "clean", "sensor_delay", "imu_tilt_unaligned", "default_rigid_feet", "default_tilt_on_reading",
+          "gyro_bias_unestimated", "default_classical", "default_level_deck")
 SENSOR_CASES = {
     "clean": "gyro_bias=0,imu_noise=1,encoder_offset=0,imu_tilt=0,sensor_delay=0",
     "default": "",
@@ -210,19 +225,33 @@ def sensor_runs(lib_path):
     ride = entry_ride(lib, key, loop.loop, loop.kin.foot_radius_m)
     start = start_state(ride.x0, ride.board0, ride.from_velocity_mps, on_deck, p.com_offset_m)
 
-    def side(text: str, settings: EstimatorSettings | None = None) -> _Side:
+    def feedback_of(text: str, settings: EstimatorSettings | None) -> EstimatedFeedback:
         errors = parse_twin_perturbation(text, p.mu).sensors
-        return _Side(EstimatedFeedback(plant, lib, p, loop.contacts.at, start, loop.tick_s, errors, 0, settings))
+        return EstimatedFeedback(plant, lib, p, loop.contacts.at, start, loop.tick_s, errors, 0, settings)
 
-    sides = {name: side(text) for name, text in SENSOR_CASES.items()}
+    def side(text: str, settings: EstimatorSettings | None = None, python: bool = False) -> _Side:
+        twin = feedback_of(text, replace(settings or EstimatorSettings(), compiled=False)) if python else None
+        return _Side(feedback_of(text, settings), twin)
+
+    def both(side: _Side) -> list[EstimatedFeedback]:
+        return [side.fb] + ([side.python] if side.python is not None else [])
+
+    python = ("default", "clean", "sensor_delay")
+    sides = {name: side(text, python=name in python) for name, text in SENSOR_CASES.items()}
     unaligned = EstimatorSettings(mount_from_legs=False)
     for name in ("clean", "imu_tilt", "accel_bias"):
-        sides[f"{name}_unaligned"] = side(SENSOR_CASES[name], unaligned)
-    sides["default_rigid_feet"] = side(SENSOR_CASES["default"])
-    sides["default_rigid_feet"].fb.estimator.body = None  # no give of the feet under load
-    sides["default_tilt_on_reading"] = side(SENSOR_CASES["default"], EstimatorSettings(tilt_from_velocity=False))
-    sides["gyro_bias_unestimated"] = side(SENSOR_CASES["gyro_bias"])
-    sides["gyro_bias_unestimated"].fb.estimator.attitude.gyro_bias = np.zeros(3)
+        sides[f"{name}_unaligned"] = side(SENSOR_CASES[name], unaligned, python=name == "imu_tilt")
+    sides["default_rigid_feet"] = side(SENSOR_CASES["default"], python=True)
+    for fb in both(sides["default_rigid_feet"]):
+        fb.estimator.body = None  # no give of the feet under load
+    sides["default_tilt_on_reading"] = side(SENSOR_CASES["default"], EstimatorSettings(tilt_from_velocity=False),
+                                            python=True)
+    sides["gyro_bias_unestimated"] = side(SENSOR_CASES["gyro_bias"], python=True)
+    for fb in both(sides["gyro_bias_unestimated"]):
+        fb.estimator.attitude.gyro_bias = np.zeros(3)
+    # the compiled tick's other branches, against the Python tick's (their verdicts are other tests')
+    sides["default_classical"] = side("", EstimatorSettings(odometry=OdometrySettings(moving_deck=False)), python=True)
+    sides["default_level_deck"] = side("", EstimatorSettings(deck=DeckSettings(roll=False)), python=True)
     truth = loop.feedback
 
     def feedback(true):
@@ -234,6 +263,20 @@ def sensor_runs(lib_path):
     run = loop.ride()
     assert not run.fall, run.fall
     return {name: s.summary() for name, s in sides.items()}
+
+
+def test_the_compiled_tick_is_the_python_tick(sensor_runs):
+    """The estimator's tick in C (:mod:`skatelib.control.estimator.native`) gives the Python tick's
+    state at every tick of the ride to 1e-9 (rounding), for each setting and sensor case it was
+    paired with: every field of the state, the feet's touch codes among them."""
+    if tick_library() is None:
+        pytest.skip("no C compiler: the estimator runs its Python tick")
+    paired = {name: r for name, r in sensor_runs.items() if name in PAIRED}
+    assert len(paired) == len(PAIRED)
+    for name, r in paired.items():
+        assert r["compiled"] == 1.0, name  # the C tick ran (else Python met Python)
+        assert r["python_gap"] < 1e-9, (name, r["python_gap"])
+        assert r["sync_gap"] == 0.0, name
 
 
 def test_sensor_errors_degrade_the_estimate_as_they_should(sensor_runs):

@@ -67,7 +67,7 @@ class AttitudeFilter:
         self.s = settings or AttitudeSettings()
         self.gyro_bias = np.zeros(3)
         self.mount = np.eye(3) if mount is None else mount  # the IMU's axes in the trunk frame
-        self._turn = mount is not None and not np.array_equal(mount, np.eye(3))  # readings to turn
+        self.turned = mount is not None and not np.array_equal(mount, np.eye(3))  # readings to turn
         self.omega = np.zeros(3)
         self.accel = np.zeros(3)  # the last specific force (trunk frame)
 
@@ -83,7 +83,7 @@ class AttitudeFilter:
         IMU's mounting turned so that the standstill's gravity reads along it (a tilted mount,
         and the accelerometer's bias with it), the filter levelled on it."""
         self.mount = _onto(self.still_up, up) @ self.mount
-        self._turn = True
+        self.turned = True
         self.still_up = up
         self._level(up)
 
@@ -100,7 +100,7 @@ class AttitudeFilter:
         (world frame [m/s^2]; None: taken as zero) and the accelerometer's bias as estimated
         besides (trunk frame [m/s^2]; None: zero): the rotation and the angular velocity."""
         omega, a = gyro - self.gyro_bias, accel
-        if self._turn:
+        if self.turned:
             omega, a = self.mount @ omega, self.mount @ a
         f = a if accel_world is None else a - self.R.T @ accel_world
         if accel_bias is not None:

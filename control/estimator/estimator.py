@@ -15,78 +15,22 @@ and speed, standing on a level deck of the board's known height.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
-from skatelib.control.estimator.attitude import AttitudeFilter, AttitudeSettings
-from skatelib.control.estimator.deck import DeckEstimate, DeckSettings, plane_normal, update_deck
+from skatelib.control.estimator.attitude import AttitudeFilter
+from skatelib.control.estimator.deck import DeckEstimate, plane_normal, update_deck
 from skatelib.control.estimator.legs import LegTermsBuffer, leg_terms
 from skatelib.control.estimator.loads import BodyFigures, compressions
-from skatelib.control.estimator.odometry import LegOdometry, OdometrySettings
+from skatelib.control.estimator.native import CompiledTick, leg_chains, tick_library
+from skatelib.control.estimator.odometry import LegOdometry
+from skatelib.control.estimator.reading import Reading
+from skatelib.control.estimator.settings import BoardGeometry, EstimatorSettings
 from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
 from skatelib.control.kinematics import LegKinematics
 from skatelib.library.channels import BOARD, GROUND
 
 UP = np.array([0.0, 0.0, 1.0])
-
-
-class Reading(Protocol):
-    """One tick's sensor readings (IMU frame; joints in channel order)."""
-
-    @property
-    def t(self) -> float: ...
-
-    @property
-    def gyro(self) -> np.ndarray: ...
-
-    @property
-    def accel(self) -> np.ndarray: ...
-
-    @property
-    def q(self) -> np.ndarray: ...
-
-    @property
-    def qd(self) -> np.ndarray: ...
-
-
-@dataclass(frozen=True)
-class BoardGeometry:
-    """What the robot knows of its board: the deck's top over the floor and the roll axis (the
-    axles) below it [m]."""
-
-    deck_height_m: float
-    axis_depth_m: float
-
-
-@dataclass(frozen=True)
-class EstimatorSettings:
-    """The estimator's parts' settings; ``touch_m``: a foot this close to its surface touches [m];
-    ``settle_s``: a deck foot's velocity is used this long after it touches down (its impact over)
-    [s]; ``floor_settle_s``: a floor foot's, this long (it slides while its load builds) [s];
-    ``mount_from_legs``: at the standstill, the trunk's up from its three or more feet on the level
-    deck, and the IMU's mounting turned to read gravity along it (False: the IMU's axes taken for
-    the trunk's); ``liftoff_s``: a floor foot's velocity is not used this long before its planned
-    lift-off (its load going, it slips back) [s]; ``tilt_from_velocity``: the attitude's tilt
-    reference is the accelerometer's reading less the trunk's acceleration as the position filter
-    has it (:mod:`.attitude`; False: the reading itself, which takes a deceleration for gravity);
-    ``mounted_bias_mps2``: with the mounting from the legs, what is left of the accelerometer's
-    horizontal bias (1 sigma, trunk x and y) [m/s^2]: the mounting holds the rest (levelled on
-    the standstill's reading, the bias cancels in the horizontal acceleration), so the filter's
-    bias state may not take up there what a slipping floor foot reads (it would then drift the
-    velocity through every coast after)."""
-
-    attitude: AttitudeSettings = field(default_factory=AttitudeSettings)
-    odometry: OdometrySettings = field(default_factory=OdometrySettings)
-    deck: DeckSettings = field(default_factory=DeckSettings)
-    touch_m: float = 0.005
-    settle_s: float = 0.02
-    floor_settle_s: float = 0.06
-    mount_from_legs: bool = True
-    liftoff_s: float = 0.15
-    tilt_from_velocity: bool = True
-    mounted_bias_mps2: float = 1e-3
 
 
 class StateEstimator:
@@ -134,6 +78,8 @@ class StateEstimator:
         self.legs = LegTermsBuffer(kin)
         self.give = np.zeros(4)  # each stance foot's give under its static load [m] (.loads)
         self.accel_world = np.zeros(3)  # the trunk's acceleration over the last tick as the filter has it [m/s^2]
+        self.native: CompiledTick | None = None  # the C tick, once the first tick has run in it
+        self._native_tried = False
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
@@ -146,6 +92,11 @@ class StateEstimator:
 
     def __call__(self, reading: Reading) -> RobotState:
         """The state after one tick's readings."""
+        if not self._native_tried:
+            self._native_tried = True
+            self.native = self._compiled()
+        if self.native is not None:
+            return self._native_tick(reading)
         dt = 0.0 if self.last_t is None else reading.t - self.last_t
         self.last_t = self.now = reading.t
         odo = self.odometry
@@ -174,6 +125,66 @@ class StateEstimator:
         if dt > 0:
             self.accel_world = (odo.v - v_before) / dt
         return self._state(reading, R, omega, r, plan)
+
+    def _compiled(self) -> CompiledTick | None:
+        """The C tick loaded with this estimator's state, or None (not asked for, or unavailable)."""
+        if not self.s.compiled:
+            return None
+        lib, chains = tick_library(), leg_chains(self.kin)
+        if lib is None or chains is None:
+            return None
+        native = CompiledTick(lib, chains)
+        native.load(*self._native_state())
+        return native
+
+    def _native_state(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+        """The figures, settings and state the C tick starts from (its fields by name)."""
+        st, att, odo, deck = self.s, self.attitude, self.odometry, self.deck
+        o = st.odometry
+        scalars = {"rho": self.rho, "g": self.g, "touch_m": st.touch_m, "settle_s": st.settle_s,
+                   "floor_settle_s": st.floor_settle_s, "deck_height": self.board.deck_height_m,
+                   "axis_depth": self.board.axis_depth_m, "k_tilt": att.s.k_tilt, "att_gate": att.s.gate,
+                   "att_gravity": att.s.gravity_mps2, "foot_velocity2": o.foot_velocity**2,
+                   "foot_height2": o.foot_height**2, "gate": o.gate, "deck_prior": st.deck.prior,
+                   "turn": float(att.turned), "tilt_from_velocity": float(st.tilt_from_velocity),
+                   "moving_deck": float(o.moving_deck), "deck_roll_on": float(st.deck.roll),
+                   "has_body": float(self.body is not None), "yaw": deck.yaw, "roll": deck.roll,
+                   "yaw_rate": deck.yaw_rate, "roll_rate": deck.roll_rate, "last_t": self.last_t or 0.0,
+                   "has_last": float(self.last_t is not None), "now": self.now}
+        arrays = {"mount": att.mount, "gyro_bias": att.gyro_bias, "q_proc": odo.process_noise, "R": att.R,
+                  "omega": att.omega, "accel": att.accel, "x": odo.x, "P": odo.P, "deck_pos": deck.pos,
+                  "footholds": deck.footholds, "deck_R": deck.R, "stance": self.stance, "down_since": self.down_since,
+                  "used": self.used, "give": self.give, "accel_world": self.accel_world}
+        if self.body is not None:
+            scalars["mass"], scalars["compliance"] = self.body.mass_kg, self.body.compliance_m_per_N
+            arrays["com_offset"] = self.body.com_offset_m
+        return scalars, arrays
+
+    def _native_tick(self, reading: Reading) -> RobotState:
+        assert self.native is not None
+        t = reading.t
+        out = self.native(reading, self.schedule(t), self.schedule(t + self.s.liftoff_s))
+        self.last_t = self.now = t
+        return RobotState(trunk_pos=out[0:3].copy(), trunk_R=out[3:12].reshape(3, 3).copy(), trunk_v=out[12:15].copy(),
+                          trunk_omega=out[15:18].copy(), q=np.array(reading.q), qd=np.array(reading.qd),
+                          deck_pos=out[18:21].copy(), deck_R=out[21:30].reshape(3, 3).copy(),
+                          deck_v=out[30:33].copy(), deck_omega=out[33:36].copy(),
+                          foot_touch=out[36:40].astype(np.int8), contact_points=out[40:52].reshape(3, 4).copy())
+
+    def sync(self) -> None:
+        """With the C tick: its state copied back into the Python parts (attitude, odometry, deck,
+        the feet's stance), which it does not update as it runs."""
+        if self.native is None:
+            return
+        n = self.native
+        self.attitude.R, self.attitude.omega, self.attitude.accel = n.view("R").reshape(3, 3), n.view("omega"), \
+            n.view("accel")
+        self.odometry.x, self.odometry.P = n.view("x"), n.view("P").reshape(10, 10)
+        self.deck = DeckEstimate(yaw=float(n.s.yaw), roll=float(n.s.roll), pos=n.view("deck_pos"),
+                                 footholds=n.view("footholds").reshape(3, 4), yaw_rate=float(n.s.yaw_rate),
+                                 roll_rate=float(n.s.roll_rate))
+        self.stance, self.used = n.view("stance") != 0, n.view("used") != 0
+        self.down_since, self.give, self.accel_world = n.view("down_since"), n.view("give"), n.view("accel_world")
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,
                  R: np.ndarray) -> np.ndarray:

@@ -94,7 +94,7 @@ class LegOdometry:
         self.x = np.concatenate([p0, v0, [u0], np.zeros(3)])
         self.P = np.diag([1e-6] * 3 + [1e-4] * 3 + [1e-4] + [bias_sd**2] * 3)
         self._F = np.eye(self.N)
-        self._q = np.array([s.position_walk**2] * 3 + [s.accel_noise**2] * 3 + [s.board_accel**2]
+        self.process_noise = np.array([s.position_walk**2] * 3 + [s.accel_noise**2] * 3 + [s.board_accel**2]
                            + [s.bias_walk**2] * 3)  # the process noise per second (diagonal)
         self._diag = np.diag_indices(self.N)
         self._foot_noise = s.foot_velocity**2 * np.eye(3)
@@ -129,7 +129,7 @@ class LegOdometry:
         F[0:3, 7:10] = -0.5 * dt * dt * R
         F[3:6, 7:10] = -dt * R
         P = F @ self.P @ F.T
-        P[self._diag] += self._q * dt
+        P[self._diag] += self.process_noise * dt
         self.P = P
 
     def correct(self, feet: list[FootMeasure]) -> np.ndarray:

@@ -1,0 +1,84 @@
+"""The estimator's compiled tick (``skatelib.control.estimator.native``): its legs' kinematics
+against pinocchio's at random joint angles. Its whole tick against the Python tick on a ride on
+the twin is in ``tests/test_twin_estimate.py`` (``test_the_compiled_tick_is_the_python_tick``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from skatelib.control.estimator import loads
+from skatelib.control.estimator.legs import leg_terms
+from skatelib.control.estimator.native import CompiledTick, leg_chains, static_loads, tick_library
+from skatelib.control.kinematics import LegKinematics
+from skatelib.pipeline.config import load_config
+
+
+@pytest.fixture(scope="module")
+def kin() -> LegKinematics:
+    cfg = load_config()
+    model = pin.buildModelFromUrdf(str(cfg.urdf_path))
+    joints = [model.getJointId(n) for n in cfg.robot.joint_names]
+    return LegKinematics(model=model, data=model.createData(),
+                         q_index=np.array([model.joints[j].idx_q for j in joints]),
+                         v_index=np.array([model.joints[j].idx_v for j in joints]),
+                         feet=tuple(model.getFrameId(f) for f in cfg.robot.foot_frames),
+                         foot_radius_m=0.02, torque_limit_Nm=0.0, lower_rad=model.lowerPositionLimit,
+                         upper_rad=model.upperPositionLimit)
+
+
+def test_the_compiled_legs_are_pinocchios(kin):
+    """Foot centres and their linear and angular Jacobians (trunk frame) at 50 random joint
+    angles, within +-1.5 rad of zero on every joint: the C code's composition of the model's
+    joint placements and axes equals pinocchio's to 1e-12."""
+    lib = tick_library()
+    if lib is None:
+        pytest.skip("no C compiler: the estimator runs its Python tick")
+    chains = leg_chains(kin)
+    assert chains is not None
+    tick = CompiledTick(lib, chains)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        q = rng.uniform(-1.5, 1.5, 12)
+        ref = leg_terms(kin, q)
+        r, J, Jw = tick.legs(q)
+        assert np.allclose(r, ref.r, atol=1e-12, rtol=0)
+        assert np.allclose(J, ref.J, atol=1e-12, rtol=0)
+        assert np.allclose(Jw, ref.Jw, atol=1e-12, rtol=0)
+
+
+def test_the_compiled_legs_fail_on_a_changed_model(kin):
+    """Negative control: the chains read from the model with one hip's placement moved by 1 cm
+    put that leg's foot 1 cm off pinocchio's, the other legs' feet where pinocchio has them."""
+    lib = tick_library()
+    if lib is None:
+        pytest.skip("no C compiler")
+    chains = leg_chains(kin)
+    assert chains is not None
+    joint_p = chains[1].copy()
+    joint_p[0, 1, 0] += 0.01
+    tick = CompiledTick(lib, (chains[0], joint_p, *chains[2:]))
+    q = np.full(12, 0.3)
+    r, _, _ = tick.legs(q)
+    gap = np.linalg.norm(r - leg_terms(kin, q).r, axis=0)
+    assert gap[0] == pytest.approx(0.01, abs=1e-9)
+    assert np.all(gap[1:] < 1e-12)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+def test_the_compiled_static_loads_are_least_squares(n):
+    """The feet's static loads (the minimum-norm loads that carry the weight with no moment about
+    the centre of mass, clipped at zero) from the C code equal numpy's least squares
+    (``loads.static_loads``) for 1-4 feet at 200 random places, three or four of them in a line
+    among them (the rank-deficient case)."""
+    lib = tick_library()
+    if lib is None:
+        pytest.skip("no C compiler")
+    rng = np.random.default_rng(n)
+    for k in range(200):
+        feet = rng.uniform(-0.2, 0.2, (2, n))
+        if k % 4 == 0 and n >= 3:  # in a line
+            feet[1] = 0.3 * feet[0] + 0.05
+        com = rng.uniform(-0.05, 0.05, 2)
+        ref = loads.static_loads(feet, com, 87.0)
+        assert np.allclose(static_loads(lib, feet, com, 87.0), ref, atol=1e-9, rtol=0), (feet, com, ref)
