@@ -163,13 +163,12 @@ class StateEstimator:
     def _native_tick(self, reading: Reading) -> RobotState:
         assert self.native is not None
         t = reading.t
-        out = self.native(reading, self.schedule(t), self.schedule(t + self.s.liftoff_s))
-        self.last_t = self.now = t
-        return RobotState(trunk_pos=out[0:3].copy(), trunk_R=out[3:12].reshape(3, 3).copy(), trunk_v=out[12:15].copy(),
-                          trunk_omega=out[15:18].copy(), q=np.array(reading.q), qd=np.array(reading.qd),
-                          deck_pos=out[18:21].copy(), deck_R=out[21:30].reshape(3, 3).copy(),
-                          deck_v=out[30:33].copy(), deck_omega=out[33:36].copy(),
-                          foot_touch=out[36:40].astype(np.int8), contact_points=out[40:52].reshape(3, 4).copy())
+        out = self.native(reading, self.schedule(t), self.schedule(t + self.s.liftoff_s)).copy()  # the state's own
+        return RobotState(trunk_pos=out[0:3], trunk_R=out[3:12].reshape(3, 3), trunk_v=out[12:15],
+                          trunk_omega=out[15:18], q=np.array(reading.q), qd=np.array(reading.qd),
+                          deck_pos=out[18:21], deck_R=out[21:30].reshape(3, 3), deck_v=out[30:33],
+                          deck_omega=out[33:36], foot_touch=out[36:40].astype(np.int8),
+                          contact_points=out[40:52].reshape(3, 4))
 
     def sync(self) -> None:
         """With the C tick: its state copied back into the Python parts (attitude, odometry, deck,
@@ -184,6 +183,7 @@ class StateEstimator:
                                  footholds=n.view("footholds").reshape(3, 4), yaw_rate=float(n.s.yaw_rate),
                                  roll_rate=float(n.s.roll_rate))
         self.stance, self.used = n.view("stance") != 0, n.view("used") != 0
+        self.last_t, self.now = (float(n.s.last_t) if n.s.has_last else None), float(n.s.now)
         self.down_since, self.give, self.accel_world = n.view("down_since"), n.view("give"), n.view("accel_world")
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,

@@ -170,14 +170,7 @@ class CompiledTick:
     def __call__(self, reading: Reading, plan: np.ndarray, ahead: np.ndarray) -> np.ndarray:
         """One tick's readings and the contact codes planned now and ``liftoff_s`` ahead: the
         output vector (tick.c's OUT_ layout)."""
-        inp = self.inp
-        inp[0] = reading.t
-        inp[1:4] = reading.gyro
-        inp[4:7] = reading.accel
-        inp[7:19] = reading.q
-        inp[19:31] = reading.qd
-        inp[31:35] = plan
-        inp[35:39] = ahead
+        np.concatenate(((reading.t,), reading.gyro, reading.accel, reading.q, reading.qd, plan, ahead), out=self.inp)
         self.lib.est_tick(*self._ptrs)
         return self.out
 

@@ -458,17 +458,19 @@ static void correct_feet(est_t *s, const int *idx, int m, const double *on_deck,
         z[r + 3] = height[j];
         r += 4;
     }
-    for (int i = 0; i < rows; i++)
-        for (int c = 0; c < NX; c++) {
-            double v = 0.0;
-            for (int l = 0; l < NX; l++) v += H[i * NX + l] * P[l * NX + c];
-            HP[i * NX + c] = v;
-        }
+    /* H's rows have one or two entries (a velocity row: 1 at v_a, -d h_a at u; a height row: 1 at
+     * p_z): H P and H P H^T by picking P's rows and H P's columns */
+    for (int i = 0; i < rows; i++) {
+        int a = i % 4;
+        const double *Pa = P + (a == 3 ? 2 : 3 + a) * NX;
+        double w = H[i * NX + 6];
+        for (int c = 0; c < NX; c++) HP[i * NX + c] = Pa[c] + (a == 3 ? 0.0 : w * P[6 * NX + c]);
+    }
     for (int i = 0; i < rows; i++)
         for (int j = 0; j < rows; j++) {
-            double v = 0.0;
-            for (int l = 0; l < NX; l++) v += HP[i * NX + l] * H[j * NX + l];
-            S[i * rows + j] = v + (i == j ? ((i % 4) == 3 ? s->foot_height2 : s->foot_velocity2) : 0.0);
+            int b = j % 4;
+            double v = b == 3 ? HP[i * NX + 2] : HP[i * NX + 3 + b] + H[j * NX + 6] * HP[i * NX + 6];
+            S[i * rows + j] = v + (i == j ? (b == 3 ? s->foot_height2 : s->foot_velocity2) : 0.0);
         }
     memcpy(Kt, HP, sizeof(double) * rows * NX);
     if (!chol_solve(S, rows, Kt, NX)) return;
