@@ -12,7 +12,8 @@ from pathlib import Path
 
 @functools.cache
 def twin_fingerprint() -> str:
-    """16 hex digits of a SHA-256 over MuJoCo's version and every source file of the three packages."""
+    """16 hex digits of a SHA-256 over MuJoCo's version and every source file (Python and C) of the
+    three packages."""
     import mujoco
     import skatelib.control
     import skatelib.proving
@@ -21,6 +22,6 @@ def twin_fingerprint() -> str:
     h = hashlib.sha256(mujoco.__version__.encode())
     for package in (skatelib.control, skatelib.sim, skatelib.proving):
         for folder in package.__path__:
-            for path in sorted(Path(folder).rglob("*.py")):
+            for path in sorted(p for p in Path(folder).rglob("*") if p.suffix in (".py", ".c")):
                 h.update(path.read_bytes())
     return h.hexdigest()[:16]
