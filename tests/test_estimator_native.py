@@ -5,8 +5,10 @@ the twin is in ``tests/test_twin_estimate.py`` (``test_the_compiled_tick_is_the_
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
+
+pin = pytest.importorskip("pinocchio")
+
 from skatelib.control.estimator import loads
 from skatelib.control.estimator.legs import leg_terms
 from skatelib.control.estimator.native import CompiledTick, leg_chains, static_loads, tick_library
