@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pin = pytest.importorskip("pinocchio")
+pytest.importorskip("pinocchio")
 
+import pinocchio as pin
 from skatelib.control.estimator import loads
 from skatelib.control.estimator.legs import leg_terms
 from skatelib.control.estimator.native import CompiledTick, leg_chains, static_loads, tick_library
