@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("pinocchio")
 
 import pinocchio as pin
-from skatelib.control.estimator import loads
+from skatelib.control.estimator import loads, native
 from skatelib.control.estimator.legs import leg_terms
 from skatelib.control.estimator.native import CompiledTick, leg_chains, static_loads, tick_library
 from skatelib.control.kinematics import LegKinematics
@@ -85,3 +85,14 @@ def test_the_compiled_static_loads_are_least_squares(n):
         com = rng.uniform(-0.05, 0.05, 2)
         ref = loads.static_loads(feet, com, 87.0)
         assert np.allclose(static_loads(lib, feet, com, 87.0), ref, atol=1e-9, rtol=0), (feet, com, ref)
+
+
+def test_a_compiler_that_fails_leaves_the_python_tick(monkeypatch, tmp_path):
+    """A C compiler that fails (``$CC`` set to ``false``), with an empty cache: no compiled tick,
+    and a warning that names the compiler's failure and says the Python tick runs."""
+    monkeypatch.setattr(native, "_LIB", [])
+    monkeypatch.setenv("CC", "false")
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
+    with pytest.warns(RuntimeWarning, match=r"false failed on tick.c.*the Python tick runs"):
+        assert native.tick_library() is None
+    assert not list(tmp_path.rglob("*.so"))

@@ -16,9 +16,11 @@ import ctypes
 import hashlib
 import importlib.resources
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -66,35 +68,47 @@ _LIB: list[ctypes.CDLL | None] = []
 
 def tick_library() -> ctypes.CDLL | None:
     """The compiled tick (built on first use, then loaded from the cache), or None without a C
-    compiler or when it fails to build (the Python tick then runs)."""
-    if _LIB:
-        return _LIB[0]
+    compiler or when it fails to build or load (the Python tick then runs; a warning says why)."""
+    if not _LIB:
+        lib, why = _build()
+        if lib is None:
+            warnings.warn(f"the estimator's C tick is not available ({why}): the Python tick runs, about 16 times "
+                          f"slower; install a C compiler (or set $CC to one)", RuntimeWarning, stacklevel=2)
+        _LIB.append(lib)
+    return _LIB[0]
+
+
+def _build() -> tuple[ctypes.CDLL | None, str]:
+    """The compiled tick and '', or None and why not."""
     source = importlib.resources.files("skatelib.control.estimator").joinpath("tick.c").read_bytes()
     cc = _compiler()
-    lib: ctypes.CDLL | None = None
-    if cc is not None:
-        tag = hashlib.sha256(source + " ".join((cc, *FLAGS)).encode()).hexdigest()[:20]
-        folder = cache_dir()
-        target = folder / f"estimator_tick_{tag}.so"
-        if not target.exists():
+    if cc is None:
+        return None, "no C compiler: neither $CC, gcc nor cc is on the PATH"
+    key = " ".join((cc, *FLAGS, platform.machine(), platform.system()))
+    folder = cache_dir()
+    target = folder / f"estimator_tick_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
+    if not target.exists():
+        try:
             folder.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=folder) as tmp:
                 src, out = Path(tmp) / "tick.c", Path(tmp) / "tick.so"
                 src.write_bytes(source)
-                done = subprocess.run([cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True)
-                if done.returncode == 0:
-                    os.replace(out, target)  # atomic: a concurrent build leaves one whole file
-        if target.exists():
-            lib = ctypes.CDLL(str(target))
-            lib.est_tick.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
-            lib.est_tick.restype = None
-            lib.est_legs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
-            lib.est_legs.restype = None
-            lib.est_static_loads.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double,
-                                             ctypes.c_void_p]
-            lib.est_static_loads.restype = None
-    _LIB.append(lib)
-    return lib
+                done = subprocess.run([cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True)
+                if done.returncode != 0:
+                    return None, f"{cc} failed on tick.c: {done.stderr.strip()[:500]}"
+                os.replace(out, target)  # atomic: a concurrent build leaves one whole file
+        except OSError as e:
+            return None, f"cannot write {folder}: {e}"
+    try:
+        lib = ctypes.CDLL(str(target))
+    except OSError as e:
+        return None, f"cannot load {target}: {e}; delete it to rebuild"
+    for name, args in (("est_tick", [ctypes.c_void_p] * 3), ("est_legs", [ctypes.c_void_p] * 3),
+                       ("est_static_loads", [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double,
+                                             ctypes.c_void_p])):
+        fn = getattr(lib, name)
+        fn.argtypes, fn.restype = args, None
+    return lib, ""
 
 
 def leg_chains(kin: LegKinematics) -> tuple[np.ndarray, ...] | None:
