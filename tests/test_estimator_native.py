@@ -96,3 +96,18 @@ def test_a_compiler_that_fails_leaves_the_python_tick(monkeypatch, tmp_path):
     with pytest.warns(RuntimeWarning, match=r"false failed on tick.c.*the Python tick runs"):
         assert native.tick_library() is None
     assert not list(tmp_path.rglob("*.so"))
+
+
+def test_cc_with_its_own_arguments_and_one_not_on_the_path(monkeypatch, tmp_path):
+    """``$CC`` is a command with arguments (``ccache gcc``-style: here ``false --anything``, which
+    fails): the warning names the whole command; a ``$CC`` not on the PATH is named as such, not
+    replaced by another compiler."""
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
+    monkeypatch.setattr(native, "_LIB", [])
+    monkeypatch.setenv("CC", "false --anything")
+    with pytest.warns(RuntimeWarning, match=r"false --anything failed on tick.c"):
+        assert native.tick_library() is None
+    monkeypatch.setattr(native, "_LIB", [])
+    monkeypatch.setenv("CC", "no-such-compiler-here")
+    with pytest.warns(RuntimeWarning, match=r"\$CC='no-such-compiler-here' is not on the PATH"):
+        assert native.tick_library() is None

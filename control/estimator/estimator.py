@@ -172,7 +172,8 @@ class StateEstimator:
 
     def sync(self) -> None:
         """With the C tick: its state copied back into the Python parts (attitude, odometry, deck,
-        the feet's stance), which it does not update as it runs."""
+        the feet's stance), which it does not update as it runs. The C tick takes the Python parts'
+        state, settings and figures once, at the first tick: change them (a bias, the body) before."""
         if self.native is None:
             return
         n = self.native

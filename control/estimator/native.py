@@ -17,6 +17,7 @@ import hashlib
 import importlib.resources
 import os
 import platform
+import shlex
 import shutil
 import subprocess
 import tempfile
@@ -31,7 +32,10 @@ if TYPE_CHECKING:
     from skatelib.control.kinematics import LegKinematics
 
 CACHE_ENV = "SKATELIB_CACHE_DIR"
-FLAGS = ("-O2", "-shared", "-fPIC")
+# -ffp-contract=off: no fused multiply-adds (ARM's compilers fuse by default), so that the C tick
+# rounds as numpy does, operation for operation
+FLAGS = ("-O2", "-ffp-contract=off", "-shared", "-fPIC")
+COMPILE_TIMEOUT_S = 120
 
 _D = ctypes.c_double
 # est_t of tick.c, field for field
@@ -59,8 +63,15 @@ def cache_dir() -> Path:
     return Path(base) / "native"
 
 
-def _compiler() -> str | None:
-    return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+def _compiler() -> list[str] | None:
+    """The C compiler's command: ``$CC`` (with its own arguments, as in ``ccache gcc``) when set,
+    else gcc, else cc; None when the one asked for is not on the PATH."""
+    wanted = shlex.split(os.environ.get("CC", ""))
+    if wanted:
+        found = shutil.which(wanted[0])
+        return [found, *wanted[1:]] if found else None
+    found = shutil.which("gcc") or shutil.which("cc")
+    return [found] if found else None
 
 
 _LIB: list[ctypes.CDLL | None] = []
@@ -83,8 +94,9 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
     source = importlib.resources.files("skatelib.control.estimator").joinpath("tick.c").read_bytes()
     cc = _compiler()
     if cc is None:
-        return None, "no C compiler: neither $CC, gcc nor cc is on the PATH"
-    key = " ".join((cc, *FLAGS, platform.machine(), platform.system()))
+        asked = os.environ.get("CC")
+        return None, f"$CC={asked!r} is not on the PATH" if asked else "no C compiler: neither gcc nor cc on the PATH"
+    key = " ".join((*cc, *FLAGS, platform.machine(), platform.system(), str(ctypes.sizeof(ctypes.c_void_p))))
     folder = cache_dir()
     target = folder / f"estimator_tick_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
     if not target.exists():
@@ -93,10 +105,13 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
             with tempfile.TemporaryDirectory(dir=folder) as tmp:
                 src, out = Path(tmp) / "tick.c", Path(tmp) / "tick.so"
                 src.write_bytes(source)
-                done = subprocess.run([cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True)
+                done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
+                                      timeout=COMPILE_TIMEOUT_S)
                 if done.returncode != 0:
-                    return None, f"{cc} failed on tick.c: {done.stderr.strip()[:500]}"
+                    return None, f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}"
                 os.replace(out, target)  # atomic: a concurrent build leaves one whole file
+        except subprocess.TimeoutExpired:
+            return None, f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c"
         except OSError as e:
             return None, f"cannot write {folder}: {e}"
     try:
