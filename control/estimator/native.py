@@ -1,13 +1,13 @@
 """The estimator's tick compiled: :class:`skatelib.control.estimator.estimator.StateEstimator`'s
 ``__call__`` in C (``tick.c``, the same equations in the same order on the same state), built once
-by the system's C compiler (``$CC``, gcc or cc; ``-O2``) into the cache folder
+by the system's C compiler (``$CC``, else gcc or cc; :data:`FLAGS`) into the cache folder
 (``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``) and called through ctypes: numpy and the
 standard library only, one call per tick.
 
 The legs' kinematics are the model's own: each leg's three revolute joints (their placements and
 axes) and its foot frame's placement are read from the pinocchio model once; the C code composes
 them as pinocchio does (tested against it). A model it cannot read so (a leg not a chain of three
-revolute joints) or a machine without a C compiler keeps the Python tick.
+revolute joints) or a machine without a working C compiler keeps the Python tick (with a warning).
 """
 
 from __future__ import annotations
@@ -54,6 +54,8 @@ IN_N, OUT_N = 39, 52
 
 
 class EstState(ctypes.Structure):
+    """tick.c's ``est_t``: the legs, figures, settings and state of one estimator (all doubles)."""
+
     _fields_ = _FIELDS
 
 
