@@ -205,3 +205,17 @@ def test_static_loads_by_the_lever_rule():
     f4 = static_loads(four, com, 150.0)
     assert f4.sum() == pytest.approx(150.0)
     assert np.allclose((four - com[:, None]) @ f4, 0.0, atol=1e-9)
+
+
+def test_static_loads_of_a_thin_triangle_stay_within_the_weight():
+    """Three feet 0.34 m apart, the middle one 1 mm off their line, the centre of mass 0.1 m off it
+    (outside their triangle): no foot's static share beyond the weight. Negative control: the exact
+    solution (the cofactor form, unclipped) asks some 50 times the weight of one foot."""
+    from skatelib.control.estimator.loads import _min_norm_loads, static_loads
+
+    feet = np.array([[0.17, 0.0, -0.17], [0.1, 0.101, 0.1]])
+    com = np.zeros(2)
+    exact = _min_norm_loads(feet, com, 87.0)
+    assert exact is not None and exact.max() > 50 * 87.0
+    f = static_loads(feet, com, 87.0)
+    assert np.all(f >= 0.0) and np.all(f <= 87.0)

@@ -35,18 +35,20 @@ class BodyFigures:
 def static_loads(feet_xy: np.ndarray, com_xy: np.ndarray, weight_N: float) -> np.ndarray:
     """(n,) the smallest normal loads [N] of feet at ``feet_xy`` (2, n) that carry ``weight_N`` with
     no moment about ``com_xy`` (2,): the minimum-norm solution of sum f = W, sum f (x_i - x_c) = 0;
-    loads below zero (the centre of mass outside the feet) clipped to zero."""
+    loads below zero (the centre of mass outside the feet) clipped to zero, loads above the weight
+    to the weight (no foot carries more than the whole robot at rest: three feet nearly in a line
+    with the centre of mass off it have an exact solution of loads without bound)."""
     n = feet_xy.shape[1]
     if n == 0:
         return np.zeros(0)
     if n >= 3:
         f = _min_norm_loads(feet_xy, com_xy, weight_N)
         if f is not None:
-            return np.maximum(f, 0.0)
+            return np.clip(f, 0.0, weight_N)
     A = np.vstack([np.ones(n), feet_xy - com_xy[:, None]])
     b = np.array([weight_N, 0.0, 0.0])
     f = np.linalg.lstsq(A, b, rcond=None)[0]
-    return np.asarray(np.maximum(f, 0.0))
+    return np.asarray(np.clip(f, 0.0, weight_N))
 
 
 def _min_norm_loads(feet_xy: np.ndarray, com_xy: np.ndarray, weight_N: float) -> np.ndarray | None:

@@ -278,7 +278,7 @@ static void static_loads(const double *dx, const double *dy, int n, double W, do
                 for (int a = 0; a < 3; a++) y[a] += V[3 * a + i] * V[i] * W / ev[i];
         for (int k = 0; k < n; k++) f[k] = y[0] + y[1] * dx[k] + y[2] * dy[k];
     }
-    for (int k = 0; k < n; k++) f[k] = f[k] > 0.0 ? f[k] : 0.0;
+    for (int k = 0; k < n; k++) f[k] = f[k] > 0.0 ? (f[k] < W ? f[k] : W) : 0.0; /* within [0, W] */
 }
 
 /* loads.compressions: each stance foot's give, for the feet in idx (n of them) */
