@@ -188,7 +188,6 @@ class CompiledTick:
         for name, arr in (("joint_R", joint_R), ("joint_p", joint_p), ("axis", axes), ("foot_R", foot_R),
                           ("foot_p", foot_p)):
             _set(s, name, arr)
-        self.loaded = False
 
     def load(self, scalars: dict[str, float], arrays: dict[str, np.ndarray]) -> None:
         """Figures, settings and state into C, by field name (est_t's)."""
@@ -196,7 +195,6 @@ class CompiledTick:
             setattr(self.s, name, float(value))
         for name, arr in arrays.items():
             _set(self.s, name, arr)
-        self.loaded = True
 
     def __call__(self, reading: Reading, plan: np.ndarray, ahead: np.ndarray) -> np.ndarray:
         """One tick's readings and the contact codes planned now and ``liftoff_s`` ahead: the
