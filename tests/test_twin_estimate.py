@@ -229,29 +229,29 @@ def sensor_runs(lib_path):
         errors = parse_twin_perturbation(text, p.mu).sensors
         return EstimatedFeedback(plant, lib, p, loop.contacts.at, start, loop.tick_s, errors, 0, settings)
 
-    def side(text: str, settings: EstimatorSettings | None = None, python: bool = False) -> _Side:
-        twin = feedback_of(text, replace(settings or EstimatorSettings(), compiled=False)) if python else None
-        return _Side(feedback_of(text, settings), twin)
+    def side(name: str, text: str, settings: EstimatorSettings | None = None) -> _Side:
+        """The case ``name``'s estimator, beside it on its Python tick when it is in PAIRED."""
+        twin = feedback_of(text, replace(settings or EstimatorSettings(), compiled=False)) if name in PAIRED else None
+        sides[name] = _Side(feedback_of(text, settings), twin)
+        return sides[name]
 
     def both(side: _Side) -> list[EstimatedFeedback]:
         return [side.fb] + ([side.python] if side.python is not None else [])
 
-    python = ("default",)
-    sides = {name: side(text, python=name in python) for name, text in SENSOR_CASES.items()}
+    sides: dict[str, _Side] = {}
+    for name, text in SENSOR_CASES.items():
+        side(name, text)
     unaligned = EstimatorSettings(mount_from_legs=False)
     for name in ("clean", "imu_tilt", "accel_bias"):
-        sides[f"{name}_unaligned"] = side(SENSOR_CASES[name], unaligned, python=name == "imu_tilt")
-    sides["default_rigid_feet"] = side(SENSOR_CASES["default"], python=True)
-    for fb in both(sides["default_rigid_feet"]):
+        side(f"{name}_unaligned", SENSOR_CASES[name], unaligned)
+    for fb in both(side("default_rigid_feet", SENSOR_CASES["default"])):
         fb.estimator.body = None  # no give of the feet under load
-    sides["default_tilt_on_reading"] = side(SENSOR_CASES["default"], EstimatorSettings(tilt_from_velocity=False),
-                                            python=True)
-    sides["gyro_bias_unestimated"] = side(SENSOR_CASES["gyro_bias"], python=True)
-    for fb in both(sides["gyro_bias_unestimated"]):
+    side("default_tilt_on_reading", SENSOR_CASES["default"], EstimatorSettings(tilt_from_velocity=False))
+    for fb in both(side("gyro_bias_unestimated", SENSOR_CASES["gyro_bias"])):
         fb.estimator.attitude.gyro_bias = np.zeros(3)
     # the compiled tick's other branches, against the Python tick's (their verdicts are other tests')
-    sides["default_classical"] = side("", EstimatorSettings(odometry=OdometrySettings(moving_deck=False)), python=True)
-    sides["default_level_deck"] = side("", EstimatorSettings(deck=DeckSettings(roll=False)), python=True)
+    side("default_classical", "", EstimatorSettings(odometry=OdometrySettings(moving_deck=False)))
+    side("default_level_deck", "", EstimatorSettings(deck=DeckSettings(roll=False)))
     truth = loop.feedback
 
     def feedback(true):
