@@ -15,12 +15,12 @@ import warnings
 import casadi as ca
 import numpy as np
 import pytest
+from skatelib.library import trust
 from skatelib.library.errors import OutputError
 from skatelib.pipeline.build import cache as entry_cache
 from skatelib.pipeline.build import codec, sweep
 from skatelib.pipeline.build.preflight import check_cache_dir
 from skatelib.pipeline.config import load_config
-from skatelib.pipeline.ocp import trust
 from skatelib.pipeline.ocp.stagewise import CompileTarget, c_compiler, compiled_stage_functions
 from skatelib.pipeline.quadruped import tasks
 from skatelib.pipeline.quadruped.problem import pushoff

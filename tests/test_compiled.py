@@ -12,8 +12,8 @@ from pathlib import Path
 
 import casadi as ca
 import pytest
+from skatelib.library import compiled, trust
 from skatelib.library.errors import OutputError
-from skatelib.pipeline.ocp import compiled, trust
 from skatelib.pipeline.ocp.stagewise import CompileTarget, c_compiler, compiled_stage_functions
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler")

@@ -14,6 +14,7 @@ from skatelib.control.estimator import loads, native
 from skatelib.control.estimator.legs import leg_terms
 from skatelib.control.estimator.native import CompiledTick, leg_chains, static_loads, tick_library
 from skatelib.control.kinematics import LegKinematics
+from skatelib.library import compiled, trust
 from skatelib.pipeline.config import load_config
 
 
@@ -92,7 +93,7 @@ def test_a_compiler_that_fails_leaves_the_python_tick(monkeypatch, tmp_path):
     and a warning that names the compiler's failure and says the Python tick runs."""
     monkeypatch.setattr(native, "_LIB", [])
     monkeypatch.setenv("CC", "false")
-    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
     with pytest.warns(RuntimeWarning, match=r"false failed on tick.c.*the Python tick runs"):
         assert native.tick_library() is None
     assert not list(tmp_path.rglob("*.so"))
@@ -102,7 +103,7 @@ def test_cc_with_its_own_arguments_and_one_not_on_the_path(monkeypatch, tmp_path
     """``$CC`` is a command with arguments (``ccache gcc``-style: here ``false --anything``, which
     fails): the warning names the whole command; a ``$CC`` not on the PATH is named as such, not
     replaced by another compiler."""
-    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
     monkeypatch.setattr(native, "_LIB", [])
     monkeypatch.setenv("CC", "false --anything")
     with pytest.warns(RuntimeWarning, match=r"false --anything failed on tick.c"):
@@ -111,3 +112,54 @@ def test_cc_with_its_own_arguments_and_one_not_on_the_path(monkeypatch, tmp_path
     monkeypatch.setenv("CC", "no-such-compiler-here")
     with pytest.warns(RuntimeWarning, match=r"\$CC='no-such-compiler-here' is not on the PATH"):
         assert native.tick_library() is None
+
+
+def _cached_tick(folder) -> list:
+    return sorted(p for p in (folder / "native").glob("estimator_tick_*.so"))
+
+
+def test_the_cached_tick_is_checked_and_loaded_from_a_private_copy(monkeypatch, tmp_path):
+    """The compiled tick follows the rules of the build's compiled code: built with its SHA-256
+    recorded; a cached file whose bytes changed since, or a symlink in its place, is not loaded but
+    compiled again (with a note saying why); what ctypes loads is a private copy of the bytes
+    checked, not the cached path."""
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.setattr(native, "_LIB", [])
+    loaded: list[str] = []
+    real_cdll = native.ctypes.CDLL
+    monkeypatch.setattr(native.ctypes, "CDLL", lambda path: loaded.append(path) or real_cdll(path))
+    assert native.tick_library() is not None
+    (target,) = _cached_tick(tmp_path)
+    assert trust.digest_record(target).read_text().strip() == trust.sha256_of(target)
+    assert loaded[-1] != str(target) and not native.Path(loaded[-1]).exists()  # the private copy, removed
+    assert compiled.usable_code(target)[0] == target.read_bytes()
+
+    target.write_bytes(target.read_bytes() + b"\0")  # changed after it was built
+    monkeypatch.setattr(native, "_LIB", [])
+    with pytest.warns(trust.CacheNote, match="changed after it was built"):
+        assert native.tick_library() is not None
+    assert trust.digest_record(target).read_text().strip() == trust.sha256_of(target)  # compiled again
+
+    elsewhere = tmp_path / "elsewhere.so"
+    target.rename(elsewhere)
+    target.symlink_to(elsewhere)
+    monkeypatch.setattr(native, "_LIB", [])
+    with pytest.warns(trust.CacheNote, match="symbolic link"):
+        assert native.tick_library() is not None
+    assert not target.is_symlink()
+
+
+def test_a_cache_others_can_write_keeps_the_python_tick(monkeypatch, tmp_path):
+    """A cache folder others can write is not used (whoever can write it could run code in the
+    controller): the warning names the folder and what to do, the Python tick runs, nothing is
+    compiled there. Negative control: the same folder made private again gives the compiled tick."""
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    (tmp_path / "native").mkdir(mode=0o700)
+    (tmp_path / "native").chmod(0o777)
+    monkeypatch.setattr(native, "_LIB", [])
+    with pytest.warns(RuntimeWarning, match=r"native.*can be written by others.*compiled=False.*Python tick runs"):
+        assert native.tick_library() is None
+    assert not _cached_tick(tmp_path)
+    (tmp_path / "native").chmod(0o700)
+    monkeypatch.setattr(native, "_LIB", [])
+    assert native.tick_library() is not None

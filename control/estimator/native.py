@@ -1,8 +1,9 @@
 """The estimator's tick compiled: :class:`skatelib.control.estimator.estimator.StateEstimator`'s
 ``__call__`` in C (``tick.c``, the same equations in the same order on the same state), built once
 by the system's C compiler (``$CC``, else gcc or cc; :data:`FLAGS`) into the cache folder
-(``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``) and called through ctypes: numpy and the
-standard library only, one call per tick.
+(``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``; kept and loaded under the rules the
+build's compiled code follows, :mod:`skatelib.library.compiled`) and called through ctypes: numpy
+and the standard library only, one call per tick.
 
 The legs' kinematics are the model's own: each leg's three revolute joints (their placements and
 axes) and its foot frame's placement are read from the pinocchio model once; the C code composes
@@ -20,18 +21,21 @@ import platform
 import shlex
 import shutil
 import subprocess
-import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from skatelib.library import trust
+from skatelib.library.compiled import locked, private_copy, record_and_place, usable_code
+from skatelib.library.errors import OutputError
+from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
 
 if TYPE_CHECKING:
     from skatelib.control.estimator.reading import Reading
     from skatelib.control.kinematics import LegKinematics
 
-CACHE_ENV = "SKATELIB_CACHE_DIR"
+ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or set EstimatorSettings(compiled=False)"
 # -ffp-contract=off: no fused multiply-adds (ARM's compilers fuse by default), so that the C tick
 # rounds as numpy does, operation for operation
 FLAGS = ("-O2", "-ffp-contract=off", "-shared", "-fPIC")
@@ -60,9 +64,8 @@ class EstState(ctypes.Structure):
 
 
 def cache_dir() -> Path:
-    """Where the compiled tick is kept."""
-    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
-    return Path(base) / "native"
+    """Where the compiled tick is kept: ``native/`` in the user's cache folder."""
+    return trust.cache_dir() / "native"
 
 
 def _compiler() -> list[str] | None:
@@ -92,7 +95,10 @@ def tick_library() -> ctypes.CDLL | None:
 
 
 def _build() -> tuple[ctypes.CDLL | None, str]:
-    """The compiled tick and '', or None and why not."""
+    """The compiled tick and '', or None and why not. Built and loaded as the build's stage
+    functions are (:mod:`skatelib.library.compiled`): only from a cache folder of the user's own
+    that no one else can write, under a lock, its SHA-256 recorded when built and checked before
+    each load, and loaded from a private copy of the bytes checked."""
     source = importlib.resources.files("skatelib.control.estimator").joinpath("tick.c").read_bytes()
     cc = _compiler()
     if cc is None:
@@ -101,31 +107,48 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
     key = " ".join((*cc, *FLAGS, platform.machine(), platform.system(), str(ctypes.sizeof(ctypes.c_void_p))))
     folder = cache_dir()
     target = folder / f"estimator_tick_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
-    if not target.exists():
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            with tempfile.TemporaryDirectory(dir=folder) as tmp:
-                src, out = Path(tmp) / "tick.c", Path(tmp) / "tick.so"
-                src.write_bytes(source)
-                done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
-                                      timeout=COMPILE_TIMEOUT_S)
-                if done.returncode != 0:
-                    return None, f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}"
-                os.replace(out, target)  # atomic: a concurrent build leaves one whole file
-        except subprocess.TimeoutExpired:
-            return None, f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c"
-        except OSError as e:
-            return None, f"cannot write {folder}: {e}"
     try:
-        lib = ctypes.CDLL(str(target))
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        trust.check_own(folder, ADVICE)
+        code, note = usable_code(target)
+        if note:
+            warnings.warn(note, trust.CacheNote, stacklevel=3)
+        if code is None:
+            with locked(target.with_suffix(".lock")):  # processes started together compile once
+                code, _ = usable_code(target)
+                if code is None:
+                    code, why = _compile(source, cc, target)
+                    if code is None:
+                        return None, why
+        with private_copy(code, folder, "tick.so") as so:
+            lib = ctypes.CDLL(str(so))
+    except OutputError as e:
+        return None, str(e)
     except OSError as e:
-        return None, f"cannot load {target}: {e}; delete it to rebuild"
+        return None, f"cannot write or load in {folder}: {e}"
     for name, args in (("est_tick", [ctypes.c_void_p] * 3), ("est_legs", [ctypes.c_void_p] * 3),
                        ("est_static_loads", [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double,
                                              ctypes.c_void_p])):
         fn = getattr(lib, name)
         fn.argtypes, fn.restype = args, None
     return lib, ""
+
+
+def _compile(source: bytes, cc: list[str], target: Path) -> tuple[bytes | None, str]:
+    """``source`` compiled into ``target`` with its SHA-256 record (in a private folder beside it,
+    then moved): its bytes and '', or None and why not."""
+    remove_stale_temporaries(target.parent)  # a compile killed earlier left its folder
+    with temporary_folder(target.parent, "compile") as tmp:
+        src, out = tmp / "tick.c", tmp / "tick.so"
+        src.write_bytes(source)
+        try:
+            done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
+                                  timeout=COMPILE_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            return None, f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c"
+        if done.returncode != 0:
+            return None, f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}"
+        return record_and_place(out, target), ""
 
 
 def leg_chains(kin: LegKinematics) -> tuple[np.ndarray, ...] | None:

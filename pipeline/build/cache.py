@@ -1,11 +1,11 @@
 """The entry cache of a build, for every robot kind: each solved entry under a key of what
 determines it (each kind says what that is), checksummed, so that an interrupted build resumes and
 a changed problem (code, config, URDF, options) never gets an old trajectory. The folder is the
-compiled stage functions' (``SKATELIB_CACHE_DIR``), which this module owns.
+user's cache (``SKATELIB_CACHE_DIR``, :func:`skatelib.library.trust.cache_dir`).
 
 A payload is stored in a form that runs no code when read (:mod:`skatelib.pipeline.build.codec`:
 arrays and a JSON manifest); files of the older pickled form (``*.pkl``) are never opened. Entries
-are read only from folders and files :mod:`skatelib.pipeline.ocp.trust` allows: the user's own
+are read only from folders and files :mod:`skatelib.library.trust` allows: the user's own
 cache, then a shared read-only one named in ``SKATELIB_TRUSTED_CACHE``; new entries go to the
 user's own."""
 
@@ -13,29 +13,19 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from skatelib.library import schema
+from skatelib.library import schema, trust
 from skatelib.library.atomic import atomic_path
+from skatelib.library.trust import cache_dir
 from skatelib.pipeline.build import codec
-from skatelib.pipeline.ocp import trust
 
 # Bump when a kind's retry ladder, the solve's post-processing or the cached payload changes: the
 # keys cover the problems themselves (stage functions, bounds, guesses, plans, options), not that code.
 CACHE_VERSION = "3"
 _MAGIC = b"skatelib-entry-cache 3\n"
-CACHE_ENV = "SKATELIB_CACHE_DIR"
-
-
-def cache_dir() -> Path:
-    """The user's cache folder of entries and compiled stage functions (``$SKATELIB_CACHE_DIR`` or
-    ~/.cache/skatelib)."""
-    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
-    return Path(base)
-
 
 def cache_key(*parts: Any) -> str:
     """The key of an entry determined by ``parts`` (JSON-serializable), the library format and

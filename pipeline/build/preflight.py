@@ -10,11 +10,11 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from skatelib.library import trust
 from skatelib.library.errors import ConfigError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
 from skatelib.library.temporaries import remove_stale_temporaries
-from skatelib.pipeline.build.cache import CACHE_ENV, cache_dir
-from skatelib.pipeline.ocp import trust
+from skatelib.library.trust import CACHE_ENV, cache_dir
 
 SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?P<port>\d{1,5})$")
 
@@ -108,7 +108,7 @@ def _writable(folder: Path, named: Path, message: str) -> None:
 def check_cache_dir(entries_too: bool = True) -> Path:
     """The cache folder exists (or can be made, private to the user) and is writable, it and its
     subfolders belong to the user and no one else can write them, and a shared cache named in
-    ``$SKATELIB_TRUSTED_CACHE`` is read-only (:mod:`skatelib.pipeline.ocp.trust`).
+    ``$SKATELIB_TRUSTED_CACHE`` is read-only (:mod:`skatelib.library.trust`).
 
     Args:
         entries_too: False when the command keeps only compiled code there (``--no-cache``,

@@ -25,9 +25,9 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from skatelib.pipeline.ocp import trust
-from skatelib.pipeline.ocp.codegen import compile_library, load_private, locked
-from skatelib.pipeline.ocp.compiled import usable_code
+from skatelib.library import trust
+from skatelib.library.compiled import locked, usable_code
+from skatelib.pipeline.ocp.codegen import compile_library, load_private
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
     content hash, with its SHA-256 recorded beside it. A cached library is read once and checked (a
     symlink, a library that changed, or one that others can write, is compiled again with a
-    :class:`~skatelib.pipeline.ocp.trust.CacheNote`; :mod:`skatelib.pipeline.ocp.compiled`), and
+    :class:`~skatelib.library.trust.CacheNote`; :mod:`skatelib.library.compiled`), and
     the bytes checked are what is loaded, from a private copy.
 
     The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the

@@ -19,7 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU, NX, S_BOARD_V, S_POS, S_Q, S_RPY, S_VEL
-from skatelib.pipeline.build.cache import cache_dir
+from skatelib.library.trust import cache_dir
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds

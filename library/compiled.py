@@ -1,19 +1,23 @@
-"""A compiled stage library from the cache, checked and loaded as one thing: its bytes are read once,
-through a descriptor that follows no symlink, and checked (the rules of its cache, :mod:`.trust`,
-for the file, its folder and every folder above it; the SHA-256 recorded when it was built). The
-loader gets those very bytes, written to a private copy
-(:func:`skatelib.pipeline.ocp.codegen.load_private`), so a file replaced or relinked after the
-check is never what runs."""
+"""A compiled library from the cache (the build's stage functions, the estimator's tick), checked
+and loaded as one thing: its bytes are read once, through a descriptor that follows no symlink, and
+checked (the rules of its cache, :mod:`.trust`, for the file, its folder and every folder above it;
+the SHA-256 recorded when it was built). The loader gets those very bytes, written to a private
+copy (:func:`private_copy`), so a file replaced or relinked after the check is never what runs.
+Standard library only: the robot's controller uses it as the build does."""
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import fcntl
 import hashlib
 import os
 import stat
+from collections.abc import Iterator
 from pathlib import Path
 
-from skatelib.pipeline.ocp import trust
+from skatelib.library import trust
+from skatelib.library.temporaries import temporary_folder
 
 _OPEN = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)  # a fifo does not block
 
@@ -86,10 +90,46 @@ def usable_code(own: Path) -> tuple[bytes | None, str]:
         code, why = checked_code(own)
         if code is not None:
             return code, ""
-        note = f"compiled stage library {own} {why}: not loaded, compiled again"
+        note = f"compiled library {own} {why}: not loaded, compiled again"
     shared = trust.trusted_cache()
     if shared is not None and os.path.lexists(shared / own.name):
         code, _ = checked_code(shared / own.name)
         if code is not None:
             return code, note
     return None, note
+
+
+def record_and_place(code_file: Path, lib: Path) -> bytes:
+    """Move the freshly compiled ``code_file`` (in a private folder beside ``lib``) to ``lib`` with
+    its SHA-256 record; returns its bytes, read before the move. The record goes first: a reader
+    never trusts a half-written library, and processes started together load a whole one."""
+    code = code_file.read_bytes()
+    record = code_file.with_name(code_file.name + ".sha256")
+    record.write_text(hashlib.sha256(code).hexdigest() + "\n")
+    os.replace(record, trust.digest_record(lib))
+    os.replace(code_file, lib)
+    return code
+
+
+@contextlib.contextmanager
+def locked(path: Path) -> Iterator[None]:
+    """An exclusive lock on ``path`` (created) while the block runs; others wait for it."""
+    with open(path, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+@contextlib.contextmanager
+def private_copy(code: bytes, folder: Path, name: str = "lib.so") -> Iterator[Path]:
+    """``code`` (checked by the caller) as a new file in a new folder of this process (mode 0700) in
+    ``folder``, for the block to load; removed when it ends (loaded code stays mapped). What runs
+    is what was checked, whatever happens to the cached file meanwhile."""
+    with temporary_folder(folder, "load") as private:
+        so = private / name
+        fd = os.open(so, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(code)
+        yield so

@@ -1,6 +1,6 @@
 """Who may have written what the cache serves. A build loads compiled stage functions (native code)
-and solved entries from its cache folder, so it uses only material no one else could have put
-there:
+and solved entries from its cache folder, the estimator its compiled tick, so they use only
+material no one else could have put there:
 
 * the user's own cache (``SKATELIB_CACHE_DIR``, default ``~/.cache/skatelib``): the folder, its
   subfolders and every file read from it belong to the user and carry no group or world write bit;
@@ -20,8 +20,16 @@ from pathlib import Path
 
 from skatelib.library.errors import OutputError
 
+CACHE_ENV = "SKATELIB_CACHE_DIR"
 TRUSTED_ENV = "SKATELIB_TRUSTED_CACHE"
 OTHERS_WRITE = stat.S_IWGRP | stat.S_IWOTH
+
+
+def cache_dir() -> Path:
+    """The user's own cache folder (``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib): a build's entries
+    and compiled stage functions, the estimator's compiled tick (``native/``)."""
+    base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
+    return Path(base)
 
 
 def trusted_cache() -> Path | None:
