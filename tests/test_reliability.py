@@ -43,14 +43,14 @@ def _session(sid: int) -> list[int]:
 
 def _slow_config(tmp_path: Path) -> Path:
     p = tmp_path / "slow.toml"
-    p.write_text(f'extends = "{TINY.as_posix()}"\n[sweep]\nvelocities_mps = [0.3, 0.35, 0.4, 0.45]\nstrides = [1, 2]\n')
+    p.write_text(f'extends = "{TINY.as_posix()}"\n[sweep]\nvelocities_mps = [0.3, 0.35]\nstrides = [1, 2]\n')
     return p
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_killed_build_leaves_no_process_and_resumes(tmp_path, sig):
-    """SIGKILL or SIGTERM during a build: after 10 s no process of it is alive (found by session,
+    """SIGKILL or SIGTERM during a build: within 10 s no process of it is alive (found by session,
     not by name); SIGTERM exits 130 saying how many entries are cached; the same command then
     resumes from the cache and writes the library."""
     cfg, out, cache = _slow_config(tmp_path), tmp_path / "out" / "x.h5", tmp_path / "cache"
@@ -64,8 +64,10 @@ def test_killed_build_leaves_no_process_and_resumes(tmp_path, sig):
     assert len(_session(p.pid)) >= 3  # the build, the queue's manager, workers
     os.kill(p.pid, sig)
     _, stderr = p.communicate(timeout=60)
-    time.sleep(10)
-    assert _session(p.pid) == [], "processes of the killed build are still running"
+    deadline = time.monotonic() + 10
+    while _session(p.pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert _session(p.pid) == [], "processes of the killed build are still running after 10 s"
     assert not out.exists() and not list(out.parent.glob(".x.h5.*"))
     if sig == signal.SIGTERM:
         assert p.returncode == 130 and "interrupted:" in stderr and "run the same command to resume" in stderr.lower()
@@ -73,7 +75,7 @@ def test_killed_build_leaves_no_process_and_resumes(tmp_path, sig):
                            capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stdout + again.stderr
     assert " c " in again.stdout or "c │" in again.stdout  # some entries came from the cache
-    assert len(MotionLibrary.open(out)) == 8
+    assert len(MotionLibrary.open(out)) == 4
 
 
 CASES = {
