@@ -29,6 +29,7 @@ from benchmarks.figures import Measured, write_table
 # name -> (module, whether its measure() takes the default library's path)
 PARTS: dict[str, tuple[str, bool]] = {
     "pushoff": ("benchmarks.pushoff", False),
+    "kernels": ("benchmarks.kernels", False),
     "library": ("benchmarks.library", True),
     "runtime": ("benchmarks.runtime", True),
     "humanoid": ("benchmarks.humanoid", False),

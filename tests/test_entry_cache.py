@@ -26,13 +26,14 @@ def _chain() -> tasks.BuildTask:
 
 
 def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
-    """Renaming the library, changing the sweep list or the compile switch, or moving the config
-    and URDF to another folder keeps the problem (and so the cache key's config part) the same."""
+    """Renaming the library, changing the sweep list or the compile switches (native or portable
+    code), or moving the config and URDF to another folder keeps the problem (and so the cache
+    key's config part) the same."""
     cfg = load_config(TINY)
     other = dataclasses.replace(
         cfg, meta=dataclasses.replace(cfg.meta, name="renamed"),
         sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.9,), strides=(7,)),
-        optimization=dataclasses.replace(cfg.optimization, compile=True))
+        optimization=dataclasses.replace(cfg.optimization, compile=True, compile_native=False))
     assert other.problem_json() == cfg.problem_json()
     moved = tmp_path / "robot.urdf"
     moved.write_bytes(cfg.urdf_path.read_bytes())

@@ -102,11 +102,34 @@ def test_native_code_is_keyed_on_the_host_cpu(tmp_path, monkeypatch):
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "another processor")
     stagewise.compiled_stage_functions(*_toy_stage(), stagewise.CompileTarget(tmp_path))
     assert len(list(tmp_path.glob("stage_*.so"))) == 2
-    portable = stagewise.CompileTarget(tmp_path, ("-O1",))  # portable code: no CPU in its key
+    portable = stagewise.CompileTarget(tmp_path, stagewise.PORTABLE_FLAGS)  # no CPU in its key
     stagewise.compiled_stage_functions(*_toy_stage(), portable)
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "a third processor")
     stagewise.compiled_stage_functions(*_toy_stage(), portable)
     assert len(list(tmp_path.glob("stage_*.so"))) == 3
+
+
+def test_the_config_chooses_native_or_portable_code(monkeypatch):
+    """``[optimization] compile_native``: the push-off's stage functions are compiled with
+    -march=native (true, the default) or as portable code (false)."""
+    import dataclasses
+
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.ocp import shooting, stagewise
+    from skatelib.pipeline.quadruped.problem.problem import PushoffProblem
+
+    seen: list[stagewise.CompileTarget] = []
+
+    def record(z, p, cost, cons, target, serialized=None):
+        seen.append(target)
+        return stagewise.stage_functions(z, p, cost, cons)
+
+    monkeypatch.setattr(shooting, "compiled_stage_functions", record)
+    cfg = load_config()
+    for native in (True, False):
+        opt = dataclasses.replace(cfg.optimization, compile=True, compile_native=native)
+        PushoffProblem(dataclasses.replace(cfg, optimization=opt), 1)
+    assert "-march=native" in seen[0].flags and seen[1].flags == stagewise.PORTABLE_FLAGS
 
 
 def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):

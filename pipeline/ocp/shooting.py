@@ -15,6 +15,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 from skatelib.pipeline.ocp.stagewise import (
+    PORTABLE_FLAGS,
     CompileTarget,
     StagewiseNLP,
     build_stagewise_nlp,
@@ -54,16 +55,19 @@ def window_stage(sizes: tuple[int, int, int], dt: float) -> tuple[ca.SX, ca.SX, 
 
 
 def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Sequence[CostTerm],
-               constraints: Sequence[ConstraintTerm], compile_dir: Path | None = None) -> Transcribed:
+               constraints: Sequence[ConstraintTerm], compile_dir: Path | None = None, native: bool = True
+               ) -> Transcribed:
     """Build the stage function from the terms and assemble the NLP over all intervals; ``sizes``
     is (state, control, stage parameters). With ``compile_dir`` the stage functions are compiled to C
-    and kept in that folder (:func:`compiled_stage_functions`); without, they run interpreted."""
+    and kept in that folder (:func:`compiled_stage_functions`; ``native``: for this CPU, else
+    portable code); without, they run interpreted."""
     z, p, stage = window_stage(sizes, method.dt)
     cost = sum((c.cost(stage) for c in costs), ca.SX(0))
     cons = ca.vertcat(*[term.rows(stage) for term in constraints])
     text = serialized_stage(z, p, cost, cons)  # the fingerprint, and the compiled functions' cache key
     if compile_dir is not None:
-        fns = compiled_stage_functions(z, p, cost, cons, CompileTarget(compile_dir), serialized=text)
+        target = CompileTarget(compile_dir) if native else CompileTarget(compile_dir, PORTABLE_FLAGS)
+        fns = compiled_stage_functions(z, p, cost, cons, target, serialized=text)
     else:
         fns = stage_functions(z, p, cost, cons)
     N = method.n_intervals

@@ -74,6 +74,7 @@ def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
 # takes it) evaluates faster with results identical to the last bit (docs/design-notes.md). The
 # library then runs only on this kind of CPU, so the host CPU is part of the cache key.
 _FLAGS = ("-O1", "-march=native")
+PORTABLE_FLAGS = ("-O1",)  # code for any CPU of the architecture
 COMPILE_LOG = logging.getLogger("skatelib.compile")  # says when (and only when) code is compiled
 
 

@@ -98,6 +98,8 @@ class OptimizationConfig:
     warm_bound_push: float = _f(1e-12, 0.1, "IPOPT warm_start_(mult_)bound_push of a warm-started solve [-].",
                                 default=1e-6)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
+    compile_native: bool = _f(doc="Compile them for this CPU (-march=native: faster; the CPU is part of the cache "
+                                  "key) rather than as portable code for any CPU of its architecture.", default=True)
     friction_model: str = _f(
         doc="Friction constraint of every contact: 'cone' (exact Coulomb cone, mu^2 f_n^2 >= |f_t|^2, f_n >= 0) "
             "or 'polygon8' (inscribed 8-facet pyramid, inside the cone).", default="cone")
@@ -159,6 +161,7 @@ class QuadrupedConfig:
         for key in ("speeds_mps", "stops", "strides", "twin_judge"):  # what is built and judged, not how it is posed
             d["transitions"].pop(key)
         d["optimization"].pop("compile")
+        d["optimization"].pop("compile_native")
         d["robot"]["urdf"] = hashlib.sha256(self.urdf_path.read_bytes()).hexdigest()
         return json.dumps(d, sort_keys=True)
 

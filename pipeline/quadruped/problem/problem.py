@@ -137,7 +137,6 @@ class PushoffProblem:
         q_nom[3 * p: 3 * p + 3] = system.stance.q_push[3 * p: 3 * p + 3]
         w = opt.weights
         self.costs: list[CostTerm] = [TrackingCost(system, w, com_rel0, q_nom), EffortCost(w), TerminalSpeedCost(w)]
-        costs = self.costs
         mu_plan = opt.friction_margin * system.friction_mu
         term = config.terminal
         self.constraints: list[ConstraintTerm] = [
@@ -148,9 +147,9 @@ class PushoffProblem:
             WheelLoads(system, board_legs), GentleContact(system, self.schedule, config.contact, opt.dt_s),
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps), RidingEnd(system, term.position_tol_m),
         ]
-        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), costs,
-                                          self.constraints,
-                                          compile_dir=cache_dir() if opt.compile else None)
+        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), self.costs,
+                                          self.constraints, compile_dir=cache_dir() if opt.compile else None,
+                                          native=opt.compile_native)
         x_sym = ca.SX.sym("x", NX)
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
         self.build_time_s = time.perf_counter() - t0
