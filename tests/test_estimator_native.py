@@ -163,3 +163,20 @@ def test_a_cache_others_can_write_keeps_the_python_tick(monkeypatch, tmp_path):
     (tmp_path / "native").chmod(0o700)
     monkeypatch.setattr(native, "_LIB", [])
     assert native.tick_library() is not None
+
+
+def test_a_killed_processs_temporaries_in_the_native_folder_are_swept(monkeypatch, tmp_path):
+    """A process killed while compiling or loading the tick leaves its temporary folder in
+    ``native/``; the next process that loads the tick removes it (and keeps the user's look-alike)."""
+    from tests.test_temporaries import _killed_writer, _leftovers
+
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    native_dir = tmp_path / "native"
+    native_dir.mkdir(mode=0o700)
+    pid = _killed_writer(native_dir)
+    look_alike = native_dir / ".skatelib-tmp.notes"
+    look_alike.write_text("the user's")
+    assert _leftovers(native_dir, pid)
+    monkeypatch.setattr(native, "_LIB", [])
+    assert native.tick_library() is not None
+    assert not _leftovers(native_dir, pid) and look_alike.read_text() == "the user's"

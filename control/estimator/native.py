@@ -110,6 +110,7 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
     try:
         folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         trust.check_own(folder, ADVICE)
+        remove_stale_temporaries(folder)  # what a killed process left: a compile's folder, a private copy
         code, note = usable_code(target)
         if note:
             warnings.warn(note, trust.CacheNote, stacklevel=3)
@@ -137,7 +138,6 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
 def _compile(source: bytes, cc: list[str], target: Path) -> tuple[bytes | None, str]:
     """``source`` compiled into ``target`` with its SHA-256 record (in a private folder beside it,
     then moved): its bytes and '', or None and why not."""
-    remove_stale_temporaries(target.parent)  # a compile killed earlier left its folder
     with temporary_folder(target.parent, "compile") as tmp:
         src, out = tmp / "tick.c", tmp / "tick.so"
         src.write_bytes(source)
