@@ -34,6 +34,7 @@ def lib(tmp_path, monkeypatch):
     return path
 
 
+@pytest.mark.slow  # three runners, a dask cluster among them
 def test_same_seed_same_certificate_on_every_runner(lib):
     """Serial, two loky workers and a dask LocalCluster give identical certificates (draws,
     verdicts, figures); another seed gives another certificate."""
@@ -85,6 +86,7 @@ def test_certify_stores_info_reads_and_track_draw_replays(lib):
     assert f"draw {draw.seed}" in t.stdout
 
 
+@pytest.mark.slow  # a worker pool started and interrupted
 def test_sigint_leaves_no_worker_and_the_library_unchanged(lib, tmp_path):
     """SIGINT to ``certify -j 2`` once its first rides are cached: exit 130 saying how many rides
     are cached, after 10 s no process of its session is alive (found by session, not by name), the

@@ -106,6 +106,7 @@ def test_the_speed_is_the_decks_forward_speed(setup):
         assert np.allclose(board_speeds(m, q, 1 / 30), expected, atol=1e-9)
 
 
+@pytest.mark.slow  # a ride on the twin, rendered
 def test_track_writes_a_720p_video_ending_on_its_verdict(tmp_path):
     """`track --plant mujoco --video run.mp4`: read back (imageio-ffmpeg), 1280 x 720, one frame
     per MPC update and 3 s held at the end; the held frame's bottom banner is in the colour of the
