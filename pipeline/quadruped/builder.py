@@ -53,11 +53,13 @@ def one_start_up(cfg: QuadrupedConfig, velocity_mps: float, strides: int) -> Qua
 
 
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask | TransitionTask]:
-    """One warm-start chain per stride count (most strides first, for load balance), then one per
-    start speed of the transitions."""
+    """One task per start speed of the transitions (fastest first), then one warm-start chain per
+    stride count (most strides first): the longest tasks first, so that the workers' last tasks
+    are short and end together (a transition chain, its twin rides included, takes two to eight
+    times a start-up chain)."""
     from skatelib.pipeline.quadruped.transitions.tasks import transition_tasks
 
-    return [*tasks_for(cfg, ipopt), *transition_tasks(cfg, ipopt)]
+    return [*transition_tasks(cfg, ipopt), *tasks_for(cfg, ipopt)]
 
 
 def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
