@@ -116,13 +116,14 @@ def check_own(folder: Path, advice: str = OWN_ADVICE) -> None:
     for d in _folders(folder):
         why = own_problem(d)
         if why:
-            raise OutputError(d, f"the cache folder {why}: whoever can write it can run code in your builds. "
-                                 f"Fix it (chmod go-w {d}), or {advice}")
+            raise OutputError(d, f"the cache folder {why}: whoever can write it can run code in your builds "
+                                 f"and controller. Fix it (chmod go-w {d}), or {advice}")
     above = above_problem(folder)
     if above is not None:
         d, why = above
         raise OutputError(folder, f"the cache folder is inside {d}, which {why}: whoever can write there can "
-                                  f"replace the cache and run code in your builds. Fix that folder, or {advice}")
+                                  f"replace the cache and run code in your builds and controller. Fix that folder, "
+                                  f"or {advice}")
 
 
 def check_shared(folder: Path) -> None:
