@@ -13,7 +13,8 @@ import fcntl
 import hashlib
 import os
 import stat
-from collections.abc import Iterator
+import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from skatelib.library import trust
@@ -97,6 +98,30 @@ def usable_code(own: Path) -> tuple[bytes | None, str]:
         if code is not None:
             return code, note
     return None, note
+
+
+def cached_or_compiled(lib: Path, advice: str, compile: Callable[[], bytes]) -> bytes:
+    """The checked bytes of the compiled library ``lib``: from the cache (:func:`usable_code`) or,
+    when there are none to load, from ``compile()`` (which writes ``lib`` and its record,
+    :func:`record_and_place`), under a lock so that processes started together compile once and
+    the others load its library. ``lib``'s folder is created private and must pass
+    :func:`trust.check_own` (``advice``: what else the user can do); a cached library refused says
+    why in a :class:`trust.CacheNote`.
+
+    Raises:
+        OutputError: The folder, or one above it, can be changed by someone else.
+    """
+    lib.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    trust.check_own(lib.parent, advice)  # code is compiled, copied and loaded there
+    code, note = usable_code(lib)  # only from a folder no one else can write, as built
+    if note:
+        warnings.warn(note, trust.CacheNote, stacklevel=3)
+    if code is None:
+        with locked(lib.with_suffix(".lock")):
+            code, _ = usable_code(lib)
+            if code is None:
+                code = compile()
+    return code
 
 
 def record_and_place(code_file: Path, lib: Path) -> bytes:

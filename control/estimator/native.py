@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from skatelib.library import trust
-from skatelib.library.compiled import locked, private_copy, record_and_place, usable_code
+from skatelib.library.compiled import cached_or_compiled, private_copy, record_and_place
 from skatelib.library.errors import OutputError
 from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
 
@@ -108,22 +108,11 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
     folder = cache_dir()
     target = folder / f"estimator_tick_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
     try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        trust.check_own(folder, ADVICE)
+        code = cached_or_compiled(target, ADVICE, lambda: _compile(source, cc, target))
         remove_stale_temporaries(folder)  # what a killed process left: a compile's folder, a private copy
-        code, note = usable_code(target)
-        if note:
-            warnings.warn(note, trust.CacheNote, stacklevel=3)
-        if code is None:
-            with locked(target.with_suffix(".lock")):  # processes started together compile once
-                code, _ = usable_code(target)
-                if code is None:
-                    code, why = _compile(source, cc, target)
-                    if code is None:
-                        return None, why
         with private_copy(code, folder, "tick.so") as so:
             lib = ctypes.CDLL(str(so))
-    except OutputError as e:
+    except (OutputError, _CompileFailed) as e:
         return None, str(e)
     except OSError as e:
         return None, f"cannot write or load in {folder}: {e}"
@@ -135,9 +124,17 @@ def _build() -> tuple[ctypes.CDLL | None, str]:
     return lib, ""
 
 
-def _compile(source: bytes, cc: list[str], target: Path) -> tuple[bytes | None, str]:
+class _CompileFailed(Exception):
+    """The C compiler did not build the tick (the message says why)."""
+
+
+def _compile(source: bytes, cc: list[str], target: Path) -> bytes:
     """``source`` compiled into ``target`` with its SHA-256 record (in a private folder beside it,
-    then moved): its bytes and '', or None and why not."""
+    then moved); its bytes.
+
+    Raises:
+        _CompileFailed: The compiler failed or timed out.
+    """
     with temporary_folder(target.parent, "compile") as tmp:
         src, out = tmp / "tick.c", tmp / "tick.so"
         src.write_bytes(source)
@@ -145,10 +142,10 @@ def _compile(source: bytes, cc: list[str], target: Path) -> tuple[bytes | None, 
             done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
                                   timeout=COMPILE_TIMEOUT_S)
         except subprocess.TimeoutExpired:
-            return None, f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c"
+            raise _CompileFailed(f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c") from None
         if done.returncode != 0:
-            return None, f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}"
-        return record_and_place(out, target), ""
+            raise _CompileFailed(f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}")
+        return record_and_place(out, target)
 
 
 def leg_chains(kin: LegKinematics) -> tuple[np.ndarray, ...] | None:

@@ -18,7 +18,6 @@ import os
 import platform
 import shutil
 import subprocess
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -26,7 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library import trust
-from skatelib.library.compiled import locked, usable_code
+from skatelib.library.compiled import cached_or_compiled
 from skatelib.pipeline.ocp.codegen import compile_library, load_private
 
 
@@ -130,20 +129,14 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     native = host_cpu() if "-march=native" in flags else ""
     key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
-    target.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-    trust.check_own(target.folder, trust.COMPILE_ADVICE)  # code is compiled, copied and loaded there
-    code, note = usable_code(lib)  # only from a folder no one else can write, as built
-    if note:
-        warnings.warn(note, trust.CacheNote, stacklevel=2)
-    if code is None:
-        # Builds started together compile once: the others wait for the lock and load its library.
-        with locked(lib.with_suffix(".lock")):
-            code, _ = usable_code(lib)
-            if code is None:
-                COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
-                                 "kept in %s)", cc, lib.parent)
-                fns = stage_functions(z, p, cost, cons)
-                code = compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
+
+    def compile_now() -> bytes:
+        COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
+                         "kept in %s)", cc, lib.parent)
+        fns = stage_functions(z, p, cost, cons)
+        return compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
+
+    code = cached_or_compiled(lib, trust.COMPILE_ADVICE, compile_now)
     return StageFunctions(*load_private(code, target.folder, _NAMES))  # the bytes checked, not the path
 
 
