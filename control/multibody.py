@@ -50,11 +50,16 @@ class RobotDynamics:
         joints = [model.getJointId(n) for n in joint_names]
         self.q_index = np.array([model.joints[j].idx_q for j in joints])
         self.v_index = np.array([model.joints[j].idx_v for j in joints])
+        # the joints in channel order are pinocchio's (a URDF's legs in order): joined, not scattered
+        self._in_order = (np.array_equal(self.q_index, np.arange(7, model.nq))
+                          and np.array_equal(self.v_index, np.arange(6, model.nv)))
         model.armature[6:] = armature_kgm2
         self.feet = [model.getFrameId(f) for f in foot_frames]
         self.data: Any = model.createData()
         self.mass_kg = float(pin.computeTotalMass(model))
-        self._lower = np.tril_indices(model.nv, -1)
+        below = np.tril_indices(model.nv, -1)  # M's lower triangle, as flat indices, and its mirror
+        self._below = np.ravel_multi_index(below, (model.nv, model.nv))
+        self._above = np.ravel_multi_index(below[::-1], (model.nv, model.nv))
 
     @staticmethod
     def from_library(lib: Any) -> RobotDynamics:
@@ -66,9 +71,13 @@ class RobotDynamics:
                       ) -> tuple[np.ndarray, np.ndarray]:
         """Pinocchio's (q, v) from a trunk pose, world-frame trunk velocity, trunk-frame angular
         velocity and the joints in channel order."""
+        quaternion = pin.Quaternion(trunk_R).coeffs()
+        if self._in_order:
+            return (np.concatenate((trunk_pos, quaternion, q)),
+                    np.concatenate((trunk_R.T @ trunk_v_world, trunk_omega, qd)))
         qp = np.zeros(self.model.nq)
         qp[0:3] = trunk_pos
-        qp[3:7] = pin.Quaternion(trunk_R).coeffs()
+        qp[3:7] = quaternion
         qp[self.q_index] = q
         vp = np.zeros(self.model.nv)
         vp[0:3] = trunk_R.T @ trunk_v_world
@@ -83,15 +92,15 @@ class RobotDynamics:
         # data.a, from which J-dot v follows (a test holds it to the rate of J(q) v along the motion).
         pin.computeAllTerms(model, data, qp, vp)
         M = data.M.copy()
-        M[self._lower] = M.T[self._lower]
+        flat = M.reshape(-1)
+        flat[self._below] = flat[self._above]
         h, J_com, com, com_v = data.nle.copy(), data.Jcom.copy(), data.com[0].copy(), data.vcom[0].copy()
-        pin.updateFramePlacements(model, data)
         world = pin.LOCAL_WORLD_ALIGNED
-        J_feet, dJv, feet = np.empty((4, 3, model.nv)), np.empty((4, 3)), np.empty((3, 4))
-        for i, f in enumerate(self.feet):
-            J_feet[i] = pin.getFrameJacobian(model, data, f, world)[:3]
-            dJv[i] = pin.getFrameClassicalAcceleration(model, data, f, world).linear
-            feet[:, i] = data.oMf[f].translation
+        # Each foot's frame placed (only theirs: what the frames below read), then its Jacobian and
+        # classical acceleration.
+        feet = np.array([pin.updateFramePlacement(model, data, f).translation for f in self.feet]).T
+        J_feet = np.array([pin.getFrameJacobian(model, data, f, world)[:3] for f in self.feet])
+        dJv = np.array([pin.getFrameClassicalAcceleration(model, data, f, world).linear for f in self.feet])
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
         return DynamicsTerms(M=M, h=h, J_feet=J_feet, dJv_feet=dJv, J_com=J_com, dJv_com=data.acom[0].copy(),
                              feet=feet, com=com, com_v=com_v)

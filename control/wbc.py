@@ -13,6 +13,8 @@ dynamics with the torque limits, the stance feet's accelerations, the normal bou
 pyramids. Their targets come from :mod:`skatelib.control.wbc_targets`. This module sums the tasks
 and stacks the constraints into one solver-neutral :class:`~skatelib.control.qp.QpProblem`, solved
 by DAQP (dense dual active set) by default, chosen in ``make bench`` against the other backends.
+With the default tasks and constraints the assembly runs in C (:mod:`skatelib.control.wbc_native`)
+unless ``WbcSettings(compiled=False)``.
 """
 
 from __future__ import annotations
@@ -22,7 +24,15 @@ from dataclasses import dataclass
 import numpy as np
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.qp import QpProblem, QpSolveFailed, solve_qp
-from skatelib.control.wbc_constraints import NONE, Constraint, FloatingBaseDynamics, RowBlock, default_constraints
+from skatelib.control.wbc_constraints import (
+    NONE,
+    Constraint,
+    FloatingBaseDynamics,
+    RowBlock,
+    SurfaceForces,
+    default_constraints,
+)
+from skatelib.control.wbc_native import CompiledAssembly, wbc_library
 from skatelib.control.wbc_settings import NV, WbcSettings
 from skatelib.control.wbc_targets import StanceSet, WbcTargets
 from skatelib.control.wbc_tasks import Task, default_tasks
@@ -75,6 +85,8 @@ class _Layout:
                        for c, a, z in zip(constraints, ends[:-1], ends[1:], strict=True)]
         for c, block in self.blocks:
             c.fixed(block, stance)
+        self.legs = np.ascontiguousarray(stance.legs, dtype=np.int32)  # for the C assembly
+        self.addresses = tuple(a.ctypes.data for a in (self.legs, self.H, self.g, self.rows, self.lo, self.up))
 
 
 class WholeBodyController:
@@ -94,6 +106,17 @@ class WholeBodyController:
         self.constraints = default_constraints(torque_limit_Nm, mu, self.s) if constraints is None else constraints
         self._torque = next((c for c in self.constraints if isinstance(c, FloatingBaseDynamics)), None)
         self._layouts: dict[bytes, _Layout] = {}
+        self._native = self._compiled() if tasks is None and constraints is None and self.s.compiled else None
+
+    def _compiled(self) -> CompiledAssembly | None:
+        """The C assembly of the default tasks and constraints, or None without the compiled code."""
+        lib = wbc_library()
+        if lib is None:
+            return None
+        surface = next(c for c in self.constraints if isinstance(c, SurfaceForces))
+        probe = _Layout(StanceSet.of(np.ones(4, dtype=bool)), self.tasks, self.constraints, self.s)
+        joints = np.arange(6, NV) if isinstance(self._j, slice) else self._j
+        return CompiledAssembly(lib, self.s, probe.q_diag, surface.coefficients, joints)
 
     @property
     def tau_max(self) -> float:
@@ -131,6 +154,13 @@ class WholeBodyController:
     def _assemble(self, T: DynamicsTerms, tg: WbcTargets) -> _Layout:
         """The tasks summed and the constraints stacked into the stance set's arrays."""
         L = self._layout(tg.stance)
+        if self._native is not None:
+            assert self._torque is not None
+            self._native((T.M.ravel(), T.h, T.J_feet.ravel(), T.dJv_feet.ravel(), T.J_com.ravel(), T.dJv_com,
+                          tg.stance_acc.ravel(), tg.com_acc, tg.angular_acc, tg.swing_acc.ravel(), tg.posture_acc,
+                          tg.forces.ravel(), tg.deck_R.ravel(), tg.on_deck, (self._torque.limit_Nm,)),
+                         L.addresses[0], len(L.stance.legs), L.addresses[1:])
+            return L
         stance = L.stance
         # Cost: the dense tasks' weighted rows A x = b over qdd stacked, A'A formed once; the
         # selecting tasks on the diagonal (fixed) and the gradient.

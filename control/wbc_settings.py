@@ -22,6 +22,9 @@ class WbcSettings:
         friction_rows: Hold the forces in the friction pyramid (False only for the negative
             control that shows the rows matter).
         qp_solver: A backend of :data:`skatelib.control.qp.SOLVERS`.
+        compiled: Make the targets and assemble the default tasks' and constraints' QP in C
+            (:mod:`skatelib.control.wbc_native`; the Python path when False, or without a C
+            compiler).
     """
 
     kp_com: float = 100.0
@@ -43,3 +46,4 @@ class WbcSettings:
     normal_max_N: float = 150.0
     friction_rows: bool = True
     qp_solver: str = "daqp"
+    compiled: bool = True

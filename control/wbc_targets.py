@@ -14,6 +14,8 @@ and constraints (:mod:`skatelib.control.wbc_constraints`) read them.
 * A stance foot accelerates with its deck point (or stays on the floor), with velocity feedback.
 * The stance set: planned and touching; a foot that lands shortly before its planned stance stays
   down; one planned up leaves its surface.
+
+The arithmetic runs in C (:mod:`skatelib.control.wbc_native`) unless ``WbcSettings(compiled=False)``.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from skatelib.control.body_plan import BodyTargets, Plan, yaw_matrix
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, MultibodyState
 from skatelib.control.multibody import DynamicsTerms
 from skatelib.control.params import SkateParams
+from skatelib.control.wbc_native import CompiledTargets, wbc_library
 from skatelib.control.wbc_settings import WbcSettings
 from skatelib.library.channels import BOARD, SWING
 
@@ -126,11 +129,16 @@ class TargetMaker:
     def __post_init__(self) -> None:
         self.stance = np.zeros(4, dtype=bool)
         self._gravity = self.p.gravity_mps2 * UP
+        lib = wbc_library() if self.g.compiled else None
+        self._native = None if lib is None else CompiledTargets(lib, self.p, self.g, TOUCHDOWN_REACH_M)
 
     def __call__(self, t: float, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray,
                  forces: np.ndarray) -> WbcTargets:
         g, table, bt = self.g, self.contacts, self.plan.at(t)  # (a plan may adapt while it runs)
         k = table.index(t)
+        if self._native is not None:
+            codes = (table.planned[k], table.planned[table.index(t + EARLY_CONTACT_S)], table.deck_next[k])
+            return self._compiled(st, T, feet_v, forces, bt, codes)
         yaw = st.deck_yaw
         Ry = yaw_matrix(yaw)
         deck_R = st.deck_R
@@ -156,6 +164,20 @@ class TargetMaker:
         return WbcTargets(stance=self.stance.copy(), on_deck=on_deck, deck_R=deck_R, stance_acc=stance_acc,
                           com_acc=com_acc, angular_acc=ang_acc, swing_acc=swing_acc, forces=forces,
                           posture_acc=posture)
+
+    def _compiled(self, st: MultibodyState, T: DynamicsTerms, feet_v: np.ndarray, forces: np.ndarray,
+                  bt: BodyTargets, codes: tuple[np.ndarray, np.ndarray, np.ndarray]) -> WbcTargets:
+        """:meth:`__call__`'s arithmetic in C (the same equations); ``codes``: the feet planned down
+        now, planned down ``EARLY_CONTACT_S`` ahead, on (or bound for) the deck now."""
+        assert self._native is not None
+        o = self._native((st.trunk_R.ravel(), st.trunk_omega, st.q, st.qd, st.deck_pos, st.deck_R.ravel(), st.deck_v,
+                          st.deck_omega, st.foot_touch, (st.deck_yaw,), T.com, T.com_v, T.feet.ravel(),
+                          feet_v.ravel(), forces.ravel(), bt.com, bt.com_v, bt.rpy, bt.omega, bt.q, bt.board_v,
+                          bt.feet.ravel(), bt.feet_v.ravel(), bt.feet_a.ravel(), *codes, self.stance))
+        self.stance = o[0:4] > 0.5
+        return WbcTargets(stance=self.stance.copy(), on_deck=o[4:8] > 0.5, deck_R=st.deck_R,
+                          stance_acc=o[8:20].reshape(3, 4), com_acc=o[20:23], angular_acc=o[23:26],
+                          swing_acc=o[26:38].reshape(3, 4), forces=forces, posture_acc=o[38:50])
 
     def _feet(self, k: int, st: MultibodyState, feet: np.ndarray, feet_v: np.ndarray, bt: BodyTargets,
               frame: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -4,6 +4,8 @@ the twin is in ``tests/test_twin_estimate.py`` (``test_the_compiled_tick_is_the_
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -131,7 +133,7 @@ def test_the_cached_tick_is_checked_and_loaded_from_a_private_copy(monkeypatch, 
     assert native.tick_library() is not None
     (target,) = _cached_tick(tmp_path)
     assert trust.digest_record(target).read_text().strip() == trust.sha256_of(target)
-    assert loaded[-1] != str(target) and not native.Path(loaded[-1]).exists()  # the private copy, removed
+    assert loaded[-1] != str(target) and not Path(loaded[-1]).exists()  # the private copy, removed
     assert compiled.usable_code(target)[0] == target.read_bytes()
 
     target.write_bytes(target.read_bytes() + b"\0")  # changed after it was built

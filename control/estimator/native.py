@@ -1,9 +1,7 @@
 """The estimator's tick compiled: :class:`skatelib.control.estimator.estimator.StateEstimator`'s
 ``__call__`` in C (``tick.c``, the same equations in the same order on the same state), built once
-by the system's C compiler (``$CC``, else gcc or cc; :data:`FLAGS`) into the cache folder
-(``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``; kept and loaded under the rules the
-build's compiled code follows, :mod:`skatelib.library.compiled`) and called through ctypes: numpy
-and the standard library only, one call per tick.
+and kept as the controller's C code is (:mod:`skatelib.control.native_code`), called through
+ctypes: numpy and the standard library only, one call per tick.
 
 The legs' kinematics are the model's own: each leg's three revolute joints (their placements and
 axes) and its foot frame's placement are read from the pinocchio model once; the C code composes
@@ -14,32 +12,17 @@ revolute joints) or a machine without a working C compiler keeps the Python tick
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import importlib.resources
-import os
-import platform
-import shlex
-import shutil
-import subprocess
 import warnings
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from skatelib.library import trust
-from skatelib.library.compiled import cached_or_compiled, private_copy, record_and_place
-from skatelib.library.errors import OutputError
-from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
+from skatelib.control import native_code
 
 if TYPE_CHECKING:
     from skatelib.control.estimator.reading import Reading
     from skatelib.control.kinematics import LegKinematics
 
 ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or set EstimatorSettings(compiled=False)"
-# -ffp-contract=off: no fused multiply-adds (ARM's compilers fuse by default), so that the C tick
-# rounds as numpy does, operation for operation
-FLAGS = ("-O2", "-ffp-contract=off", "-shared", "-fPIC")
-COMPILE_TIMEOUT_S = 120
 
 _D = ctypes.c_double
 # est_t of tick.c, field for field
@@ -63,22 +46,6 @@ class EstState(ctypes.Structure):
     _fields_ = _FIELDS
 
 
-def cache_dir() -> Path:
-    """Where the compiled tick is kept: ``native/`` in the user's cache folder."""
-    return trust.cache_dir() / "native"
-
-
-def _compiler() -> list[str] | None:
-    """The C compiler's command: ``$CC`` (with its own arguments, as in ``ccache gcc``) when set,
-    else gcc, else cc; None when the one asked for is not on the PATH."""
-    wanted = shlex.split(os.environ.get("CC", ""))
-    if wanted:
-        found = shutil.which(wanted[0])
-        return [found, *wanted[1:]] if found else None
-    found = shutil.which("gcc") or shutil.which("cc")
-    return [found] if found else None
-
-
 _LIB: list[ctypes.CDLL | None] = []
 
 
@@ -86,66 +53,15 @@ def tick_library() -> ctypes.CDLL | None:
     """The compiled tick (built on first use, then loaded from the cache), or None without a C
     compiler or when it fails to build or load (the Python tick then runs; a warning says why)."""
     if not _LIB:
-        lib, why = _build()
+        lib, why = native_code.load(
+            "skatelib.control.estimator", "tick.c", "estimator_tick", ADVICE,
+            {"est_tick": [ctypes.c_void_p] * 3, "est_legs": [ctypes.c_void_p] * 3,
+             "est_static_loads": [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_void_p]})
         if lib is None:
             warnings.warn(f"the estimator's C tick is not available ({why}): the Python tick runs, about 16 times "
                           f"slower; install a C compiler (or set $CC to one)", RuntimeWarning, stacklevel=2)
         _LIB.append(lib)
     return _LIB[0]
-
-
-def _build() -> tuple[ctypes.CDLL | None, str]:
-    """The compiled tick and '', or None and why not. Built and loaded as the build's stage
-    functions are (:mod:`skatelib.library.compiled`): only from a cache folder of the user's own
-    that no one else can write, under a lock, its SHA-256 recorded when built and checked before
-    each load, and loaded from a private copy of the bytes checked."""
-    source = importlib.resources.files("skatelib.control.estimator").joinpath("tick.c").read_bytes()
-    cc = _compiler()
-    if cc is None:
-        asked = os.environ.get("CC")
-        return None, f"$CC={asked!r} is not on the PATH" if asked else "no C compiler: neither gcc nor cc on the PATH"
-    key = " ".join((*cc, *FLAGS, platform.machine(), platform.system(), str(ctypes.sizeof(ctypes.c_void_p))))
-    folder = cache_dir()
-    target = folder / f"estimator_tick_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
-    try:
-        code = cached_or_compiled(target, ADVICE, lambda: _compile(source, cc, target))
-        remove_stale_temporaries(folder)  # what a killed process left: a compile's folder, a private copy
-        with private_copy(code, folder, "tick.so") as so:
-            lib = ctypes.CDLL(str(so))
-    except (OutputError, _CompileFailed) as e:
-        return None, str(e)
-    except OSError as e:
-        return None, f"cannot write or load in {folder}: {e}"
-    for name, args in (("est_tick", [ctypes.c_void_p] * 3), ("est_legs", [ctypes.c_void_p] * 3),
-                       ("est_static_loads", [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double,
-                                             ctypes.c_void_p])):
-        fn = getattr(lib, name)
-        fn.argtypes, fn.restype = args, None
-    return lib, ""
-
-
-class _CompileFailed(Exception):
-    """The C compiler did not build the tick (the message says why)."""
-
-
-def _compile(source: bytes, cc: list[str], target: Path) -> bytes:
-    """``source`` compiled into ``target`` with its SHA-256 record (in a private folder beside it,
-    then moved); its bytes.
-
-    Raises:
-        _CompileFailed: The compiler failed or timed out.
-    """
-    with temporary_folder(target.parent, "compile") as tmp:
-        src, out = tmp / "tick.c", tmp / "tick.so"
-        src.write_bytes(source)
-        try:
-            done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
-                                  timeout=COMPILE_TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            raise _CompileFailed(f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on tick.c") from None
-        if done.returncode != 0:
-            raise _CompileFailed(f"{' '.join(cc)} failed on tick.c: {done.stderr.strip()[:500]}")
-        return record_and_place(out, target)
 
 
 def leg_chains(kin: LegKinematics) -> tuple[np.ndarray, ...] | None:
