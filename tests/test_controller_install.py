@@ -61,7 +61,8 @@ def test_the_controller_imports_no_harness():
 @pytest.mark.slow
 def test_the_controller_extra_alone_runs_a_tick(tmp_path):
     """The wheel with the [control] extra into a fresh venv: the packages installed are the
-    controller's and its solvers' alone (no casadi, mujoco, typer, rerun), and a tick runs."""
+    controller's and its solvers' alone (no casadi, mujoco, typer, rerun), and a tick runs, its
+    whole-body targets and assembly in C (the source shipped in the wheel)."""
     dist = tmp_path / "dist"
     subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(dist),
                     str(ROOT)], check=True, capture_output=True)
@@ -81,3 +82,4 @@ def test_the_controller_extra_alone_runs_a_tick(tmp_path):
                          cwd=tmp_path)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "torques [N m]" in out.stdout
+    assert "not available" not in out.stderr, out.stderr  # the whole-body tick's C code came with the wheel
