@@ -188,3 +188,24 @@ def test_a_ride_ticks_the_same_either_way(robot):
     run = loop.ride()
     assert not run.fall and {3, 4} <= sizes
     assert worst < 1e-9
+
+
+def test_a_cache_others_can_write_keeps_the_python_path(monkeypatch, tmp_path):
+    """The whole-body tick's C code is kept under the rules of the controller's compiled code: in a
+    cache folder others can write it is neither compiled nor loaded, a warning names the folder and
+    what to do, and the controller runs its Python path. Negative control: the folder made private
+    again gives the C code."""
+    from skatelib.library import trust
+
+    monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    (tmp_path / "native").mkdir(mode=0o700)
+    (tmp_path / "native").chmod(0o777)
+    monkeypatch.setattr(wbc_native, "_LIB", [])
+    with pytest.warns(RuntimeWarning, match=r"native.*can be written by others.*compiled=False.*Python path runs"):
+        assert WholeBodyController(np.arange(6, NV), 12.0, 0.6, C_SETTINGS)._native is None
+    assert not list((tmp_path / "native").glob("wbc_tick_*.so"))
+    (tmp_path / "native").chmod(0o700)
+    monkeypatch.setattr(wbc_native, "_LIB", [])
+    assert WholeBodyController(np.arange(6, NV), 12.0, 0.6, C_SETTINGS)._native is not None
+    assert len(list((tmp_path / "native").glob("wbc_tick_*.so"))) == 1
+
