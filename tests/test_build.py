@@ -238,12 +238,13 @@ def test_build_without_a_c_compiler_warns_and_still_solves(tmp_path):
 def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     """`build --frontier` (BuildOptions.frontier) searches each stride count's fastest passing label
     and stores it: the fastest is a probe that passed, the first failure one that did not, and they
-    bracket within the resolution (a coarse search here, to keep the test short)."""
+    bracket within the resolution (a coarse search here, to keep the test short: one climb past the
+    frontier and one bisection; the finer search is tests/test_transitions.py's)."""
     from skatelib.pipeline.quadruped import frontier as frontier_module
     from skatelib.pipeline.quadruped.frontier import FrontierSearch
 
     monkeypatch.setattr(frontier_module, "FrontierSearch",
-                        lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.2, max_mps=1.75))
+                        lambda: FrontierSearch(start_mps=0.75, step_mps=0.5, resolution_mps=0.3, max_mps=1.75))
     cfg = load_config(TINY)  # a probe past the frontier runs to the iteration limit: a lower one keeps it short
     cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, max_iter=60))
     report = build_library(cfg, tmp_path / "f.h5", BuildOptions(jobs=1, frontier=True))
@@ -252,5 +253,6 @@ def test_build_with_frontier_stores_the_search(cache, tmp_path, monkeypatch):
     ok = {p["velocity_mps"] for p in point["probes"] if p["ok"]}
     bad = {p["velocity_mps"] for p in point["probes"] if not p["ok"]}
     assert point["n_strides"] == 1 and point["fastest_mps"] in ok and point["first_failure_mps"] in bad
-    assert 0 < point["first_failure_mps"] - point["fastest_mps"] <= 0.2
+    assert 0 < point["first_failure_mps"] - point["fastest_mps"] <= 0.3
+    assert len(point["probes"]) == 3  # 0.75 passes, 1.25 fails, the bisection's 1.0 fails
     assert report.frontier is not None and report.frontier[0].fastest_mps == point["fastest_mps"]
