@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from skatelib.library import trust
 from skatelib.library.compiled import cached_or_compiled, private_copy, record_and_place
 from skatelib.library.errors import OutputError
@@ -99,3 +100,16 @@ def _compile(source: bytes, name: str, cc: list[str], target: Path) -> bytes:
         if done.returncode != 0:
             raise CompileFailed(f"{' '.join(cc)} failed on {name}: {done.stderr.strip()[:500]}")
         return record_and_place(out, target)
+
+
+def set_field(s: ctypes.Structure, name: str, values: Any) -> None:
+    """Copy ``values`` (raveled, as doubles) into the array field ``name`` of the C struct ``s``.
+
+    Raises:
+        ValueError: Not as many values as the field holds.
+    """
+    field = getattr(s, name)
+    flat = np.ascontiguousarray(values, dtype=float).ravel()
+    if len(flat) != len(field):
+        raise ValueError(f"{name}: {len(flat)} values for a field of {len(field)}")
+    ctypes.memmove(field, flat.ctypes.data, flat.nbytes)

@@ -114,7 +114,7 @@ class WholeBodyController:
         if lib is None:
             return None
         surface = next(c for c in self.constraints if isinstance(c, SurfaceForces))
-        probe = _Layout(StanceSet.of(np.ones(4, dtype=bool)), self.tasks, self.constraints, self.s)
+        probe = self._layout(np.ones(4, dtype=bool))  # the cost's fixed diagonal over qdd is any layout's
         joints = np.arange(6, NV) if isinstance(self._j, slice) else self._j
         return CompiledAssembly(lib, self.s, probe.q_diag, surface.coefficients, joints)
 

@@ -61,13 +61,6 @@ def wbc_library() -> ctypes.CDLL | None:
     return _LIB[0]
 
 
-def _set(field: Any, values: np.ndarray) -> None:
-    flat = np.ascontiguousarray(values, dtype=float).ravel()
-    if len(flat) != len(field):
-        raise ValueError(f"{len(flat)} values for a field of {len(field)}")
-    ctypes.memmove(field, flat.ctypes.data, flat.nbytes)
-
-
 class CompiledTargets:
     """:class:`~skatelib.control.wbc_targets.TargetMaker`'s arithmetic in C: its inputs packed into
     one vector (wbc_tick.c's ``T_`` layout), its outputs read from another (``O_``)."""
@@ -100,11 +93,11 @@ class CompiledAssembly:
         for name, value in (("sw_com", np.sqrt(g.w_com)), ("sw_swing", np.sqrt(g.w_swing)), ("w_att", g.w_attitude),
                             ("w_post", g.w_posture), ("w_force", g.w_force), ("per_leg", len(coefficients))):
             setattr(self.s, name, float(value))
-        _set(self.s.q_diag, q_diag)
+        native_code.set_field(self.s, "q_diag", q_diag)
         coef = np.zeros((5, 3))
         coef[:len(coefficients)] = coefficients
-        _set(self.s.coef, coef)
-        _set(self.s.joints, joints)
+        native_code.set_field(self.s, "coef", coef)
+        native_code.set_field(self.s, "joints", joints)
         self.inp = np.zeros(ASSEMBLY_IN)
         self._s, self._in = ctypes.addressof(self.s), self.inp.ctypes.data
 

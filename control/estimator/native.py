@@ -123,14 +123,14 @@ class CompiledTick:
         s = self.s
         for name, arr in (("joint_R", joint_R), ("joint_p", joint_p), ("axis", axes), ("foot_R", foot_R),
                           ("foot_p", foot_p)):
-            _set(s, name, arr)
+            native_code.set_field(s, name, arr)
 
     def load(self, scalars: dict[str, float], arrays: dict[str, np.ndarray]) -> None:
         """Figures, settings and state into C, by field name (est_t's)."""
         for name, value in scalars.items():
             setattr(self.s, name, float(value))
         for name, arr in arrays.items():
-            _set(self.s, name, arr)
+            native_code.set_field(self.s, name, arr)
 
     def __call__(self, reading: Reading, plan: np.ndarray, ahead: np.ndarray) -> np.ndarray:
         """One tick's readings and the contact codes planned now and ``liftoff_s`` ahead: the
@@ -149,11 +149,3 @@ class CompiledTick:
     def view(self, name: str) -> np.ndarray:
         """A field of the C state as a numpy array (a copy)."""
         return np.array(getattr(self.s, name))
-
-
-def _set(s: EstState, name: str, arr: np.ndarray) -> None:
-    field = getattr(s, name)
-    flat = np.asarray(arr, dtype=float).ravel()
-    if len(flat) != len(field):
-        raise ValueError(f"{name}: {len(flat)} values for a field of {len(field)}")
-    ctypes.memmove(field, flat.ctypes.data, flat.nbytes)
