@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from skatelib.library.rotations import roll_of, yaw_of
+from skatelib.sim.contacts import FootContacts
 from skatelib.sim.errors import TwinErrors
 from skatelib.sim.figures import TwinFigures
 from skatelib.sim.robot import JOINTS, LEGS
@@ -23,7 +24,6 @@ if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra
     import mujoco
 
 TIMESTEP_S = 1.0 / 1020.0  # two steps per 510 Hz whole-body tick, 34 per 30 Hz MPC update
-NO_CONTACT, ON_DECK, ON_FLOOR = 0, 1, 2
 
 
 @dataclass
@@ -138,6 +138,10 @@ class TwinPlant:
         self.deck_v = m.joint("deck_free").dofadr[0]
         self.robot_actuators = np.array([m.actuator(n).id for n in JOINTS])
         self.rolling = RollingResistance(m, f.board.rolling_friction_coeff * self.errors.rolling_scale)
+        self.contacts = FootContacts(m, self.feet, self.wheels, self.floor, self.deck_geom)
+        # the wheels' floor forces :meth:`state` read, for the next step's first rolling torque (None:
+        # the contacts have changed since)
+        self._floor_forces: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def timestep_s(self) -> float:
@@ -165,6 +169,7 @@ class TwinPlant:
         d.qpos[:] = pose_qpos(self.m, (trunk_pos, trunk_quat_wxyz), q,
                               (np.array([x, y, deck_z]), np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])))
         mujoco.mj_forward(self.m, d)
+        self._floor_forces = None
 
     def launch(self, speed_mps: float) -> None:
         """Robot and board moving forward along the deck's heading at ``speed_mps``, wheels rolling."""
@@ -178,6 +183,7 @@ class TwinPlant:
         for dof, r in zip(self.rolling.dofs, self.rolling.radius, strict=True):
             d.qvel[dof] = speed_mps / r
         mujoco.mj_forward(self.m, d)
+        self._floor_forces = None
 
     def foot_centres(self) -> np.ndarray:
         return np.array(self.d.geom_xpos[self.feet].T)
@@ -187,6 +193,7 @@ class TwinPlant:
 
         self.d.qpos[self.trunk_q + 2] += dz
         mujoco.mj_forward(self.m, self.d)
+        self._floor_forces = None
 
     def push(self, force_N: np.ndarray) -> None:
         """A force on the trunk's centre of mass (world frame) [N], held until changed."""
@@ -194,7 +201,8 @@ class TwinPlant:
 
     def step(self, tau: np.ndarray, n: int = 1) -> None:
         self.d.ctrl[self.robot_actuators] = tau
-        step(self.m, self.d, self.rolling, n)
+        fresh, self._floor_forces = self._floor_forces, None
+        step(self.m, self.d, self.rolling, n, None if fresh is None else fresh[0])
 
     def state(self) -> TwinState:
         """What the twin is doing now (contact forces evaluated at the last step)."""
@@ -214,25 +222,10 @@ class TwinPlant:
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, v6, 0)
             vel[:, i] = v6[3:]
             spins[:, i] = v6[:3]
-        touch = np.zeros(4, dtype=np.int8)
         points = centres - np.array([[0.0], [0.0], [self.f.foot_radius_m]])
         loads, wheel_force = self.rolling.floor_forces(d)
-        foot_loads = np.zeros(4)
-        others: set[str] = set()
-        for k in range(d.ncon):
-            c = d.contact[k]
-            g1, g2 = int(c.geom1), int(c.geom2)
-            pair = {g1, g2}
-            for i, g in enumerate(self.feet):
-                if g in pair:
-                    touch[i] = ON_DECK if self.deck_geom in pair else ON_FLOOR
-                    points[:, i] = c.pos
-                    mujoco.mj_contactForce(m, d, k, v6)
-                    foot_loads[i] += v6[0]
-            if self.floor in pair:
-                other = g2 if g1 == self.floor else g1
-                if other not in self.wheels and other not in self.feet:
-                    others.add(m.geom(other).name or f"geom {other} of body {m.body(m.geom_bodyid[other]).name}")
+        self._floor_forces = loads, wheel_force  # the next step's first rolling torque reads the same contacts
+        touch, foot_loads, others = self.contacts.read(d, points)
         mujoco.mj_subtreeVel(m, d)
         return TwinState(
             t=float(d.time), trunk_pos=d.qpos[self.trunk_q:self.trunk_q + 3].copy(), trunk_R=R,

@@ -32,9 +32,35 @@ class RollingResistance:
         self.actuators = np.array([m.actuator(f"rolling_{w}").id for w in WHEELS])
         self.radius = np.array([m.geom_size[g][0] for g in self.geoms])
         self.floor = m.geom("floor").id
-        self.wheel_of = np.full(m.ngeom, -1)  # each geom's wheel (-1: none)
-        self.wheel_of[self.geoms] = np.arange(len(WHEELS))
+        # for each pair of geoms (geom1, geom2) of a contact: the wheel of a wheel on the floor (-1:
+        # none), and whether the wheel is geom2 (the contact's force is on geom2)
+        self.pair_wheel = np.full((m.ngeom, m.ngeom), -1)
+        self.pair_wheel[self.floor, self.geoms] = self.pair_wheel[self.geoms, self.floor] = np.arange(len(WHEELS))
         self._force = np.zeros(6)
+
+    def _picked(self, d: Any) -> tuple[list[int], list[int], list[bool]]:
+        """The contacts of a wheel with the floor (the last step's), each one's wheel, and whether
+        the wheel is its geom2 (the contact's force is on geom2)."""
+        if d.ncon == 0:
+            return [], [], []
+        con = d.contact
+        g1, g2 = con.geom1, con.geom2
+        # picked from the arrays: a Python loop over every contact of a robot on a board costs more
+        # than the physics step
+        wheel = self.pair_wheel[g1, g2]
+        picked = np.nonzero(wheel >= 0)[0]
+        return picked.tolist(), wheel[picked].tolist(), (g2[picked] != self.floor).tolist()
+
+    def wheel_loads(self, d: Any) -> np.ndarray:
+        """(4,) each wheel's normal force on the floor [N] (contacts of the last step)."""
+        import mujoco
+
+        loads = np.zeros(4)
+        picked, wheels, _ = self._picked(d)
+        for k, hit in zip(picked, wheels, strict=True):
+            mujoco.mj_contactForce(self.m, d, k, self._force)
+            loads[hit] += self._force[0]
+        return loads
 
     def floor_forces(self, d: Any) -> tuple[np.ndarray, np.ndarray]:
         """(4,) each wheel's normal force on the floor [N] and (3,) the floor's force on all four
@@ -42,28 +68,23 @@ class RollingResistance:
         import mujoco
 
         loads, total = np.zeros(4), np.zeros(3)
-        if d.ncon == 0:
+        picked, wheels, on_geom2 = self._picked(d)
+        if not picked:
             return loads, total
-        con = d.contact
-        g1, g2 = con.geom1, con.geom2
-        # the contacts of a wheel with the floor, picked from the arrays (a Python loop over every
-        # contact of a robot on a board costs more than the physics step)
-        w1, w2 = self.wheel_of[g1], self.wheel_of[g2]
-        picked = np.nonzero(((g1 == self.floor) & (w2 >= 0)) | ((g2 == self.floor) & (w1 >= 0)))[0]
-        if len(picked) == 0:
-            return loads, total
-        frames = con.frame
-        for k in picked:
-            hit = int(max(w1[k], w2[k]))
-            mujoco.mj_contactForce(self.m, d, int(k), self._force)
+        frames = d.contact.frame
+        for k, hit, second in zip(picked, wheels, on_geom2, strict=True):
+            mujoco.mj_contactForce(self.m, d, k, self._force)
             loads[hit] += self._force[0]
             force = frames[k].reshape(3, 3).T @ self._force[:3]  # on geom2 (the wheel, or the floor)
-            total += force if w2[k] == hit else -force
+            total += force if second else -force
         return loads, total
 
-    def apply(self, d: Any) -> None:
+    def apply(self, d: Any, loads: np.ndarray | None = None) -> None:
+        """The rolling torques from the contacts of the last step (``loads``: their wheel loads, when
+        already read from them)."""
         v = d.qvel[self.dofs] * self.radius
-        loads, _ = self.floor_forces(d)
+        if loads is None:
+            loads = self.wheel_loads(d)
         d.ctrl[self.actuators] = -self.coefficient * self.radius * loads * np.tanh(v / SMOOTHING_MPS)
 
 
@@ -75,10 +96,11 @@ def add_rolling_actuators(spec: Any) -> None:
         spec.add_actuator(name=f"rolling_{w}", target=w, trntype=mujoco.mjtTrn.mjTRN_JOINT)
 
 
-def step(m: Any, d: Any, rolling: RollingResistance, n: int = 1) -> None:
-    """``n`` steps with the rolling torques updated before each."""
+def step(m: Any, d: Any, rolling: RollingResistance, n: int = 1, loads: np.ndarray | None = None) -> None:
+    """``n`` steps with the rolling torques updated before each (``loads``: the wheels' loads of the
+    contacts as they are, when already read from them)."""
     import mujoco
 
-    for _ in range(n):
-        rolling.apply(d)
+    for k in range(n):
+        rolling.apply(d, loads if k == 0 else None)
         mujoco.mj_step(m, d)

@@ -181,3 +181,77 @@ def test_deck_mass_motor_strength_and_a_shove(built):
 
     assert momentum_change(1.0) == pytest.approx(1.0, rel=0.03)
     assert abs(momentum_change(0.0)) < 0.01
+
+
+def _plain_contacts(p) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...], np.ndarray, np.ndarray]:
+    """What the plant reads of its contacts, by a plain loop over every contact: each foot's touch
+    code, contact point and load, the other geoms on the floor, the wheels' loads and the floor's
+    force on them."""
+    from skatelib.sim.contacts import ON_DECK, ON_FLOOR
+
+    m, d = p.m, p.d
+    touch, points, loads = np.zeros(4, dtype=np.int8), np.full((3, 4), np.nan), np.zeros(4)
+    wheel_loads, wheel_force, others = np.zeros(4), np.zeros(3), set()
+    f6 = np.zeros(6)
+    for k in range(d.ncon):
+        c = d.contact[k]
+        pair = {int(c.geom1), int(c.geom2)}
+        mujoco.mj_contactForce(m, d, k, f6)
+        for i, g in enumerate(p.feet):
+            if g in pair:
+                touch[i] = ON_DECK if p.deck_geom in pair else ON_FLOOR
+                points[:, i] = c.pos
+                loads[i] += f6[0]
+        if p.floor in pair:
+            other = (pair - {p.floor}).pop()
+            if other in p.wheels:
+                wheel_loads[list(p.wheels).index(other)] += f6[0]
+                on_other = c.frame.reshape(3, 3).T @ f6[0:3] * (1 if int(c.geom2) == other else -1)
+                wheel_force += on_other
+            elif other not in p.feet:
+                others.add(m.geom(other).name or f"geom {other} of body {m.body(m.geom_bodyid[other]).name}")
+    return touch, points, loads, tuple(sorted(others)), wheel_loads, wheel_force
+
+
+def test_the_plants_contact_reads_against_a_plain_loop(built):
+    """The plant's state reads its contacts from MuJoCo's arrays, and its first rolling torque after
+    a state reads the loads that state read: against a plain loop over every contact, over 0.6 s
+    of a robot collapsing on its board with its motors off (feet on the deck, wheels on the floor,
+    the trunk and legs landing on the deck and the floor), and against a twin stepped without
+    reading its state in between, to the bit. Negative control: the loads that state hands to the
+    next step doubled, the two twins part."""
+    from skatelib.control import feedback
+    from skatelib.sim import contacts
+    from skatelib.sim.plant import TwinPlant
+
+    # the controller reads the touch codes as its own
+    assert (contacts.ON_DECK, contacts.ON_FLOOR) == (feedback.ON_DECK, feedback.ON_FLOOR)
+    _, _, f, _ = built
+
+    def plant() -> TwinPlant:
+        p = TwinPlant(f)
+        mujoco.mj_resetDataKeyframe(p.m, p.d, p.m.key("stance").id)
+        mujoco.mj_forward(p.m, p.d)
+        return p
+
+    a, b, c = plant(), plant(), plant()
+    zero = np.zeros(len(JOINTS))
+    seen_others, parted = set(), False
+    for _ in range(300):
+        st = a.state()
+        c.state()
+        c._floor_forces = (2.0 * c._floor_forces[0], c._floor_forces[1])
+        touch, points, loads, others, wheel_loads, wheel_force = _plain_contacts(a)
+        assert np.array_equal(st.foot_touch, touch)
+        on = touch > 0
+        assert np.array_equal(st.contact_points[:, on], points[:, on])
+        assert np.array_equal(st.foot_load_N, loads) and st.floor_touches == others
+        assert np.array_equal(st.wheel_load_N, wheel_loads)
+        assert np.allclose(st.wheel_force_N, wheel_force, rtol=1e-12, atol=1e-9)
+        seen_others |= set(others)
+        for p in (a, b, c):
+            p.step(zero, 2)
+        assert np.array_equal(a.d.qpos, b.d.qpos) and np.array_equal(a.d.qvel, b.d.qvel)
+        parted |= not np.array_equal(a.d.qvel, c.d.qvel)
+    assert seen_others, "the collapse put nothing but feet and wheels on the floor: the check saw no stray contact"
+    assert parted

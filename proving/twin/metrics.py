@@ -89,16 +89,20 @@ class Meter:
 
     def _slips(self, st: Any) -> None:
         touch = st.foot_touch > 0
+        if touch.any():
+            # every foot's contact point velocity at once (elementwise: the same figures as foot by foot)
+            p = st.contact_points
+            v = st.foot_velocities + _cross(st.foot_spins, p - st.foot_centres)
+            deck = st.foot_touch == ON_DECK
+            if deck.any():
+                under = st.deck_v[:, None] + _cross(st.deck_omega[:, None], p - st.deck_pos[:, None])
+                v = np.where(deck, v - under, v)
         for i in range(4):
             if touch[i]:
-                p = st.contact_points[:, i]
-                v = st.foot_velocities[:, i] + _cross(st.foot_spins[:, i], p - st.foot_centres[:, i])
-                if st.foot_touch[i] == ON_DECK:
-                    v = v - (st.deck_v + _cross(st.deck_omega, p - st.deck_pos))
                 if not self.touching[i]:
                     self.slip[:, i] = 0.0
                     self.slip_max[i] = 0.0
-                self.slip[:, i] += v * self.tick_s
+                self.slip[:, i] += v[:, i] * self.tick_s
                 self.slip_max[i] = max(self.slip_max[i], float(np.linalg.norm(self.slip[:, i])))
             elif self.touching[i]:
                 self.m.slips_m.append(float(self.slip_max[i]))
@@ -120,7 +124,7 @@ class Meter:
         if len(m.stage_speeds_mps) < len(self.stage_ends) and t >= self.stage_ends[len(m.stage_speeds_mps)] - 1e-9:
             m.stage_speeds_mps.append(float(st.system_v[0:2] @ heading))
         # At the axles, not the deck's top: a rolling deck's top swings sideways over the wheels.
-        v_axle = st.deck_v + np.cross(st.deck_omega, st.deck_R @ self.axle)
+        v_axle = st.deck_v + _cross(st.deck_omega, st.deck_R @ self.axle)
         forward = float(v_axle[0:2] @ heading)
         if abs(forward) > CRAB_MIN_MPS:
             across = float(v_axle[1] * heading[0] - v_axle[0] * heading[1])
@@ -140,10 +144,12 @@ class Meter:
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two 3-vectors (np.cross costs ten times as much on these)."""
+    """a x b of two 3-vectors, or column by column of (3, n) arrays (np.cross costs ten times as
+    much on these)."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def planned_floor_near(contact_at: Any, t: float) -> np.ndarray:
     """(4,) whether each foot is planned on the floor at ``t`` or within the grace time."""
-    return np.any([contact_at(t + dt) == GROUND for dt in (-CONTACT_GRACE_S, 0.0, CONTACT_GRACE_S)], axis=0)
+    return np.asarray((contact_at(t - CONTACT_GRACE_S) == GROUND) | (contact_at(t) == GROUND)
+                      | (contact_at(t + CONTACT_GRACE_S) == GROUND))
