@@ -139,9 +139,9 @@ class TwinPlant:
         self.robot_actuators = np.array([m.actuator(n).id for n in JOINTS])
         self.rolling = RollingResistance(m, f.board.rolling_friction_coeff * self.errors.rolling_scale)
         self.contacts = FootContacts(m, self.feet, self.wheels, self.floor, self.deck_geom)
-        # the wheels' floor forces :meth:`state` read, for the next step's first rolling torque (None:
+        # the wheels' floor loads :meth:`state` read, for the next step's first rolling torque (None:
         # the contacts have changed since)
-        self._floor_forces: tuple[np.ndarray, np.ndarray] | None = None
+        self._wheel_loads: np.ndarray | None = None
 
     @property
     def timestep_s(self) -> float:
@@ -169,7 +169,7 @@ class TwinPlant:
         d.qpos[:] = pose_qpos(self.m, (trunk_pos, trunk_quat_wxyz), q,
                               (np.array([x, y, deck_z]), np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])))
         mujoco.mj_forward(self.m, d)
-        self._floor_forces = None
+        self._wheel_loads = None
 
     def launch(self, speed_mps: float) -> None:
         """Robot and board moving forward along the deck's heading at ``speed_mps``, wheels rolling."""
@@ -183,7 +183,7 @@ class TwinPlant:
         for dof, r in zip(self.rolling.dofs, self.rolling.radius, strict=True):
             d.qvel[dof] = speed_mps / r
         mujoco.mj_forward(self.m, d)
-        self._floor_forces = None
+        self._wheel_loads = None
 
     def foot_centres(self) -> np.ndarray:
         return np.array(self.d.geom_xpos[self.feet].T)
@@ -193,7 +193,7 @@ class TwinPlant:
 
         self.d.qpos[self.trunk_q + 2] += dz
         mujoco.mj_forward(self.m, self.d)
-        self._floor_forces = None
+        self._wheel_loads = None
 
     def push(self, force_N: np.ndarray) -> None:
         """A force on the trunk's centre of mass (world frame) [N], held until changed."""
@@ -201,8 +201,8 @@ class TwinPlant:
 
     def step(self, tau: np.ndarray, n: int = 1) -> None:
         self.d.ctrl[self.robot_actuators] = tau
-        fresh, self._floor_forces = self._floor_forces, None
-        step(self.m, self.d, self.rolling, n, None if fresh is None else fresh[0])
+        loads, self._wheel_loads = self._wheel_loads, None
+        step(self.m, self.d, self.rolling, n, loads)
 
     def state(self) -> TwinState:
         """What the twin is doing now (contact forces evaluated at the last step)."""
@@ -224,7 +224,7 @@ class TwinPlant:
             spins[:, i] = v6[:3]
         points = centres - np.array([[0.0], [0.0], [self.f.foot_radius_m]])
         loads, wheel_force = self.rolling.floor_forces(d)
-        self._floor_forces = loads, wheel_force  # the next step's first rolling torque reads the same contacts
+        self._wheel_loads = loads  # the next step's first rolling torque reads the same contacts
         touch, foot_loads, others = self.contacts.read(d, points)
         mujoco.mj_subtreeVel(m, d)
         return TwinState(

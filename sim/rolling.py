@@ -32,8 +32,7 @@ class RollingResistance:
         self.actuators = np.array([m.actuator(f"rolling_{w}").id for w in WHEELS])
         self.radius = np.array([m.geom_size[g][0] for g in self.geoms])
         self.floor = m.geom("floor").id
-        # for each pair of geoms (geom1, geom2) of a contact: the wheel of a wheel on the floor (-1:
-        # none), and whether the wheel is geom2 (the contact's force is on geom2)
+        # for each pair of geoms (geom1, geom2) of a contact: the wheel of a wheel on the floor (-1: none)
         self.pair_wheel = np.full((m.ngeom, m.ngeom), -1)
         self.pair_wheel[self.floor, self.geoms] = self.pair_wheel[self.geoms, self.floor] = np.arange(len(WHEELS))
         self._force = np.zeros(6)

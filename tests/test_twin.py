@@ -240,7 +240,7 @@ def test_the_plants_contact_reads_against_a_plain_loop(built):
     for _ in range(300):
         st = a.state()
         c.state()
-        c._floor_forces = (2.0 * c._floor_forces[0], c._floor_forces[1])
+        c._wheel_loads = 2.0 * c._wheel_loads
         touch, points, loads, others, wheel_loads, wheel_force = _plain_contacts(a)
         assert np.array_equal(st.foot_touch, touch)
         on = touch > 0
