@@ -169,7 +169,7 @@ class TwinPlant:
         d.qpos[:] = pose_qpos(self.m, (trunk_pos, trunk_quat_wxyz), q,
                               (np.array([x, y, deck_z]), np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])))
         mujoco.mj_forward(self.m, d)
-        self._wheel_loads = None
+        self.contacts_changed()
 
     def launch(self, speed_mps: float) -> None:
         """Robot and board moving forward along the deck's heading at ``speed_mps``, wheels rolling."""
@@ -183,7 +183,7 @@ class TwinPlant:
         for dof, r in zip(self.rolling.dofs, self.rolling.radius, strict=True):
             d.qvel[dof] = speed_mps / r
         mujoco.mj_forward(self.m, d)
-        self._wheel_loads = None
+        self.contacts_changed()
 
     def foot_centres(self) -> np.ndarray:
         return np.array(self.d.geom_xpos[self.feet].T)
@@ -193,6 +193,11 @@ class TwinPlant:
 
         self.d.qpos[self.trunk_q + 2] += dz
         mujoco.mj_forward(self.m, self.d)
+        self.contacts_changed()
+
+    def contacts_changed(self) -> None:
+        """The twin's contacts were computed again (``mj_forward``) since the last :meth:`state`:
+        the next step reads the wheels' loads from them."""
         self._wheel_loads = None
 
     def push(self, force_N: np.ndarray) -> None:
@@ -200,6 +205,10 @@ class TwinPlant:
         self.d.xfrc_applied[self.trunk, 0:3] = force_N
 
     def step(self, tau: np.ndarray, n: int = 1) -> None:
+        """``n`` physics steps with the joint torques ``tau`` [N m]. The first rolling torque takes
+        the wheels' loads the last :meth:`state` read (the same contacts); the plant's own methods
+        that move the twin drop them, and so must a caller that runs ``mj_forward`` on ``d`` itself
+        between a state and a step (:meth:`contacts_changed`)."""
         self.d.ctrl[self.robot_actuators] = tau
         loads, self._wheel_loads = self._wheel_loads, None
         step(self.m, self.d, self.rolling, n, loads)

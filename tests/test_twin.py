@@ -218,8 +218,9 @@ def test_the_plants_contact_reads_against_a_plain_loop(built):
     a state reads the loads that state read: against a plain loop over every contact, over 0.6 s
     of a robot collapsing on its board with its motors off (feet on the deck, wheels on the floor,
     the trunk and legs landing on the deck and the floor), and against a twin stepped without
-    reading its state in between, to the bit. Negative control: the loads that state hands to the
-    next step doubled, the two twins part."""
+    reading its state in between, to the bit, the contacts computed again now and then (a shift by
+    nothing: ``mj_forward``). Negative controls: the loads that state hands to the next step
+    doubled, or the contacts computed again behind the plant's back, the twins part."""
     from skatelib.control import feedback
     from skatelib.sim import contacts
     from skatelib.sim.plant import TwinPlant
@@ -234,13 +235,14 @@ def test_the_plants_contact_reads_against_a_plain_loop(built):
         mujoco.mj_forward(p.m, p.d)
         return p
 
-    a, b, c = plant(), plant(), plant()
+    a, b, c, stale = plant(), plant(), plant(), plant()
     zero = np.zeros(len(JOINTS))
-    seen_others, parted = set(), False
-    for _ in range(300):
+    seen_others, parted, stale_parted = set(), False, False
+    for k in range(300):
         st = a.state()
         c.state()
         c._wheel_loads = 2.0 * c._wheel_loads
+        stale.state()
         touch, points, loads, others, wheel_loads, wheel_force = _plain_contacts(a)
         assert np.array_equal(st.foot_touch, touch)
         on = touch > 0
@@ -249,9 +251,14 @@ def test_the_plants_contact_reads_against_a_plain_loop(built):
         assert np.array_equal(st.wheel_load_N, wheel_loads)
         assert np.allclose(st.wheel_force_N, wheel_force, rtol=1e-12, atol=1e-9)
         seen_others |= set(others)
-        for p in (a, b, c):
+        if k % 50 == 25:  # the contacts computed again: the loads the state read are dropped
+            for p in (a, b):
+                p.shift_robot(0.0)
+            mujoco.mj_forward(stale.m, stale.d)  # behind the plant's back: the stale loads stay
+        for p in (a, b, c, stale):
             p.step(zero, 2)
         assert np.array_equal(a.d.qpos, b.d.qpos) and np.array_equal(a.d.qvel, b.d.qvel)
         parted |= not np.array_equal(a.d.qvel, c.d.qvel)
+        stale_parted |= not np.array_equal(a.d.qvel, stale.d.qvel)
     assert seen_others, "the collapse put nothing but feet and wheels on the floor: the check saw no stray contact"
-    assert parted
+    assert parted and stale_parted
