@@ -1,13 +1,18 @@
-"""Shared fixtures, each made once per test run: the default config and the system built from it,
-and the libraries several test modules read (a solve or a build costs seconds to minutes; the
-modules that read one open it, and copy it before they change it)."""
+"""Shared fixtures: the default config and the system built from it, and the libraries several test
+modules read (a solve or a build costs seconds to minutes; the modules that read one open it, and
+copy it before they change it). The solves and builds are made once per test run, whichever of the
+pytest-xdist processes asks first (:func:`_once`); the others wait for it and read what it made."""
 
 from __future__ import annotations
 
 import dataclasses
+import fcntl
 import os
+import pickle
+import shutil
+from collections.abc import Callable
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import pytest
 from skatelib.pipeline.config import CONFIG_DIR, load_config
@@ -23,6 +28,29 @@ class CliBuild(NamedTuple):
     path: Path
     stdout: str
     cache: Path
+
+
+def _once(tmp_path_factory: pytest.TempPathFactory, name: str, make: Callable[[Path], Any]) -> Any:
+    """``make(folder)``, run once per test run and shared by the pytest-xdist processes: the first to
+    ask runs it under a lock in the run's temporary folder (the workers' common parent) and pickles
+    what it returns there; the others wait on the lock and unpickle it. A ``make`` that fails leaves
+    nothing, so the next process to ask makes it again (and fails the same way)."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent
+    folder, value = root / f"once-{name}", root / f"once-{name}.pickle"
+    with open(root / f"once-{name}.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if value.exists():
+            return pickle.loads(value.read_bytes())
+        if folder.exists():
+            shutil.rmtree(folder)  # a make that failed
+        folder.mkdir()
+        made = make(folder)
+        part = value.with_suffix(".part")
+        part.write_bytes(pickle.dumps(made))
+        part.replace(value)
+        return made
 
 
 def _cli_build(folder: Path, config: Path, *args: str) -> CliBuild:
@@ -58,18 +86,21 @@ def small_cfg(cfg):
 
 
 @pytest.fixture(scope="session")
-def pushoff_0p3(small_cfg):
+def pushoff_0p3(tmp_path_factory, small_cfg):
     """The one-stride 0.3 m/s push-off of ``small_cfg``, solved cold in this process (the problem of
     ``tests/configs/tiny.toml``'s first entry)."""
     from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, solve
 
-    r = solve(PushoffSpec(small_cfg, 0.3, 1))
-    assert r.success, r.status
-    return r
+    def make(_: Path) -> Any:
+        r = solve(PushoffSpec(small_cfg, 0.3, 1))
+        assert r.success, r.status
+        return r
+
+    return _once(tmp_path_factory, "pushoff_0p3", make)
 
 
 @pytest.fixture(scope="session")
-def shove_0p3(small_cfg):
+def shove_0p3(tmp_path_factory, small_cfg):
     """The same push-off solved the old way: only the board's final speed constrained, no riding end
     state (the terminal shove the physics checks and the twin must refuse)."""
     import numpy as np
@@ -82,33 +113,37 @@ def shove_0p3(small_cfg):
         lo[-1, 0], hi[-1, 0] = -self.rel_tol, self.rel_tol
         return lo, hi
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(FinalSpeed, "bounds", board_only)
-        mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
-        mp.setattr(problem, "bound_terms", lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
-        mp.setattr(pushoff, "_PROBLEMS", {})
-        return pushoff.solve(pushoff.PushoffSpec(small_cfg, 0.3, 1))
+    def make(_: Path) -> Any:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(FinalSpeed, "bounds", board_only)
+            mp.setattr(RidingEnd, "bounds", lambda self, n: (np.full((n, 2), -np.inf), np.full((n, 2), np.inf)))
+            mp.setattr(problem, "bound_terms",
+                       lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
+            mp.setattr(pushoff, "_PROBLEMS", {})
+            return pushoff.solve(pushoff.PushoffSpec(small_cfg, 0.3, 1))
+
+    return _once(tmp_path_factory, "shove_0p3", make)
 
 
 @pytest.fixture(scope="session")
 def tiny_build(tmp_path_factory) -> CliBuild:
     """``skatelib build tests/configs/tiny.toml --jobs 2 --profile``: 0.3 and 0.4 m/s, one stride each;
     its profile is ``profile.json`` beside the library."""
-    folder = tmp_path_factory.mktemp("tiny_build")
-    return _cli_build(folder, TINY, "--jobs", "2", "--profile", str(folder / "profile.json"))
+    return _once(tmp_path_factory, "tiny_build",
+                 lambda folder: _cli_build(folder, TINY, "--jobs", "2", "--profile", str(folder / "profile.json")))
 
 
 @pytest.fixture(scope="session")
 def tiny_v03(tmp_path_factory) -> CliBuild:
     """``skatelib solve -V 0.3 -s 1 --config tests/configs/tiny.toml``: a library of one solved entry."""
-    return _cli_solve(tmp_path_factory.mktemp("tiny_v03"), 0.3, 1)
+    return _once(tmp_path_factory, "tiny_v03", lambda folder: _cli_solve(folder, 0.3, 1))
 
 
 @pytest.fixture(scope="session")
 def tiny_v04(tmp_path_factory) -> CliBuild:
     """``skatelib solve -V 0.4 -s 1 --config tests/configs/tiny.toml``: a library of one solved entry,
     the one the controller and the twin ride."""
-    return _cli_solve(tmp_path_factory.mktemp("tiny_v04"), 0.4, 1)
+    return _once(tmp_path_factory, "tiny_v04", lambda folder: _cli_solve(folder, 0.4, 1))
 
 
 @pytest.fixture(scope="session")
@@ -117,10 +152,13 @@ def hrp2_walk_path(tmp_path_factory):
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import build_library
 
-    out = tmp_path_factory.mktemp("hrp2_walk") / "walk.h5"
-    rep = build_library(load_config(CONFIG_DIR / "hrp2_walk.toml"), out, BuildOptions(jobs=1, cache=False))
-    assert not rep.failed
-    return out
+    def make(folder: Path) -> Path:
+        out = folder / "walk.h5"
+        cfg = load_config(CONFIG_DIR / "hrp2_walk.toml")
+        assert not build_library(cfg, out, BuildOptions(jobs=1, cache=False)).failed
+        return out
+
+    return _once(tmp_path_factory, "hrp2_walk", make)
 
 
 @pytest.fixture(scope="session")
@@ -135,7 +173,8 @@ def hrp2_walk_motion():
 @pytest.fixture(scope="session")
 def hrp2_skate_build(tmp_path_factory) -> CliBuild:
     """``skatelib build configs/hrp2_skate.toml -j 2`` (0.5, 0.75 and 1.0 m/s) from an empty cache."""
-    return _cli_build(tmp_path_factory.mktemp("hrp2_skate"), CONFIG_DIR / "hrp2_skate.toml", "-j", "2")
+    return _once(tmp_path_factory, "hrp2_skate_build",
+                 lambda folder: _cli_build(folder, CONFIG_DIR / "hrp2_skate.toml", "-j", "2"))
 
 
 @pytest.fixture(scope="session")
@@ -144,10 +183,12 @@ def hrp2_skate_v100(tmp_path_factory) -> Path:
     from skatelib.pipeline.build.contract import BuildOptions
     from skatelib.pipeline.build.orchestrate import build_library
 
-    folder = tmp_path_factory.mktemp("hrp2_skate_v100")
-    cfg = folder / "skate.toml"
-    cfg.write_text(f'extends = "{(CONFIG_DIR / "hrp2_skate.toml").as_posix()}"\n[sweep]\nvelocities_mps = [1.0]\n')
-    out = folder / "skate.h5"
-    assert not build_library(load_config(cfg), out, BuildOptions(jobs=1, cache=False)).failed
-    return out
+    def make(folder: Path) -> Path:
+        cfg = folder / "skate.toml"
+        cfg.write_text(f'extends = "{(CONFIG_DIR / "hrp2_skate.toml").as_posix()}"\n[sweep]\nvelocities_mps = [1.0]\n')
+        out = folder / "skate.h5"
+        assert not build_library(load_config(cfg), out, BuildOptions(jobs=1, cache=False)).failed
+        return out
+
+    return _once(tmp_path_factory, "hrp2_skate_v100", make)
 
