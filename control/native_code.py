@@ -34,8 +34,9 @@ COMPILE_TIMEOUT_S = 120
 
 
 def cache_dir() -> Path:
-    """Where the compiled code is kept: ``native/`` in the user's cache folder."""
-    return trust.cache_dir() / "native"
+    """Where the compiled code is kept: ``native/`` in the folder of compiled code
+    (:func:`skatelib.library.trust.compile_dir`, the user's cache folder unless set apart)."""
+    return trust.compile_dir() / "native"
 
 
 def compiler() -> list[str] | None:

@@ -18,6 +18,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from skatelib.library import trust
+from skatelib.library.errors import OutputError
 from skatelib.library.temporaries import temporary_folder
 
 _OPEN = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)  # a fifo does not block
@@ -151,10 +152,19 @@ def locked(path: Path) -> Iterator[None]:
 def private_copy(code: bytes, folder: Path, name: str = "lib.so") -> Iterator[Path]:
     """``code`` (checked by the caller) as a new file in a new folder of this process (mode 0700) in
     ``folder``, for the block to load; removed when it ends (loaded code stays mapped). What runs
-    is what was checked, whatever happens to the cached file meanwhile."""
+    is what was checked, whatever happens to the cached file meanwhile.
+
+    Raises:
+        OutputError: The copy cannot be written (a full disk, a file-size limit), naming ``folder``.
+    """
     with temporary_folder(folder, "load") as private:
         so = private / name
-        fd = os.open(so, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
-        with os.fdopen(fd, "wb") as f:
-            f.write(code)
+        try:
+            fd = os.open(so, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+            with os.fdopen(fd, "wb") as f:
+                f.write(code)
+        except OSError as e:
+            raise OutputError(folder, f"the compiled code ({len(code):,} bytes) cannot be copied there to be "
+                                      f"loaded ({e.strerror}): make room on its disk, or point {trust.COMPILE_ENV} "
+                                      "to a folder on another") from e
         yield so

@@ -21,6 +21,7 @@ from pathlib import Path
 from skatelib.library.errors import OutputError
 
 CACHE_ENV = "SKATELIB_CACHE_DIR"
+COMPILE_ENV = "SKATELIB_COMPILE_DIR"
 TRUSTED_ENV = "SKATELIB_TRUSTED_CACHE"
 OTHERS_WRITE = stat.S_IWGRP | stat.S_IWOTH
 
@@ -30,6 +31,14 @@ def cache_dir() -> Path:
     and compiled stage functions, the estimator's compiled tick (``native/``)."""
     base = os.environ.get(CACHE_ENV) or os.path.join(os.path.expanduser("~"), ".cache", "skatelib")
     return Path(base)
+
+
+def compile_dir() -> Path:
+    """Where compiled code is kept: ``$SKATELIB_COMPILE_DIR``, else the cache folder. Each library in
+    it is named by a hash of what it computes, the compiler's flags and the CPU, so one folder serves
+    any number of entry caches (a fresh ``SKATELIB_CACHE_DIR`` per experiment compiles nothing again)."""
+    own = os.environ.get(COMPILE_ENV)
+    return Path(own) if own else cache_dir()
 
 
 def trusted_cache() -> Path | None:
@@ -100,7 +109,10 @@ def file_problem(path: Path) -> str:
 
 OWN_ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or pass --no-cache"
 # Compiled stage functions are kept in the cache folder even with --no-cache (solve, frontier too).
-COMPILE_ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or set [optimization] compile = false"
+def compile_advice() -> str:
+    """What to do when the folder of compiled code may not be used (it names the variable in force)."""
+    env = COMPILE_ENV if os.environ.get(COMPILE_ENV) else CACHE_ENV
+    return f"point {env} to a folder of your own, or set [optimization] compile = false"
 
 
 def check_own(folder: Path, advice: str = OWN_ADVICE) -> None:

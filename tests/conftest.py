@@ -5,7 +5,6 @@ pytest-xdist processes asks first (:func:`_once`); the others wait for it and re
 
 from __future__ import annotations
 
-import dataclasses
 import fcntl
 import os
 import pickle
@@ -19,6 +18,16 @@ from skatelib.pipeline.config import CONFIG_DIR, load_config
 from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 from tests.helpers import TINY, run_cli
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Compiled code (the stage functions of the tiny config's model, the estimator's tick) kept where
+    a build of the developer's would keep it (``$SKATELIB_COMPILE_DIR``, else the cache folder),
+    whatever entry cache a test points ``SKATELIB_CACHE_DIR`` to: compiled once per machine and
+    model, not once per test (the processes a test starts inherit the variable)."""
+    from skatelib.library import trust
+
+    os.environ[trust.COMPILE_ENV] = str(trust.compile_dir())
 
 
 class CliBuild(NamedTuple):
@@ -80,19 +89,13 @@ def system(cfg):
 
 
 @pytest.fixture(scope="session")
-def small_cfg(cfg):
-    """The default config with the stage functions interpreted (no C compilation)."""
-    return dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
-
-
-@pytest.fixture(scope="session")
-def pushoff_0p3(tmp_path_factory, small_cfg):
-    """The one-stride 0.3 m/s push-off of ``small_cfg``, solved cold in this process (the problem of
+def pushoff_0p3(tmp_path_factory, cfg):
+    """The one-stride 0.3 m/s push-off of ``cfg``, solved cold in this process (the problem of
     ``tests/configs/tiny.toml``'s first entry)."""
     from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, solve
 
     def make(_: Path) -> Any:
-        r = solve(PushoffSpec(small_cfg, 0.3, 1))
+        r = solve(PushoffSpec(cfg, 0.3, 1))
         assert r.success, r.status
         return r
 
@@ -100,7 +103,7 @@ def pushoff_0p3(tmp_path_factory, small_cfg):
 
 
 @pytest.fixture(scope="session")
-def shove_0p3(tmp_path_factory, small_cfg):
+def shove_0p3(tmp_path_factory, cfg):
     """The same push-off solved the old way: only the board's final speed constrained, no riding end
     state (the terminal shove the physics checks and the twin must refuse)."""
     import numpy as np
@@ -120,7 +123,7 @@ def shove_0p3(tmp_path_factory, small_cfg):
             mp.setattr(problem, "bound_terms",
                        lambda *a: [t for t in bound_terms(*a) if not t.name.startswith("end_")])
             mp.setattr(pushoff, "_PROBLEMS", {})
-            return pushoff.solve(pushoff.PushoffSpec(small_cfg, 0.3, 1))
+            return pushoff.solve(pushoff.PushoffSpec(cfg, 0.3, 1))
 
     return _once(tmp_path_factory, "shove_0p3", make)
 

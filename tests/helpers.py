@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-TINY = Path(__file__).parent / "configs" / "tiny.toml"  # 2 entries, 1 stride, interpreted stage functions
+TINY = Path(__file__).parent / "configs" / "tiny.toml"  # 2 entries, 1 stride
 CLI = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
 
 

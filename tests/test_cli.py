@@ -123,6 +123,7 @@ def test_advice_names_only_the_options_the_command_has(tmp_path: Path):
     compiled = tmp_path / "compiled.toml"
     compiled.write_text(f'extends = "{tiny.as_posix()}"\n[optimization]\ncompile = true\n')
     cache.chmod(0o777)
+    env.pop("SKATELIB_COMPILE_DIR", None)  # the compiled code kept in the cache folder
     r = subprocess.run([*SKATELIB, "build", str(compiled), "-o", str(tmp_path / "x.h5"), "--no-cache",
                         "--no-progress"], capture_output=True, text=True, env=env, timeout=120)
     err = " ".join(r.stderr.split())

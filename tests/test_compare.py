@@ -34,7 +34,9 @@ def pair(tmp_path_factory, tiny_build):
     d = tmp_path_factory.mktemp("diff")
     shutil.copy(tiny_build.path, d / "a.h5")
     heavier = d / "heavier.toml"
-    heavier.write_text(f'extends = "{TINY.as_posix()}"\n[optimization.weights]\nforce_rate = 2e-3\n')
+    # another model: interpreted, so that it needs no compile of its own
+    heavier.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n'
+                       '[optimization.weights]\nforce_rate = 2e-3\n')
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SKATELIB_CACHE_DIR", str(tiny_build.cache))
         r = _cli(["build", str(heavier), "-o", str(d / "b.h5"), "--no-progress"])

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 
 import pytest
+from skatelib.library import trust
 from skatelib.pipeline.build import sweep
 from skatelib.pipeline.config import load_config
 from skatelib.pipeline.quadruped import tasks
 from skatelib.pipeline.quadruped.problem import costs as pushoff_costs
 from skatelib.pipeline.quadruped.problem import pushoff
 
-from tests.helpers import TINY
+from tests.helpers import TINY, run_cli
 
 
 @pytest.fixture()
@@ -21,8 +23,11 @@ def cache(tmp_path, monkeypatch):
     return tmp_path / "cache"
 
 
-def _chain() -> tasks.BuildTask:
-    return tasks.BuildTask(load_config(TINY), 1, (0.3,))
+def _chain(compiled: bool = True) -> tasks.BuildTask:
+    cfg = load_config(TINY)
+    if not compiled:  # code changed in a test is another model: interpreted, it needs no compile of its own
+        cfg = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, compile=False))
+    return tasks.BuildTask(cfg, 1, (0.3,))
 
 
 def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
@@ -33,7 +38,7 @@ def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
     other = dataclasses.replace(
         cfg, meta=dataclasses.replace(cfg.meta, name="renamed"),
         sweep=dataclasses.replace(cfg.sweep, velocities_mps=(0.9,), strides=(7,)),
-        optimization=dataclasses.replace(cfg.optimization, compile=True, compile_native=False))
+        optimization=dataclasses.replace(cfg.optimization, compile=False, compile_native=False))
     assert other.problem_json() == cfg.problem_json()
     moved = tmp_path / "robot.urdf"
     moved.write_bytes(cfg.urdf_path.read_bytes())
@@ -46,15 +51,15 @@ def test_key_ignores_name_sweep_list_compile_and_checkout_path(tmp_path):
 @pytest.mark.slow
 def test_a_changed_cost_term_misses_the_cache(cache, monkeypatch):
     """A second run is served from the cache; after a cost weight changes in code it is solved again."""
-    first = sweep.run_task(_chain())
-    again = sweep.run_task(_chain())
+    first = sweep.run_task(_chain(compiled=False))
+    again = sweep.run_task(_chain(compiled=False))
     assert not first[0].cached and again[0].cached
     assert again[0].cache_key == first[0].cache_key
 
     original = pushoff_costs.EffortCost.cost
     monkeypatch.setattr(pushoff_costs.EffortCost, "cost", lambda self, s: 2.0 * original(self, s))
     monkeypatch.setattr(pushoff, "_PROBLEMS", {})
-    changed = sweep.run_task(_chain())
+    changed = sweep.run_task(_chain(compiled=False))
     assert not changed[0].cached
     assert changed[0].cache_key != first[0].cache_key
 
@@ -72,3 +77,21 @@ def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
     assert not again[0].cached
     assert "damaged" in again[0].note and str(path) in again[0].note
     assert sweep.run_task(_chain())[0].cached
+
+
+def test_compiled_code_is_kept_apart_from_the_entries(tmp_path, monkeypatch):
+    """With SKATELIB_COMPILE_DIR set (the suite sets it), a build keeps its entries in the cache
+    folder and loads its compiled stage functions from the folder of compiled code: no compiled
+    code in the cache folder. Unset, the folder of compiled code is the cache folder."""
+    compiled = trust.compile_dir()
+    assert os.environ.get(trust.COMPILE_ENV) == str(compiled)
+    cache = tmp_path / "cache"
+    r = run_cli(["build", str(TINY), "-o", str(tmp_path / "x.h5"), "--no-progress"],
+                env={**os.environ, "COLUMNS": "200", trust.CACHE_ENV: str(cache)})
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert len(list((cache / "entries").glob("*.entry"))) == 2
+    assert not [p.name for p in cache.iterdir() if p.name != "entries"]
+    assert list(compiled.glob("stage_*.so"))
+    monkeypatch.delenv(trust.COMPILE_ENV)
+    monkeypatch.setenv(trust.CACHE_ENV, str(cache))
+    assert trust.compile_dir() == cache

@@ -96,6 +96,7 @@ def test_a_compiler_that_fails_leaves_the_python_tick(monkeypatch, tmp_path):
     monkeypatch.setattr(native, "_LIB", [])
     monkeypatch.setenv("CC", "false")
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     with pytest.warns(RuntimeWarning, match=r"false failed on tick.c.*the Python tick runs"):
         assert native.tick_library() is None
     assert not list(tmp_path.rglob("*.so"))
@@ -106,6 +107,7 @@ def test_cc_with_its_own_arguments_and_one_not_on_the_path(monkeypatch, tmp_path
     fails): the warning names the whole command; a ``$CC`` not on the PATH is named as such, not
     replaced by another compiler."""
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     monkeypatch.setattr(native, "_LIB", [])
     monkeypatch.setenv("CC", "false --anything")
     with pytest.warns(RuntimeWarning, match=r"false --anything failed on tick.c"):
@@ -126,6 +128,7 @@ def test_the_cached_tick_is_checked_and_loaded_from_a_private_copy(monkeypatch, 
     compiled again (with a note saying why); what ctypes loads is a private copy of the bytes
     checked, not the cached path."""
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     monkeypatch.setattr(native, "_LIB", [])
     loaded: list[str] = []
     real_cdll = native.ctypes.CDLL
@@ -156,6 +159,7 @@ def test_a_cache_others_can_write_keeps_the_python_tick(monkeypatch, tmp_path):
     controller): the warning names the folder and what to do, the Python tick runs, nothing is
     compiled there. Negative control: the same folder made private again gives the compiled tick."""
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     (tmp_path / "native").mkdir(mode=0o700)
     (tmp_path / "native").chmod(0o777)
     monkeypatch.setattr(native, "_LIB", [])
@@ -173,6 +177,7 @@ def test_a_killed_processs_temporaries_in_the_native_folder_are_swept(monkeypatc
     from tests.test_temporaries import _killed_writer, _leftovers
 
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     native_dir = tmp_path / "native"
     native_dir.mkdir(mode=0o700)
     pid = _killed_writer(native_dir)

@@ -80,17 +80,20 @@ def test_an_output_that_cannot_be_used_is_2(tmp_path, args):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
 
 
+@pytest.mark.parametrize("variable", ["SKATELIB_CACHE_DIR", "SKATELIB_COMPILE_DIR"])
 @pytest.mark.parametrize("args", [["solve", "-V", "0.5", "-s", "2", "-o", "{tmp}/x.h5"],
                                   ["frontier", "-s", "2", "-o", "{tmp}/f.json"],
                                   ["build", "-o", "{tmp}/x.h5", "--no-cache"]])
-def test_a_cache_folder_that_is_a_file_is_refused_first(tmp_path, args):
-    """SKATELIB_CACHE_DIR naming a file: solve, frontier and build --no-cache (which still keep the
+def test_a_cache_folder_that_is_a_file_is_refused_first(tmp_path, args, variable):
+    """The folder of compiled code naming a file (SKATELIB_CACHE_DIR with no SKATELIB_COMPILE_DIR
+    set, or SKATELIB_COMPILE_DIR): solve, frontier and build --no-cache (which still keep the
     compiled stage functions there) exit 2 naming the variable, before any solve, with advice
     that is not to pass --no-cache."""
     blocker = tmp_path / "cachefile"
     blocker.write_text("")
+    env = {k: v for k, v in os.environ.items() if k != "SKATELIB_COMPILE_DIR"}
     r = subprocess.run([*CLI, *[a.format(tmp=tmp_path) for a in args]], capture_output=True, text=True, timeout=120,
-                       env={**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(blocker)})
-    assert r.returncode == errors.EXIT_USAGE and "SKATELIB_CACHE_DIR" in r.stderr, r.stdout + r.stderr
+                       env={**env, "COLUMNS": "200", variable: str(blocker)})
+    assert r.returncode == errors.EXIT_USAGE and variable in r.stderr, r.stdout + r.stderr
     assert "pass --no-cache" not in r.stderr and "Traceback" not in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cachefile"]

@@ -47,14 +47,31 @@ def solved(tmp_path_factory, tiny_v03):
         yield d, lib
 
 
-def test_a_library_that_does_not_fit_leaves_the_old_one(solved):
+def test_a_library_that_does_not_fit_leaves_the_old_one(solved, tmp_path):
     """solve onto an existing library with no room: exit 2 naming the path and 'cannot be written',
-    no traceback or crash, the old file byte for byte, no temporary left."""
+    no traceback or crash, the old file byte for byte, no temporary left. (The stage functions
+    interpreted: compiled, their code is copied to be loaded before the solve, and the copy is the
+    first write refused; the next test.)"""
+    d, lib = solved
+    before = _snapshot(d)
+    cfg = tmp_path / "interpreted.toml"
+    cfg.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n')
+    r = _run(["solve", "-V", "0.3", "-s", "1", "--config", str(cfg), "-o", str(lib)], limited=True)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert str(lib) in r.stderr and "cannot be written" in r.stderr and "Traceback" not in r.stderr
+    assert _snapshot(d) == before
+
+
+def test_compiled_code_that_cannot_be_copied_to_be_loaded_is_a_clear_error(solved):
+    """A compiled solve with no room for the copy of the compiled code it loads: exit 2 naming the
+    folder of compiled code and what to do, no traceback, the old library byte for byte."""
     d, lib = solved
     before = _snapshot(d)
     r = _run(["solve", "-V", "0.3", "-s", "1", "--config", str(TINY), "-o", str(lib)], limited=True)
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
-    assert str(lib) in r.stderr and "cannot be written" in r.stderr and "Traceback" not in r.stderr
+    err = " ".join(r.stderr.split())
+    assert os.environ["SKATELIB_COMPILE_DIR"] in err and "cannot be copied there to be loaded" in err, err
+    assert "SKATELIB_COMPILE_DIR" in err and "Traceback" not in err
     assert _snapshot(d) == before
 
 

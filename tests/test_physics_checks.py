@@ -15,7 +15,7 @@ from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajecto
 
 @pytest.fixture(scope="module")
 def honest(pushoff_0p3):
-    """The 0.3 m/s one-stride push-off of ``small_cfg``, solved cold (the session's solve)."""
+    """The 0.3 m/s one-stride push-off of ``cfg``, solved cold (the session's solve)."""
     return pushoff_0p3
 
 
@@ -38,14 +38,14 @@ def shove(shove_0p3):
     return shove_0p3
 
 
-def test_old_terminal_shove_is_refused(small_cfg, system, shove):
+def test_old_terminal_shove_is_refused(cfg, system, shove):
     """The optimizer shoves the deck ahead in the last swing: the board hits the label, the robot
     does not. The checks refuse it."""
     assert shove.success and abs(shove.final_velocity_mps - 0.3) < 0.01  # the optimizer was satisfied
     rep = _check(system, shove)
     assert rep.momentum_speed_error > 0.05
     assert any("momentum speed" in f for f in rep.failures(system))
-    judged, _ = judge(small_cfg, shove)
+    judged, _ = judge(cfg, shove)
     assert not judged.success and judged.status.startswith("Physics_Check_Failed")
 
 
@@ -131,7 +131,7 @@ def test_rigid_leg_torques_reduce_to_quasi_static_with_massless_legs(honest, sys
     assert np.abs(full - light).max() > 0.05
 
 
-def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shove, tmp_path):
+def test_validate_exits_1_on_a_library_holding_the_shove(cfg, system, shove, tmp_path):
     """A library written with the shove stored as a success (as format 1.0 builds did) makes
     `skatelib validate` name the entry's failed checks and exit 1."""
     import os
@@ -140,14 +140,14 @@ def test_validate_exits_1_on_a_library_holding_the_shove(small_cfg, system, shov
 
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 
-    path = write_quadruped_library(tmp_path / "shove.h5", small_cfg, system, [entry_from_result(shove)], {})
+    path = write_quadruped_library(tmp_path / "shove.h5", cfg, system, [entry_from_result(shove)], {})
     r = subprocess.run([sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()", "validate",
                         str(path)], capture_output=True, text=True, env={**os.environ, "COLUMNS": "300"})
     assert r.returncode == 1, r.stdout + r.stderr
     assert "v0.30_s1" in r.stdout and "momentum speed" in r.stdout
 
 
-def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_cfg, system, shove, honest,
+def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(cfg, system, shove, honest,
                                                                             tmp_path):
     """`skatelib track`'s verdict on the same push-off solved both ways, exact plant: the honest
     entry delivers its label; the shove (board at the label, robot slow and sinking) ends the push-off
@@ -162,7 +162,7 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(small_
 
     verdicts = {}
     for name, r in (("honest", honest), ("shove", shove)):
-        path = write_quadruped_library(tmp_path / f"{name}.h5", small_cfg, system, [entry_from_result(r)], {})
+        path = write_quadruped_library(tmp_path / f"{name}.h5", cfg, system, [entry_from_result(r)], {})
         lib = MotionLibrary.open(path)
         p = SkateParams.from_library(lib)
         verdicts[name], _ = track_entry(lib, "v0.30_s1", ClosedLoop(p, p, settings=TrackSettings(ride_s=1.2)))

@@ -14,7 +14,7 @@ from tests import reference_model as ref
 
 @pytest.fixture(scope="module")
 def solved(pushoff_0p3):
-    """The 0.3 m/s one-stride push-off of ``small_cfg``, solved cold (the session's solve)."""
+    """The 0.3 m/s one-stride push-off of ``cfg``, solved cold (the session's solve)."""
     return pushoff_0p3
 
 
@@ -64,19 +64,19 @@ def test_push_foot_really_pushes(solved, system):
     assert np.all(solved.control[~on_ground, 3 * p: 3 * p + 3] == 0.0)
 
 
-def test_warm_start_cuts_iterations(small_cfg, solved):
+def test_warm_start_cuts_iterations(cfg, solved):
     """A solve warm-started from the 0.3 m/s solution needs at most 2/3 of a cold solve's iterations."""
-    cold = solve(PushoffSpec(small_cfg, 0.35, 1))
-    warm = solve(PushoffSpec(small_cfg, 0.35, 1, warm=solved.warm))
+    cold = solve(PushoffSpec(cfg, 0.35, 1))
+    warm = solve(PushoffSpec(cfg, 0.35, 1, warm=solved.warm))
     assert cold.success and warm.success
     assert warm.iterations <= (2 * cold.iterations) // 3, (warm.iterations, cold.iterations)
     assert abs(warm.final_velocity_mps - cold.final_velocity_mps) < 0.01
 
 
-def test_solution_sits_in_every_named_bound(small_cfg, solved):
+def test_solution_sits_in_every_named_bound(cfg, solved):
     """Each bound term names its channels; the solved knots (state, board position, control) read
     back by those names lie inside each term's box, e.g. the riding end's trunk height at the last knot."""
-    prob = problem_for(small_cfg, 1)
+    prob = problem_for(cfg, 1)
     K = len(solved.t)
     by_name = {n: solved.state[:, i] for i, n in enumerate(STATE_NAMES)}
     by_name |= {"board_x": solved.board_pos[:, 0], "board_y": solved.board_pos[:, 1]}

@@ -34,7 +34,8 @@ pytestmark = pytest.mark.slow  # make test-fast leaves this module out
 
 def _solve(tmp: Path, cache: Path, name: str, velocity: float, strides: int, extra: str = "") -> Path:
     cfg = tmp / f"{name}.toml"
-    cfg.write_text(f'extends = "{TINY.as_posix()}"\n{extra}')
+    interpreted = "[optimization]\ncompile = false\n" if extra else ""  # another model: no compile of its own
+    cfg.write_text(f'extends = "{TINY.as_posix()}"\n{interpreted}{extra}')
     out = tmp / f"{name}.h5"
     env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(cache)}
     r = subprocess.run([*CLI, "solve", "--config", str(cfg), "--velocity", str(velocity), "--strides", str(strides),
@@ -190,16 +191,16 @@ def test_video_and_stored_verdicts(libs, tracked, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def shove_lib(tmp_path_factory, small_cfg, system, shove_0p3):
+def shove_lib(tmp_path_factory, cfg, system, shove_0p3):
     """The old terminal shove (only the board's final speed constrained, no riding end state; see
     tests/test_physics_checks.py) judged by the physics checks as a build judges it and written as a
     library."""
     from skatelib.pipeline.quadruped.checks.verify import judge
     from skatelib.pipeline.quadruped.entries import entry_from_result, write_quadruped_library
 
-    judged, physics = judge(small_cfg, shove_0p3)
+    judged, physics = judge(cfg, shove_0p3)
     out = tmp_path_factory.mktemp("shove") / "shove.h5"
-    return write_quadruped_library(out, small_cfg, system, [entry_from_result(judged, physics=physics)], {})
+    return write_quadruped_library(out, cfg, system, [entry_from_result(judged, physics=physics)], {})
 
 
 def test_the_terminal_shove_fails_in_physics(shove_lib):

@@ -198,6 +198,7 @@ def test_a_cache_others_can_write_keeps_the_python_path(monkeypatch, tmp_path):
     from skatelib.library import trust
 
     monkeypatch.setenv(trust.CACHE_ENV, str(tmp_path))
+    monkeypatch.delenv(trust.COMPILE_ENV, raising=False)  # the native code in that cache folder
     (tmp_path / "native").mkdir(mode=0o700)
     (tmp_path / "native").chmod(0o777)
     monkeypatch.setattr(wbc_native, "_LIB", [])

@@ -120,7 +120,7 @@ def check_cache_dir(entries_too: bool = True) -> Path:
     d = cache_dir()
     try:
         d.mkdir(mode=0o700, parents=True, exist_ok=True)
-        trust.check_own(d, trust.OWN_ADVICE if entries_too else trust.COMPILE_ADVICE)
+        trust.check_own(d, trust.OWN_ADVICE if entries_too else trust.compile_advice())
         (d / "entries").mkdir(mode=0o700, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
             pass
@@ -134,6 +134,29 @@ def check_cache_dir(entries_too: bool = True) -> Path:
     if shared is not None:
         trust.check_shared(shared)
     remove_stale_temporaries(d / "entries")
+    return d
+
+
+def check_compile_dir() -> Path:
+    """The folder of compiled code (:func:`trust.compile_dir`) can be used: when it is the cache
+    folder, :func:`check_cache_dir`'s checks for a command that keeps only compiled code there
+    (``--no-cache``, ``solve``, ``frontier``); when ``$SKATELIB_COMPILE_DIR`` sets it apart, the
+    same rules for that folder (private, the user's own, writable).
+
+    Raises:
+        OutputError: Naming the folder, what is wrong with it and what to do.
+    """
+    d = trust.compile_dir()
+    if d == cache_dir():
+        return check_cache_dir(entries_too=False)
+    try:
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+        trust.check_own(d, trust.compile_advice())
+        with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
+            pass
+    except OSError as e:
+        raise OutputError(d, f"the folder of compiled code cannot be used ({e.strerror}); set {trust.COMPILE_ENV} "
+                             "to a writable folder, or set [optimization] compile = false (3-4x slower solves)") from e
     return d
 
 

@@ -185,9 +185,9 @@ def solve(
     out = out or Path("out") / f"{cfg.meta.name}-{entry_key(velocity, strides)}.h5"
     check_output(out, [cfg.path])
     if cfg.optimization.compile:
-        from skatelib.pipeline.build.preflight import check_cache_dir
+        from skatelib.pipeline.build.preflight import check_compile_dir
 
-        check_cache_dir(entries_too=False)
+        check_compile_dir()
     cfg = one_start_up(cfg, velocity, strides)  # that entry alone: no transitions
     report = build_library(cfg, out, BuildOptions(jobs=1, cache=False), ipopt=(("print_level", 5),) if verbose else ())
 

@@ -38,7 +38,7 @@ def frontier(
     (climb, then bisection): of the start-ups, or of the speed-ups from riding speeds (--from) and
     the stops (--stops)."""
     from skatelib.library.atomic import write_atomic
-    from skatelib.pipeline.build.preflight import check_cache_dir, check_output
+    from skatelib.pipeline.build.preflight import check_compile_dir, check_output
     from skatelib.pipeline.build.size import check_size
     from skatelib.pipeline.config import load_config
     from skatelib.pipeline.quadruped.config import QuadrupedConfig
@@ -49,7 +49,7 @@ def frontier(
     if out is not None:
         check_output(out, [cfg.path], what="frontier")
     if cfg.optimization.compile:
-        check_cache_dir(entries_too=False)
+        check_compile_dir()
     search = FrontierSearch(start_mps=start, step_mps=step, resolution_mps=resolution, max_mps=max_speed)
     lanes = [Lane(v) for v in sorted(set(from_speeds or ()))] + ([Lane(stop=True)] if stops else [])
     counts = sorted(set(strides or (cfg.transitions.strides if lanes else cfg.sweep.strides)))

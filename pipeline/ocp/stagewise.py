@@ -136,7 +136,7 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
         fns = stage_functions(z, p, cost, cons)
         return compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
 
-    code = cached_or_compiled(lib, trust.COMPILE_ADVICE, compile_now)
+    code = cached_or_compiled(lib, trust.compile_advice(), compile_now)
     return StageFunctions(*load_private(code, target.folder, _NAMES))  # the bytes checked, not the path
 
 

@@ -19,18 +19,18 @@ from skatelib.pipeline.views.console import console, entry_table, err_console, f
 
 
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
-    """The build's size within the bounds (or ``--yes``). Compiled stage functions are cached in
-    the cache folder too: it must be writable even with ``--no-cache`` (with the cache on,
-    ``build.check_options`` has checked it already). A twin judge must be able to run."""
-    from skatelib.pipeline.build.preflight import check_cache_dir
+    """The build's size within the bounds (or ``--yes``). Compiled stage functions are kept in the
+    folder of compiled code (the cache folder unless ``$SKATELIB_COMPILE_DIR`` sets it apart): it
+    must be usable even with ``--no-cache``. A twin judge must be able to run."""
+    from skatelib.pipeline.build.preflight import check_compile_dir
     from skatelib.pipeline.build.size import check_size
     from skatelib.pipeline.quadruped.size import build_size
     from skatelib.pipeline.quadruped.transitions.twin_judge import check_twin_judge
 
     check_size(cfg.path, build_size(cfg), opts.yes)
     check_twin_judge(cfg)
-    if cfg.optimization.compile and not opts.cache:
-        check_cache_dir(entries_too=False)
+    if cfg.optimization.compile:
+        check_compile_dir()
 
 
 def announce(cfg: QuadrupedConfig) -> None:

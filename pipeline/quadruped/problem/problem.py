@@ -19,7 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU, NX, S_BOARD_V, S_POS, S_Q, S_RPY, S_VEL
-from skatelib.library.trust import cache_dir
+from skatelib.library.trust import compile_dir
 from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
@@ -148,7 +148,7 @@ class PushoffProblem:
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps), RidingEnd(system, term.position_tol_m),
         ]
         self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), self.costs,
-                                          self.constraints, compile_dir=cache_dir() if opt.compile else None,
+                                          self.constraints, compile_dir=compile_dir() if opt.compile else None,
                                           native=opt.compile_native)
         x_sym = ca.SX.sym("x", NX)
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
