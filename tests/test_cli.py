@@ -83,16 +83,13 @@ def test_solve_cuts_the_config_to_the_one_start_up_it_names(cfg):
 
 @pytest.mark.slow
 def test_solve_of_the_default_config_writes_one_entry(tmp_path: Path):
-    """`skatelib solve -V 0.5 -s 2` of the default config (its transitions included; the stage
-    functions interpreted, to need no compiler) writes the one push-off, in seconds: it solved the
-    25 transitions too, over ten minutes."""
+    """`skatelib solve -V 0.5 -s 2` of the default config (its transitions included) writes the one
+    push-off, in seconds: it solved the 25 transitions too, over ten minutes."""
     from skatelib.runtime import MotionLibrary
 
-    cfg = tmp_path / "default.toml"
-    cfg.write_text(f'extends = "{(CONFIG_DIR / "cyberdog2.toml").as_posix()}"\n[optimization]\ncompile = false\n')
     env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(tmp_path / "cache")}
     out = tmp_path / "one.h5"
-    r = subprocess.run([*SKATELIB, "solve", "-V", "0.5", "-s", "2", "--config", str(cfg), "-o", str(out)],
+    r = subprocess.run([*SKATELIB, "solve", "-V", "0.5", "-s", "2", "-o", str(out)],
                        capture_output=True, text=True, env=env, timeout=180)
     assert r.returncode == 0, r.stdout + r.stderr
     assert MotionLibrary.open(out).keys() == ["v0.50_s2"]
