@@ -108,7 +108,7 @@ def file_problem(path: Path) -> str:
 
 
 OWN_ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or pass --no-cache"
-# Compiled stage functions are kept in the cache folder even with --no-cache (solve, frontier too).
+# Compiled code is kept in the folder of compiled code (compile_dir) even with --no-cache (solve, frontier too).
 def compile_advice() -> str:
     """What to do when the folder of compiled code may not be used (it names the variable in force)."""
     env = COMPILE_ENV if os.environ.get(COMPILE_ENV) else CACHE_ENV
