@@ -9,6 +9,7 @@ import pytest
 from skatelib.library import trust
 from skatelib.pipeline.build import sweep
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.ocp.stagewise import c_compiler
 from skatelib.pipeline.quadruped import tasks
 from skatelib.pipeline.quadruped.problem import costs as pushoff_costs
 from skatelib.pipeline.quadruped.problem import pushoff
@@ -79,6 +80,7 @@ def test_a_damaged_cache_entry_is_solved_again_with_a_note(cache):
     assert sweep.run_task(_chain())[0].cached
 
 
+@pytest.mark.skipif(c_compiler() is None, reason="no C compiler: nothing is compiled")
 def test_compiled_code_is_kept_apart_from_the_entries(tmp_path, monkeypatch):
     """With SKATELIB_COMPILE_DIR set (the suite sets it), a build keeps its entries in the cache
     folder and loads its compiled stage functions from the folder of compiled code: no compiled

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from skatelib.library import atomic
 from skatelib.library.errors import OutputError
+from skatelib.pipeline.ocp.stagewise import c_compiler
 
 from tests.helpers import CLI, TINY, copy_of
 
@@ -62,6 +63,7 @@ def test_a_library_that_does_not_fit_leaves_the_old_one(solved, tmp_path):
     assert _snapshot(d) == before
 
 
+@pytest.mark.skipif(c_compiler() is None, reason="no C compiler: nothing is compiled")
 def test_compiled_code_that_cannot_be_copied_to_be_loaded_is_a_clear_error(solved):
     """A compiled solve with no room for the copy of the compiled code it loads: exit 2 naming the
     folder of compiled code and what to do, no traceback, the old library byte for byte."""
