@@ -21,6 +21,14 @@ def run_cli(args: list[str], timeout: float = 300, env: dict[str, str] | None = 
                           env=env or {**os.environ, "COLUMNS": "200"}, **kw)  # type: ignore[call-overload]
 
 
+def interpreted_tiny(path: Path, extra: str = "") -> Path:
+    """The tiny config with its stage functions interpreted, and ``extra`` (TOML), written to
+    ``path``: for a test that changes the model (no compile of its own for a model solved once) or
+    needs a solve of seconds."""
+    path.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n{extra}')
+    return path
+
+
 def copy_of(path: Path, folder: Path, name: str = "lib.h5") -> Path:
     """A copy of a shared library, for a test that writes into it or beside it."""
     folder.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ from skatelib.library.compare import Tolerance, compare_files
 from skatelib.library.reader import read_library
 from skatelib.library.writer import write_library
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI, TINY, interpreted_tiny
 
 pytestmark = pytest.mark.slow  # make test-fast leaves this module out
 
@@ -34,9 +34,7 @@ def pair(tmp_path_factory, tiny_build):
     d = tmp_path_factory.mktemp("diff")
     shutil.copy(tiny_build.path, d / "a.h5")
     heavier = d / "heavier.toml"
-    # another model: interpreted, so that it needs no compile of its own
-    heavier.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n'
-                       '[optimization.weights]\nforce_rate = 2e-3\n')
+    interpreted_tiny(heavier, "[optimization.weights]\nforce_rate = 2e-3\n")  # another model
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SKATELIB_CACHE_DIR", str(tiny_build.cache))
         r = _cli(["build", str(heavier), "-o", str(d / "b.h5"), "--no-progress"])

@@ -16,7 +16,7 @@ from skatelib.library import atomic
 from skatelib.library.errors import OutputError
 from skatelib.pipeline.ocp.stagewise import c_compiler
 
-from tests.helpers import CLI, TINY, copy_of
+from tests.helpers import CLI, TINY, copy_of, interpreted_tiny
 
 LIMIT_BYTES = 8_000  # smaller than any library, figure or recording written here
 
@@ -55,8 +55,7 @@ def test_a_library_that_does_not_fit_leaves_the_old_one(solved, tmp_path):
     first write refused; the next test.)"""
     d, lib = solved
     before = _snapshot(d)
-    cfg = tmp_path / "interpreted.toml"
-    cfg.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n')
+    cfg = interpreted_tiny(tmp_path / "interpreted.toml")
     r = _run(["solve", "-V", "0.3", "-s", "1", "--config", str(cfg), "-o", str(lib)], limited=True)
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     assert str(lib) in r.stderr and "cannot be written" in r.stderr and "Traceback" not in r.stderr

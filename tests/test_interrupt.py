@@ -15,7 +15,7 @@ import pytest
 from skatelib.library.errors import EXIT_INTERRUPTED
 from skatelib.pipeline.build import interrupt
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI, interpreted_tiny
 
 SIGNALS = [signal.SIGINT, signal.SIGTERM]
 
@@ -24,14 +24,6 @@ def _start(args: list[str], cache: Path) -> subprocess.Popen:
     env = {**os.environ, "SKATELIB_CACHE_DIR": str(cache), "COLUMNS": "200"}
     return subprocess.Popen([*CLI, *args], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)  # the signal goes to the command alone
-
-
-def _interpreted(tmp_path: Path, sweep: str = "") -> Path:
-    """The tiny config with its stage functions interpreted: solves of seconds, a wide window for the
-    signal to arrive inside one (compiled, the one-stride solve takes about a second)."""
-    cfg = tmp_path / "interpreted.toml"
-    cfg.write_text(f'extends = "{TINY.as_posix()}"\n[optimization]\ncompile = false\n{sweep}')
-    return cfg
 
 
 def _ended(p: subprocess.Popen, sig: int) -> tuple[float, str]:
@@ -49,8 +41,9 @@ def test_a_signal_inside_ipopt_stops_solve(tmp_path, sig):
     IPOPT): it exits 130 within seconds, writing no library (without the record of the interrupt
     the next attempt of the ladder ran, and the library was written with exit 0)."""
     out = tmp_path / "one.h5"
-    p = _start(["solve", "-V", "0.3", "-s", "1", "--config", str(_interpreted(tmp_path)), "-o", str(out), "-v"],
-               tmp_path / "cache")
+    # interpreted: a solve of seconds, a wide window for the signal (compiled, about a second)
+    cfg = interpreted_tiny(tmp_path / "interpreted.toml")
+    p = _start(["solve", "-V", "0.3", "-s", "1", "--config", str(cfg), "-o", str(out), "-v"], tmp_path / "cache")
     assert p.stdout is not None
     for line in p.stdout:
         if line.startswith("iter"):
@@ -70,7 +63,8 @@ def test_a_signal_inside_ipopt_stops_solve(tmp_path, sig):
 def test_a_signal_stops_a_serial_build_keeping_what_is_finished(tmp_path, sig):
     """``skatelib build -j 1`` of two cold entries, signalled during the second solve: exit 130
     saying one entry is cached, that one in the cache, no library written, within seconds."""
-    cfg = _interpreted(tmp_path, "[sweep]\nvelocities_mps = [0.3, 0.4]\nstrides = [1]\nwarm_start = false\n")
+    cfg = interpreted_tiny(tmp_path / "two.toml",  # a second solve of seconds to signal inside
+                           "[sweep]\nvelocities_mps = [0.3, 0.4]\nstrides = [1]\nwarm_start = false\n")
     out, cache = tmp_path / "out" / "two.h5", tmp_path / "cache"
     p = _start(["build", str(cfg), "-o", str(out), "-j", "1", "--no-progress"], cache)
     deadline = time.monotonic() + 120

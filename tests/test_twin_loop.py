@@ -27,15 +27,13 @@ from skatelib.sim.errors import DEFAULT_TWIN_PERTURBATION, parse_twin_perturbati
 from skatelib.sim.figures import TwinFigures
 from skatelib.sim.plant import TwinPlant
 
-from tests.helpers import CLI, TINY
+from tests.helpers import CLI, TINY, interpreted_tiny
 
 pytestmark = pytest.mark.slow  # make test-fast leaves this module out
 
 
 def _solve(tmp: Path, cache: Path, name: str, velocity: float, strides: int, extra: str = "") -> Path:
-    cfg = tmp / f"{name}.toml"
-    interpreted = "[optimization]\ncompile = false\n" if extra else ""  # another model: no compile of its own
-    cfg.write_text(f'extends = "{TINY.as_posix()}"\n{interpreted}{extra}')
+    cfg = interpreted_tiny(tmp / f"{name}.toml", extra) if extra else TINY  # another model: interpreted
     out = tmp / f"{name}.h5"
     env = {**os.environ, "COLUMNS": "200", "SKATELIB_CACHE_DIR": str(cache)}
     r = subprocess.run([*CLI, "solve", "--config", str(cfg), "--velocity", str(velocity), "--strides", str(strides),

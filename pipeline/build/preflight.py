@@ -95,10 +95,10 @@ def check_folder(out: Path) -> None:
         remove_stale_temporaries(folder)
 
 
-def _writable(folder: Path, named: Path, message: str) -> None:
-    """Make ``folder`` if needed and write a probe file in it, or refuse naming ``named``."""
+def _writable(folder: Path, named: Path, message: str, mode: int = 0o777) -> None:
+    """Make ``folder`` if needed (with ``mode``) and write a probe file in it, or refuse naming ``named``."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(mode=mode, parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".skatelib-probe-"):
             pass
     except OSError as e:
@@ -149,14 +149,9 @@ def check_compile_dir() -> Path:
     d = trust.compile_dir()
     if d == cache_dir():
         return check_cache_dir(entries_too=False)
-    try:
-        d.mkdir(mode=0o700, parents=True, exist_ok=True)
-        trust.check_own(d, trust.compile_advice())
-        with tempfile.NamedTemporaryFile(dir=d, prefix=".skatelib-probe-"):
-            pass
-    except OSError as e:
-        raise OutputError(d, f"the folder of compiled code cannot be used ({e.strerror}); set {trust.COMPILE_ENV} "
-                             "to a writable folder, or set [optimization] compile = false (3-4x slower solves)") from e
+    _writable(d, d, f"the folder of compiled code cannot be used ({{why}}); set {trust.COMPILE_ENV} to a writable "
+                    "folder, or set [optimization] compile = false (3-4x slower solves)", mode=0o700)
+    trust.check_own(d, trust.compile_advice())
     return d
 
 

@@ -21,7 +21,9 @@ from skatelib.pipeline.views.console import console, entry_table, err_console, f
 def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     """The build's size within the bounds (or ``--yes``). Compiled stage functions are kept in the
     folder of compiled code (the cache folder unless ``$SKATELIB_COMPILE_DIR`` sets it apart): it
-    must be usable even with ``--no-cache``. A twin judge must be able to run."""
+    must be usable even with ``--no-cache`` (with the cache on and compiled code in it,
+    ``build.check_options`` has checked it already). A twin judge must be able to run."""
+    from skatelib.library import trust
     from skatelib.pipeline.build.preflight import check_compile_dir
     from skatelib.pipeline.build.size import check_size
     from skatelib.pipeline.quadruped.size import build_size
@@ -29,7 +31,7 @@ def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
 
     check_size(cfg.path, build_size(cfg), opts.yes)
     check_twin_judge(cfg)
-    if cfg.optimization.compile:
+    if cfg.optimization.compile and not (opts.cache and trust.compile_dir() == trust.cache_dir()):
         check_compile_dir()
 
 
