@@ -43,23 +43,37 @@ class HumanoidKinematics:
         rots = np.array([data.oMi[j].rotation for j in self.ankles])
         return np.array(c), soles, pts, rots
 
+    def rows(self, qfull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The correction's rows (18, nv) at ``qfull``: the COM's Jacobian, each sole's (world axes,
+        linear then angular) and the waist's angular one; and the soles' rotations (2, 3, 3)."""
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, qfull)
+        pin.updateFramePlacements(model, data)
+        A = np.vstack([pin.jacobianCenterOfMass(model, data, qfull, False),
+                       *(pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED) for f in self.soles),
+                       pin.getFrameJacobian(model, data, self.waist, pin.LOCAL_WORLD_ALIGNED)[3:6]])
+        return A, np.array([data.oMf[f].rotation for f in self.soles])
+
     def correction(self, qfull: np.ndarray, dcom: np.ndarray, dtilt: np.ndarray, lift: np.ndarray | None = None
                    ) -> np.ndarray:
         """Joint angle changes (n,) that move the COM by ``dcom`` (3,) and tilt each sole by
         ``dtilt`` (2, 2: roll, pitch about its own axes), holding both soles' positions and
-        yaws and the waist's attitude (18 rows for the 18 degrees of freedom, at ``qfull``)."""
-        model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, qfull)
-        pin.updateFramePlacements(model, data)
-        rows = [pin.jacobianCenterOfMass(model, data, qfull, False)]
-        rhs = [dcom]
-        for s, f in enumerate(self.soles):
-            J = pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED)
-            R = data.oMf[f].rotation
-            rows.append(J)
-            up = 0.0 if lift is None else float(lift[s])
-            rhs.append(np.concatenate([[0.0, 0.0, up], R @ np.array([dtilt[s, 0], dtilt[s, 1], 0.0])]))
-        rows.append(pin.getFrameJacobian(model, data, self.waist, pin.LOCAL_WORLD_ALIGNED)[3:6])
-        rhs.append(np.zeros(3))
-        dq = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
-        return np.asarray(dq[6:])
+        yaws and the waist's attitude (18 rows for the 18 degrees of freedom, at ``qfull``; the least-norm
+        change where those rows are singular)."""
+        return solve_rows(*self.rows(qfull), dcom, dtilt, lift)
+
+
+def solve_rows(A: np.ndarray, R: np.ndarray, dcom: np.ndarray, dtilt: np.ndarray, lift: np.ndarray | None = None
+               ) -> np.ndarray:
+    """:meth:`HumanoidKinematics.correction` from its rows ``A`` and the soles' rotations ``R``."""
+    rhs = [dcom]
+    for s in (0, 1):
+        up = 0.0 if lift is None else float(lift[s])
+        rhs.append(np.concatenate([[0.0, 0.0, up], R[s] @ np.array([dtilt[s, 0], dtilt[s, 1], 0.0])]))
+    rhs.append(np.zeros(3))
+    b = np.concatenate(rhs)
+    try:  # as many rows as the model's degrees of freedom: square, solved by LU
+        dq = np.linalg.solve(A, b) if A.shape[0] == A.shape[1] else np.linalg.lstsq(A, b, rcond=None)[0]
+    except np.linalg.LinAlgError:  # singular (a knee exactly straight): the least-norm change
+        dq = np.linalg.lstsq(A, b, rcond=None)[0]
+    return np.asarray(dq[6:])

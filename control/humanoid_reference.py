@@ -169,39 +169,45 @@ class HumanoidReference:
         self.support = self._lowest(self.feet) - self.plane < GROUND_M
         # A sole on the ground stands still; one on a deck rides at the board's planned speed.
         self.sole_vel = np.where((self.plane > 0.0)[:, :, None], np.gradient(self.feet[:, :, 0:3], self.t, axis=0), 0.0)
+        # every knot's sampled rows side by side: one interpolation a sample (each column as alone)
+        parts = (self.q, self.base, self.feet.reshape(len(self.t), -1), self.com, self.com_vel, self.com_acc,
+                 self.zmp, self.sole_vel.reshape(len(self.t), -1))
+        self._knots = np.hstack(parts)
+        self._cols = np.cumsum([0, *(x.shape[1] for x in parts)])
+        self._width = self.feet.shape[2]
 
     def _lowest(self, feet: np.ndarray) -> np.ndarray:
         """Each sole's lowest edge (..., 2): its toe on a heel raised (pitched) sole."""
         pitch = feet[..., 4] if feet.shape[-1] > 4 else np.zeros(feet.shape[:-1])
         return np.asarray(feet[..., 2] - self.model.foot_length_m / 2 * np.abs(np.sin(pitch)))
 
-    def _knot(self, t: float) -> tuple[int, float]:
-        """The knot interval ``t`` [s] falls in and the weight of its end (clamped to the entry)."""
-        k = min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 2)
+    def _knot(self, t: float) -> tuple[int, float, int]:
+        """The knot interval ``t`` [s] falls in, the weight of its end (clamped to the entry) and the
+        last knot at or before ``t``."""
+        after = int(np.searchsorted(self.t, t, side="right")) - 1
+        k = min(max(after, 0), len(self.t) - 2)
         w = min(max(float((t - self.t[k]) / (self.t[k + 1] - self.t[k])), 0.0), 1.0)
-        return k, w
-
-    def _at(self, x: np.ndarray, t: float, at: tuple[int, float] | None = None) -> np.ndarray:
-        k, w = self._knot(t) if at is None else at
-        return np.asarray((1 - w) * x[k] + w * x[k + 1])
+        return k, w, min(max(after, 0), len(self.t) - 1)
 
     def sample(self, t: float) -> ReferenceSample:
         """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
         the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
-        at = self._knot(t)
-        feet = self._at(self.feet, t, at)
-        base = self._at(self.base, t, at)
+        k, w, last = self._knot(t)
+        x = (1 - w) * self._knots[k] + w * self._knots[k + 1]
+        q, base, feet, com, com_vel, com_acc, zmp, sole_vel = (x[a:b] for a, b in zip(self._cols[:-1], self._cols[1:],
+                                                                                       strict=True))
+        feet = feet.reshape(2, self._width)
         m = self.model
         still = t >= self.duration_s
-        plane = self.plane[min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 1)]
+        plane = self.plane[last]
         support = self._lowest(feet) - plane < GROUND_M
-        return ReferenceSample(q=self._at(self.q, t, at), base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
+        return ReferenceSample(q=q, base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
             base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=support,
-            com=self._at(self.com, t, at), com_vel=np.zeros(3) if still else self._at(self.com_vel, t, at),
-            com_acc=np.zeros(3) if still else self._at(self.com_acc, t, at),
-            zmp=self.com[-1, 0:2].copy() if still else self._at(self.zmp, t, at), gravity=m.gravity_mps2,
+            com=com, com_vel=np.zeros(3) if still else com_vel,
+            com_acc=np.zeros(3) if still else com_acc,
+            zmp=self.com[-1, 0:2].copy() if still else zmp, gravity=m.gravity_mps2,
             sole_size=(m.foot_length_m, m.foot_width_m),
             ground_z=float(plane[support].mean()) if support.any() else 0.0,
             sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
-            sole_vel=np.zeros((2, 3)) if still else self._at(self.sole_vel, t, at), sole_plane=plane.copy(),
+            sole_vel=np.zeros((2, 3)) if still else sole_vel.reshape(2, 3), sole_plane=plane.copy(),
             anchored=_ground_anchors(support, plane), hulls=self.hulls)

@@ -24,6 +24,8 @@ in its DCM form:
   (:mod:`.humanoid_kinematics`).
 
 With ``enabled`` False it passes the plan's joint angles through (the estimate still runs).
+The tick's arithmetic after the kinematics runs in C (:mod:`.humanoid_native`) unless
+``compiled`` is False or no C compiler is there.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from skatelib.control.humanoid_kinematics import HumanoidKinematics
+from skatelib.control import humanoid_native
+from skatelib.control.humanoid_kinematics import HumanoidKinematics, solve_rows
 from skatelib.control.humanoid_reference import ReferenceSample
 
 MIN_LOAD_N = 30.0  # a sole carrying less is not in the measured ZMP
@@ -59,6 +62,7 @@ class StabilizerGains:
     swing_return_s: float = 0.1  # a support sole's lift returns to the plan at this time constant
     landing: bool = True  # the landing detection (off: the clock alone says when a sole lands)
     enabled: bool = True
+    compiled: bool = True  # the tick's arithmetic in C (humanoid_native) when a C compiler is there
 
 
 @dataclass(frozen=True)
@@ -91,6 +95,19 @@ class LipStabilizer:
         self.support_prev: tuple[bool, bool] = (True, True)
         self.v = np.zeros(3)  # the COM's velocity relative to the anchor soles
         self.v_world = np.zeros(3)
+        # the tick in C (its own state): for the square correction of a model of 18 degrees of freedom
+        self.native: humanoid_native.CompiledTick | None = None
+        lib = humanoid_native.tick_library() if self.g.compiled and kin.model.nv == 18 else None
+        if lib is not None:
+            g = self.g
+            self.native = humanoid_native.CompiledTick(lib, {
+                "dt": dt, "dcm_gain": g.dcm_gain_per_s, "velocity_cutoff_hz": g.velocity_cutoff_hz,
+                "offset_rate": g.offset_rate_per_s, "polygon_margin": g.polygon_margin_m,
+                "ankle_damping": g.ankle_damping_Nms_per_rad, "ankle_return": g.ankle_return_s,
+                "ankle_tilt_max": g.ankle_tilt_max_rad, "com_shift_max": g.com_shift_max_m, "lip": g.com_mode == "lip",
+                "com_velocity_gain": g.com_velocity_gain_per_s, "swing_height_gain": g.swing_height_gain_per_s,
+                "swing_return": g.swing_return_s, "enabled": g.enabled, "min_load": MIN_LOAD_N,
+                "toe_off": TOE_OFF_RAD}, kin.model.nv)
 
     def _estimate(self, r: ReferenceSample, qfull: np.ndarray, force: np.ndarray, torque: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -127,6 +144,8 @@ class LipStabilizer:
              torque: np.ndarray) -> StabilizerOutput:
         """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
         each foot at its ankle sensor, foot frame) and the reference at this instant."""
+        if self.native is not None:
+            return self._tick_native(self.native, r, q, quat_xyzw, force, torque)
         g, dt = self.g, self.dt
         r = self.phase(r, force)
         qfull = self.kin.configuration(quat_xyzw, q)
@@ -158,6 +177,22 @@ class LipStabilizer:
         dq = (self.kin.correction(base, np.append(self.dc, 0.0), self.tilt, self.lift) if g.enabled
               else np.zeros(len(r.q)))
         return StabilizerOutput(r.q + dq, com, xi, zmp_meas, p_d, self.dc.copy(), r.support.copy())
+
+    def _tick_native(self, native: humanoid_native.CompiledTick, r: ReferenceSample, q: np.ndarray,
+                     quat_xyzw: np.ndarray, force: np.ndarray, torque: np.ndarray) -> StabilizerOutput:
+        """:meth:`tick` with its arithmetic after the kinematics in C."""
+        r = self.phase(r, force)
+        measured = self.kin.measure(self.kin.configuration(quat_xyzw, q))
+        rows = self.kin.rows(self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)) if self.g.enabled else None
+        o = native(r, measured, force, torque, rows)
+        dq = o[humanoid_native.OUT_FIXED + 6:]
+        if o[humanoid_native.O_SINGULAR] and rows is not None:  # the least-norm change, as the Python path's
+            st = native.state
+            dq = solve_rows(*rows, np.append(st[0:2], 0.0), st[humanoid_native.S_TILT:humanoid_native.S_TILT + 4]
+                            .reshape(2, 2), st[humanoid_native.S_LIFT:humanoid_native.S_LIFT + 2])
+        n = humanoid_native
+        return StabilizerOutput(r.q + dq, o[n.O_COM:n.O_COM + 3], o[n.O_XI:n.O_XI + 2], o[n.O_ZMP:n.O_ZMP + 2],
+                                o[n.O_PD:n.O_PD + 2], o[n.O_DC:n.O_DC + 2], r.support.copy())
 
     def _swing_height(self, r: ReferenceSample) -> None:
         """Swing height control: each swing sole's height, measured by kinematics anchored on the

@@ -139,3 +139,54 @@ def test_a_skate_library_without_its_board_is_refused(tmp_path, monkeypatch):
         + '[sweep]\nmotion = "skate"\nvelocities_mps = [0.5]\n')
     with pytest.raises(ConfigError, match="board"):
         load_config(bare)
+
+
+def test_the_soles_wrenches_are_their_contacts(skate):
+    """The twin's truth takes each sole's force and centre of pressure from its foot's external
+    wrench (MuJoCo's cfrc_ext): along the stabilized push and slide they are the sole's floor and
+    deck contacts summed one by one (mj_contactForce); the same sum leaving one contact out does
+    not match (the comparison sees a lost contact)."""
+    from skatelib.control.humanoid_kinematics import HumanoidKinematics
+    from skatelib.control.humanoid_reference import HumanoidReference
+    from skatelib.control.humanoid_stabilizer import LipStabilizer
+    from skatelib.sim.humanoid.figures import SOLE_THICKNESS_M
+
+    lib = MotionLibrary.open(skate)
+    f = figures_for(lib, KEY)
+    plant = HumanoidPlant(f, parse_humanoid_perturbation(DEFAULT_HUMANOID_PERTURBATION))
+    ref = HumanoidReference(lib[KEY], lib.humanoid_model)
+    stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), 0.002)
+    m, d = plant.m, plant.d
+    frame, both, missed = np.zeros(6), 0, 0.0
+    for _ in range(1500):
+        r = plant.readings()
+        s = ref.sample(r.t)
+        plant.step(stab.tick(s, r.q, r.imu_quat_wxyz[[1, 2, 3, 0]], r.ft_force, r.ft_torque).q_target, 2)
+        tr = plant.truth()
+        wrenches = []  # (sole, force, moment about the world origin) of each sole's contact
+        for k in range(d.ncon):
+            c = d.contact[k]
+            pair = (int(c.geom1), int(c.geom2))
+            sole = [g for g in pair if g in plant.soles]
+            if sole and {plant.floor, plant.deck_geom} & set(pair):
+                mujoco.mj_contactForce(m, d, k, frame)
+                R = c.frame.reshape(3, 3).T
+                sign = 1.0 if pair[1] == sole[0] else -1.0  # the contact's force is on geom2
+                fw = sign * (R @ frame[0:3])
+                wrenches.append((plant.soles.index(sole[0]), fw, np.cross(c.pos, fw) + sign * (R @ frame[3:6])))
+        force, moment = np.zeros((2, 3)), np.zeros((2, 3))
+        for i, fw, mw in wrenches:
+            force[i] += fw
+            moment[i] += mw
+        assert tr.sole_force == pytest.approx(force, abs=1e-9)
+        for i in (0, 1):
+            if force[i, 2] > 1.0:
+                z = float(d.geom_xpos[plant.soles[i]][2]) - SOLE_THICKNESS_M / 2
+                cop = np.array([(z * force[i, 0] - moment[i, 1]) / force[i, 2],
+                                (moment[i, 0] + z * force[i, 1]) / force[i, 2]])
+                assert tr.sole_zmp[i] == pytest.approx(cop, abs=1e-9)
+        if wrenches:
+            i, fw, _ = wrenches[0]
+            missed = max(missed, float(np.abs(tr.sole_force[i] - (force[i] - fw)).max()))
+        both += int((force[:, 2] > 1.0).all())
+    assert both > 300 and missed > 1.0  # both soles loaded (452 ticks); one contact's loss seen (newtons)

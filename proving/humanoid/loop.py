@@ -7,14 +7,15 @@ skate's also its deck's speed and its soles' places on the deck)."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
-from skatelib.control.humanoid_reference import HumanoidReference, ReferenceSample, polygon_margin
+from skatelib.control.humanoid_reference import HumanoidReference, ReferenceSample
 from skatelib.control.humanoid_stabilizer import LipStabilizer, StabilizerGains
 from skatelib.control.humanoid_torques import PlannedTorques
 from skatelib.library import schema
+from skatelib.proving.humanoid import support
 from skatelib.runtime import MotionLibrary
 from skatelib.sim.humanoid.errors import HumanoidErrors
 from skatelib.sim.humanoid.figures import HumanoidFigures
@@ -24,6 +25,7 @@ STEPS_PER_TICK = 2  # 1 ms physics, a 500 Hz stabilizer
 HOLD_S = 1.0  # after the entry, the reference holds its end
 FALLEN_HEIGHT_M = 0.4  # the waist lower than this: fallen
 FALLEN_TILT_RAD = 0.5
+COS_FALLEN_TILT = float(np.cos(FALLEN_TILT_RAD))
 LANDING = StabilizerGains()  # the landing rule the verdict's support polygon follows
 
 
@@ -86,37 +88,30 @@ def push_end_s(lib: MotionLibrary, key: str) -> float | None:
 def _fallen(tr: Truth) -> str:
     if tr.base_pos[2] < FALLEN_HEIGHT_M:
         return f"waist at {tr.base_pos[2]:.2f} m"
-    tilt = float(np.arccos(np.clip(tr.base_R[2, 2], -1.0, 1.0)))
-    if tilt > FALLEN_TILT_RAD:
-        return f"waist tilted {tilt:.2f} rad"
+    if tr.base_R[2, 2] < COS_FALLEN_TILT:  # tilted more than FALLEN_TILT_RAD
+        return f"waist tilted {float(np.arccos(np.clip(tr.base_R[2, 2], -1.0, 1.0))):.2f} rad"
     if tr.floor_touches:
         return f"{', '.join(tr.floor_touches)} on the floor"
     return ""
 
 
-def _deck_rows(rows: dict[str, list[np.ndarray]], tr: Truth) -> None:
-    """A skate's deck samples: the soles' places and yaws on the deck, the deck's velocity."""
-    if tr.deck_R is not None and tr.deck_v is not None:
-        rows["deck_pos"].append(tr.on_deck(tr.sole_pos))
-        rows["deck_yaw"].append(tr.sole_yaw - np.arctan2(tr.deck_R[1, 0], tr.deck_R[0, 0]))
-        rows["deck_v"].append(tr.deck_v)
-
-
-def _margins(s: ReferenceSample, tr: Truth, zmp: np.ndarray, shift: np.ndarray | None) -> tuple[float, float]:
-    """The contact ZMP's distance inside the polygon of the soles down (the plan's, and any landed
-    early) and inside that of the plan's clock alone (-inf: airborne); a skate's (``shift``: the
-    plan's board sole from the twin's) with its soles where they are, moved by ``shift``."""
-    if np.isnan(tr.zmp).any():
-        return -np.inf, -np.inf
-    down = s.with_landed(tr.sole_force[:, 2], LANDING.landing_load_N, LANDING.landing_window_m)
-    clock = s
-    if shift is not None:
-        placed = np.column_stack([tr.sole_pos[:, 0:2] + shift, s.soles[:, 2]])
-        down, clock = replace(down, soles=placed, sole_yaw=tr.sole_yaw), replace(s, soles=placed,
-                                                                                 sole_yaw=tr.sole_yaw)
-    margin = polygon_margin(down.polygon(), zmp)
-    # the clock's soles are the same soles, most ticks the same ones down: the same polygon
-    return margin, margin if np.array_equal(down.support, clock.support) else polygon_margin(clock.polygon(), zmp)
+def _support_margins(plan: dict[str, np.ndarray], twin: dict[str, np.ndarray], zmp: np.ndarray, shift: np.ndarray,
+                     skate: bool, size: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Each tick's contact ZMP (``zmp``) distance inside the polygon of the soles down (the plan's,
+    and any landed early: the stabilizer's rule on the contact forces) and inside that of the plan's
+    clock alone; a skate's with its soles where they are, moved by ``shift`` (the plan's board sole
+    from the twin's)."""
+    clock = plan["support"]
+    landed = ~clock & (plan["soles"][:, :, 2] - plan["sole_plane"] < LANDING.landing_window_m) & (
+        twin["sole_force"][:, :, 2] > LANDING.landing_load_N)
+    centres, yaw = (twin["sole_pos"][:, :, 0:2] + shift[:, None, :], twin["sole_yaw"]) if skate else (
+        plan["soles"][:, :, 0:2], plan["sole_yaw"])
+    down = support.margins(centres, yaw, clock | landed, size, zmp)
+    at_clock = down.copy()
+    moved = landed.any(axis=1)
+    if moved.any():
+        at_clock[moved] = support.margins(centres[moved], yaw[moved], clock[moved], size, zmp[moved])
+    return down, at_clock
 
 
 @dataclass(frozen=True)
@@ -144,54 +139,68 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     plant = HumanoidPlant(f, errors, o.seed)
     ref = HumanoidReference(lib[key], lib.humanoid_model)
     dt = STEPS_PER_TICK * plant.timestep_s
-    kin = HumanoidKinematics(lib.urdf, f.joint_names)
-    stab = LipStabilizer(kin, dt, gains)
+    stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), dt, gains)
     torques = PlannedTorques(HumanoidKinematics(lib.urdf, f.joint_names), ref)
-    n = round((ref.duration_s + o.hold_s) / dt)
-    skate = f.board is not None
-    rows: dict[str, list[np.ndarray]] = {k: [] for k in (
-        "t", "com", "com_ref", "zmp", "zmp_measured", "zmp_ref", "margin", "margin_clock", "support", "sole_pos",
-        "sole_yaw", "sole_fz", "torque", "plane", "deck_pos", "deck_yaw", "deck_v", "shift", "qpos", "qpos_plan")}
+    truths: list[Truth] = []
+    samples: list[ReferenceSample] = []
+    measured: list[np.ndarray] = []
+    poses: list[tuple[np.ndarray, np.ndarray]] = []
     fell_at, reason = None, ""
-    for _ in range(n):
+    for _ in range(round((ref.duration_s + o.hold_s) / dt)):
         r = plant.readings()
         s = ref.sample(r.t)
-        out = stab.tick(s, r.q, np.roll(r.imu_quat_wxyz, -1), r.ft_force, r.ft_torque)
+        out = stab.tick(s, r.q, r.imu_quat_wxyz[XYZW], r.ft_force, r.ft_torque)
         qd, tau = torques.sample(r.t)
         if o.feedforward:
             plant.step(out.q_target, STEPS_PER_TICK, qd, tau)
         else:
             plant.step(out.q_target, STEPS_PER_TICK)
         tr = plant.truth(s.ground_z)
-        # On a board the robot is where its board has rolled to: a skate's COM and ZMP are taken
-        # relative to the board sole (the plan's and the twin's), its support polygon where the
-        # soles are (the plan's slide has no rolling resistance; the twin's board falls behind it).
-        shift = s.soles[0, 0:2] - tr.sole_pos[0, 0:2] if skate else np.zeros(2)
-        com = tr.com + np.append(shift, 0.0)
-        zmp = tr.zmp + shift
-        for k, v in (("t", tr.t), ("com", com), ("com_ref", s.com), ("zmp", zmp), ("zmp_measured",
-                     out.zmp_measured), ("zmp_ref", s.zmp), ("support", s.support), ("sole_pos", tr.sole_pos),
-                     ("sole_yaw", tr.sole_yaw), ("sole_fz", tr.sole_force[:, 2]), ("torque", tr.torque),
-                     ("plane", s.sole_plane)):
-            rows[k].append(np.asarray(v))
-        _deck_rows(rows, tr)
-        rows["shift"].append(shift)
+        truths.append(tr)
+        samples.append(s)
+        measured.append(out.zmp_measured)
         if o.keep_poses:
-            rows["qpos"].append(plant.d.qpos.copy())
-            rows["qpos_plan"].append(plant.pose_qpos(s.base_pos, np.roll(s.base_quat_xyzw, 1), s.q))
-        margin, margin_clock = _margins(s, tr, zmp, shift if skate else None)
-        rows["margin"].append(np.asarray(margin))
-        rows["margin_clock"].append(np.asarray(margin_clock))
+            poses.append((plant.d.qpos.copy(), plant.pose_qpos(s.base_pos, s.base_quat_xyzw[WXYZ], s.q)))
         reason = _fallen(tr)
         if reason:
             fell_at = tr.t
             break
-    a = {k: np.array(v) for k, v in rows.items()}
-    return HumanoidRun(key, a["t"], a["com"], a["com_ref"], a["zmp"], a["zmp_measured"], a["zmp_ref"], a["margin"],
-                       a["margin_clock"], a["support"], a["sole_pos"], a["sole_yaw"], a["sole_fz"], a["torque"],
-                       f.torque_limit_Nm, fell_at, reason, sole_plane=a["plane"] if skate else None,
-                       sole_deck_pos=a["deck_pos"] if skate else None, sole_deck_yaw=a["deck_yaw"] if skate else None,
-                       deck_v=a["deck_v"] if skate else None, push_end_s=push_end_s(lib, key),
-                       board_shift=a["shift"], qpos=a["qpos"] if o.keep_poses else None,
-                       qpos_plan=a["qpos_plan"] if o.keep_poses else None,
-                       layout=plant.layout() if o.keep_poses else None)
+    return _run(lib, key, f, (truths, samples, measured, poses), (fell_at, reason),
+                plant.layout() if o.keep_poses else None)
+
+
+XYZW, WXYZ = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # a quaternion's components reordered
+
+
+def _run(lib: MotionLibrary, key: str, f: HumanoidFigures, ticks: tuple[list, list, list, list],
+         fall: tuple[float | None, str], layout: tuple[int, np.ndarray, int] | None) -> HumanoidRun:
+    """The run's arrays from each tick's truth, reference sample and measured ZMP (and poses); when
+    and why it fell."""
+    truths, samples, measured, poses = ticks
+    fell_at, reason = fall
+    twin = {name: np.array([getattr(x, name) for x in truths]) for name in (
+        "t", "com", "zmp", "sole_pos", "sole_yaw", "sole_force", "torque", *(("deck_pos", "deck_R", "deck_v")
+                                                                             if f.board is not None else ()))}
+    plan = {name: np.array([getattr(x, name) for x in samples]) for name in (
+        "soles", "sole_yaw", "com", "zmp", "support", "sole_plane")}
+    n, skate = len(truths), f.board is not None
+    # On a board the robot is where its board has rolled to: a skate's COM and ZMP are taken
+    # relative to the board sole (the plan's and the twin's), its support polygon where the
+    # soles are (the plan's slide has no rolling resistance; the twin's board falls behind it).
+    shift = plan["soles"][:, 0, 0:2] - twin["sole_pos"][:, 0, 0:2] if skate else np.zeros((n, 2))
+    zmp = twin["zmp"] + shift
+    margin, margin_clock = _support_margins(plan, twin, zmp, shift, skate, (lib.humanoid_model.foot_length_m,
+                                                                           lib.humanoid_model.foot_width_m))
+    deck: dict[str, np.ndarray | None] = {"sole_deck_pos": None, "sole_deck_yaw": None, "deck_v": None}
+    if skate:
+        R = twin["deck_R"]
+        deck = {"sole_deck_pos": np.einsum("nsi,nij->nsj", twin["sole_pos"] - twin["deck_pos"][:, None, :], R),
+                "sole_deck_yaw": twin["sole_yaw"] - np.arctan2(R[:, 1, 0], R[:, 0, 0])[:, None],
+                "deck_v": twin["deck_v"]}
+    return HumanoidRun(key, twin["t"], twin["com"] + np.column_stack([shift, np.zeros(n)]), plan["com"], zmp,
+                       np.array(measured), plan["zmp"], margin, margin_clock, plan["support"], twin["sole_pos"],
+                       twin["sole_yaw"], twin["sole_force"][:, :, 2], twin["torque"], f.torque_limit_Nm, fell_at,
+                       reason, sole_plane=plan["sole_plane"] if skate else None, **deck,
+                       push_end_s=push_end_s(lib, key), board_shift=shift,
+                       qpos=np.array([q for q, _ in poses]) if layout else None,
+                       qpos_plan=np.array([q for _, q in poses]) if layout else None, layout=layout)

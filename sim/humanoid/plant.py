@@ -76,11 +76,6 @@ class Truth:
         return np.asarray((np.asarray(p) - self.deck_pos) @ self.deck_R)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two 3-vectors (np.cross costs 30 us a call; a contact loop calls it thousands of times)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 class HumanoidPlant:
     """The twin's ``MjModel`` and ``MjData``, stepped with joint angle targets."""
 
@@ -100,13 +95,31 @@ class HumanoidPlant:
         self.root = m.body(ROOT).id
         self.sensor = {n: (m.sensor(n).adr[0], m.sensor(n).dim[0]) for n in
                        ("imu_quat", "imu_gyro", *(f"{foot}_{w}" for foot in FEET for w in ("force", "torque")))}
+        self._quat, self._gyro = self._rows("imu_quat"), self._rows("imu_gyro")
+        self._force = np.array([self._rows(f"{foot}_force") for foot in FEET])  # (2, 3)
+        self._torque = np.array([self._rows(f"{foot}_torque") for foot in FEET])
+        e, n = self.errors, len(f.joint_names)
+        self._noise_scale = np.concatenate([np.full(4, e.imu_noise_rad / 2), np.full(6, e.force_noise_N),
+                                            np.full(6, e.torque_noise_Nm), np.full(n, e.encoder_noise_rad),
+                                            np.full(n, 20 * e.encoder_noise_rad), np.full(3, e.gyro_noise_radps)])
         self.rolling = RollingResistance(m, f.board.rolling_friction_coeff) if f.board is not None else None
         self.deck = m.body("deck").id if f.board is not None else -1
         self.deck_geom = m.geom("deck").id if f.board is not None else -1
-        self.wheels = {m.geom(w).id for w in WHEELS} if f.board is not None else set()
+        self.feet = m.geom_bodyid[self.soles]
+        self.on_floor = np.zeros(m.ngeom, dtype=bool)  # the geoms planned on the floor: the soles, the wheels
+        self.on_floor[self.soles] = True
+        if f.board is not None:
+            self.on_floor[[m.geom(w).id for w in WHEELS]] = True
         mujoco.mj_resetDataKeyframe(m, self.d, m.key("initial").id)
         self.d.ctrl[self.act] = f.q0_rad
         mujoco.mj_forward(m, self.d)
+        # MjData's arrays, each read once: an attribute's read makes a new numpy view each time, some
+        # microseconds that a tick's dozens of reads add up
+        d = self.d
+        self._sd, self._qpos, self._qvel, self._ctrl = d.sensordata, d.qpos, d.qvel, d.ctrl
+        self._ext, self._com, self._comvel = d.cfrc_ext, d.subtree_com, d.subtree_linvel
+        self._gpos, self._gmat, self._xpos, self._xmat = d.geom_xpos, d.geom_xmat, d.xpos, d.xmat
+        self._torques = d.actuator_force
 
     @property
     def timestep_s(self) -> float:
@@ -125,7 +138,7 @@ class HumanoidPlant:
             extra += SERVO_KD_NMS_PER_RAD * qd_target
         if tau_ff is not None:
             extra += tau_ff
-        self.d.ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
+        self._ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
         for _ in range(n):
             self.errors.push(self.d, self.root)
             if self.rolling is not None:
@@ -146,76 +159,71 @@ class HumanoidPlant:
         out[a:a + 3], out[a + 3:a + 7], out[self.qadr] = base_pos, base_quat_wxyz, q
         return out
 
-    def _s(self, name: str) -> np.ndarray:
+    def _rows(self, name: str) -> np.ndarray:
+        """Where sensor ``name``'s values are in ``sensordata``."""
         a, n = self.sensor[name]
-        return np.array(self.d.sensordata[a:a + n])
+        return np.arange(a, a + n)
 
     def readings(self) -> Readings:
-        """The sensors, with the errors' noise (angles, rates, forces and torques; docs/twin.md)."""
-        e, r, d = self.errors, self.rng, self.d
-        n = len(self.qadr)
-        quat = self._s("imu_quat") + r.normal(0, e.imu_noise_rad / 2, 4)
-        force = np.array([-self._s(f"{foot}_force") for foot in FEET]) + r.normal(0, e.force_noise_N, (2, 3))
-        torque = np.array([-self._s(f"{foot}_torque") for foot in FEET]) + r.normal(0, e.torque_noise_Nm, (2, 3))
-        return Readings(float(d.time), d.qpos[self.qadr] + r.normal(0, e.encoder_noise_rad, n),
-                        d.qvel[self.dadr] + r.normal(0, 20 * e.encoder_noise_rad, n), quat / np.linalg.norm(quat),
-                        self._s("imu_gyro") + r.normal(0, e.gyro_noise_radps, 3), force, torque)
+        """The sensors, with the errors' noise (angles, rates, forces and torques; docs/twin.md):
+        one draw of every sensor's noise a tick, in the order quaternion, forces, torques, angles,
+        rates, gyro."""
+        sd, d, n = self._sd, self.d, len(self.qadr)
+        noise = self.rng.normal(0.0, self._noise_scale)
+        quat = sd[self._quat] + noise[0:4]
+        force = -sd[self._force] + noise[4:10].reshape(2, 3)
+        torque = -sd[self._torque] + noise[10:16].reshape(2, 3)
+        q, qd = self._qpos[self.qadr] + noise[16:16 + n], self._qvel[self.dadr] + noise[16 + n:16 + 2 * n]
+        return Readings(float(d.time), q, qd, quat / np.linalg.norm(quat), sd[self._gyro] + noise[16 + 2 * n:], force,
+                        torque)
+
+    def _floor_touches(self) -> tuple[str, ...]:
+        """The geoms on the floor other than the soles and the board's wheels, by name."""
+        d, m = self.d, self.m
+        if d.ncon == 0:
+            return ()
+        g1, g2 = d.contact.geom1, d.contact.geom2
+        at_floor = (g1 == self.floor) | (g2 == self.floor)
+        other = np.where(g1 == self.floor, g2, g1)
+        stray = other[at_floor & ~self.on_floor[other]]
+        if not len(stray):
+            return ()
+        return tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray.tolist()}))
 
     def truth(self, plane_z: float = 0.0) -> Truth:
         """What happened; the soles' joint ZMP on the plane at height ``plane_z`` [m]."""
         import mujoco
 
         m, d = self.m, self.d
-        force, moment = np.zeros((2, 3)), np.zeros((2, 3))  # moment about the world origin
-        others: set[str] = set()
-        frame, w = np.zeros(6), np.zeros(6)
-        con = d.contact
-        empty = np.zeros(0, int)
-        g1, g2 = (con.geom1, con.geom2) if d.ncon else (empty, empty)
-        # the contacts with the floor or the deck, picked from the arrays (a Python loop over every
-        # contact, the board's wheels among them, cost as much as the physics step)
-        floor = (g1 == self.floor) | (g2 == self.floor)
-        on_deck = (g1 == self.deck_geom) | (g2 == self.deck_geom)  # no board: -1, no geom's id
-        pos, frames = (con.pos, con.frame) if d.ncon else (np.zeros((0, 3)), np.zeros((0, 9)))
-        for k in np.nonzero(floor | on_deck)[0]:
-            base = self.floor if floor[k] else self.deck_geom
-            first = int(g1[k]) == base  # the floor or the deck is geom1
-            other = int(g2[k]) if first else int(g1[k])
-            if other not in self.soles:
-                if base == self.floor and other not in self.wheels:
-                    others.add(m.geom(other).name or m.body(m.geom_bodyid[other]).name)
-                continue
-            mujoco.mj_contactForce(m, d, int(k), frame)
-            R = frames[k].reshape(3, 3).T
-            fw = R @ frame[0:3]  # on geom2 (the sole when the floor or deck is geom1)
-            fw = fw if first else -fw
-            s = self.soles.index(other)
-            force[s] += fw
-            moment[s] += _cross(pos[k], fw) + (R @ frame[3:6] * (1 if first else -1))
+        # A sole's box touches the floor and the deck alone (its foot's other geoms touch nothing):
+        # its foot's external force is its contacts' (MuJoCo's cfrc_ext, computed for the ankle
+        # sensors at each step: a torque about the robot's COM and a force, world axes).
+        ext = self._ext[self.feet]
+        tau, force = ext[:, 0:3], ext[:, 3:6]
+        c, pos, R = self._com[self.root], self._gpos[self.soles], self._gmat[self.soles]
         zmp = np.full((2, 2), np.nan)
         for s in (0, 1):
             if force[s, 2] > 1.0:
-                zmp[s] = _cop(force[s], moment[s], float(d.geom_xpos[self.soles[s]][2]) - SOLE_THICKNESS_M / 2)
-        total_f, total_m = force.sum(axis=0), moment.sum(axis=0)
-        both = _cop(total_f, total_m, plane_z) if total_f[2] > 1.0 else np.full(2, np.nan)
-        pos, yaw, v, wz = np.zeros((2, 3)), np.zeros(2), np.zeros((2, 3)), np.zeros(2)
+                zmp[s] = _cop(force[s], tau[s], c, float(pos[s, 2]) - SOLE_THICKNESS_M / 2)
+        total_f, total_tau = force.sum(axis=0), tau.sum(axis=0)
+        both = _cop(total_f, total_tau, c, plane_z) if total_f[2] > 1.0 else np.full(2, np.nan)
+        yaw = np.arctan2(R[:, 3], R[:, 0])
+        v, wz, w = np.zeros((2, 3)), np.zeros(2), np.zeros(6)
         for s, g in enumerate(self.soles):
-            R = d.geom_xmat[g].reshape(3, 3)
-            pos[s], yaw[s] = d.geom_xpos[g], np.arctan2(R[1, 0], R[0, 0])
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, w, 0)
             v[s], wz[s] = w[3:6], w[2]
         mujoco.mj_subtreeVel(m, d)
         deck: tuple[np.ndarray | None, ...] = (None, None, None)
         if self.deck >= 0:
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, self.deck, w, 0)
-            deck = (d.xpos[self.deck].copy(), d.xmat[self.deck].reshape(3, 3).copy(), w[3:6].copy())
-        return Truth(float(d.time), d.subtree_com[self.root].copy(), d.subtree_linvel[self.root].copy(),
-                     d.xpos[self.root].copy(), d.xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw,
-                     v, wz, d.actuator_force[self.act].copy(), tuple(sorted(others)), *deck)
+            deck = (self._xpos[self.deck].copy(), self._xmat[self.deck].reshape(3, 3).copy(), w[3:6].copy())
+        return Truth(float(d.time), c.copy(), self._comvel[self.root].copy(), self._xpos[self.root].copy(),
+                     self._xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw, v, wz,
+                     self._torques[self.act], self._floor_touches(), *deck)
 
 
-def _cop(f: np.ndarray, n: np.ndarray, z: float) -> np.ndarray:
+def _cop(f: np.ndarray, tau: np.ndarray, c: np.ndarray, z: float) -> np.ndarray:
     """The centre of pressure (x, y) on the plane at height ``z`` of a force ``f`` with the moment
-    ``n`` about the world origin: the point of that plane about which the moment has no x, y part."""
-    return np.array([(z * f[0] - n[1]) / f[2], (n[0] + z * f[1]) / f[2]])
-
+    ``tau`` about the point ``c``: the point of that plane about which the moment has no x, y part."""
+    h = z - c[2]
+    return np.array([c[0] + (h * f[0] - tau[1]) / f[2], c[1] + (tau[0] + h * f[1]) / f[2]])
