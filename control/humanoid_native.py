@@ -15,7 +15,6 @@ either (``StabilizerGains(compiled=False)`` keeps the Python path).
 from __future__ import annotations
 
 import ctypes
-import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -27,7 +26,7 @@ if TYPE_CHECKING:
 ADVICE = "point SKATELIB_CACHE_DIR to a folder of your own, or set StabilizerGains(compiled=False)"
 IN_FIXED, STATE, OUT_FIXED = 95, 28, 12  # humanoid_tick.c's I_A, S_N, O_DQ
 O_COM, O_XI, O_ZMP, O_PD, O_DC, O_SINGULAR = 0, 3, 5, 7, 9, 11
-S_DC, S_TILT, S_LIFT = 0, 8, 12
+S_DC, S_OFFSET, S_TILT, S_LIFT = 0, 6, 8, 12
 
 _FIELDS: list[tuple[str, Any]] = [
     *((name, ctypes.c_double) for name in (
@@ -49,15 +48,10 @@ _LIB: list[ctypes.CDLL | None] = []
 def tick_library() -> ctypes.CDLL | None:
     """The compiled tick (built on first use, then loaded from the cache), or None without a C
     compiler or when it fails to build or load (the Python path then runs; a warning says why)."""
-    if not _LIB:
-        lib, why = native_code.load("skatelib.control", "humanoid_tick.c", "humanoid_tick", ADVICE,
-                                    {"humanoid_tick": [ctypes.c_void_p] * 4})
-        if lib is None:
-            warnings.warn(f"the humanoid stabilizer's C code is not available ({why}): its Python path runs, "
-                          f"about four times as slow; install a C compiler (or set $CC to one)", RuntimeWarning,
-                          stacklevel=2)
-        _LIB.append(lib)
-    return _LIB[0]
+    return native_code.load_once(_LIB, ("skatelib.control", "humanoid_tick.c", "humanoid_tick"), ADVICE,
+                                 {"humanoid_tick": [ctypes.c_void_p] * 4},
+                                 "the humanoid stabilizer's C code is not available: its Python path runs, about "
+                                 "four times as slow")
 
 
 class CompiledTick:

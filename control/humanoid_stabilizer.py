@@ -81,8 +81,21 @@ def _mean(rows: list[np.ndarray]) -> np.ndarray:
     return rows[0] if len(rows) == 1 else (rows[0] + rows[1]) / 2
 
 
+def _anchors(r: ReferenceSample) -> np.ndarray:
+    """The soles anchoring the estimate.
+
+    Raises:
+        ValueError: None (a reference with no support sole: nothing tells where the robot is).
+    """
+    sup = r.anchors
+    if not sup.any():
+        raise ValueError("the reference has no support sole to anchor the stabilizer's estimate")
+    return sup
+
+
 class LipStabilizer:
-    """One robot's stabilizer state, ticked at a fixed rate."""
+    """One robot's stabilizer state, ticked at a fixed rate (with the C tick, :attr:`native`
+    holds the state and the attributes here stay at their start)."""
 
     def __init__(self, kin: HumanoidKinematics, dt: float, gains: StabilizerGains | None = None):
         self.kin, self.dt, self.g = kin, dt, gains or StabilizerGains()
@@ -114,7 +127,7 @@ class LipStabilizer:
         """The COM (world, anchored on the support soles), the measured ZMP and each sole's load and
         CoP relative to its centre (foot frame: x, y)."""
         c, soles, pts, rots = self.kin.measure(qfull)
-        sup = r.anchors
+        sup = _anchors(r)
         anchor = _mean([r.soles[s] - soles[s] for s in (0, 1) if sup[s]])
         rel = c - _mean([soles[s] for s in (0, 1) if sup[s]])
         self.swing_z = soles[:, 2] + anchor[2]
@@ -182,6 +195,7 @@ class LipStabilizer:
                      quat_xyzw: np.ndarray, force: np.ndarray, torque: np.ndarray) -> StabilizerOutput:
         """:meth:`tick` with its arithmetic after the kinematics in C."""
         r = self.phase(r, force)
+        _anchors(r)
         measured = self.kin.measure(self.kin.configuration(quat_xyzw, q))
         rows = self.kin.rows(self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)) if self.g.enabled else None
         o = native(r, measured, force, torque, rows)

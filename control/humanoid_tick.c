@@ -32,7 +32,8 @@ enum { O_COM = 0, O_XI = 3, O_ZMP = 5, O_PD = 7, O_DC = 9, O_SINGULAR = 11, O_DQ
 
 static double clip(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
-/* the mean of the rows (3) of the soles flagged in on (one or two; none: zeros) */
+/* the mean of the rows (3) of the soles flagged in on (one or two; none: zeros, which the caller
+ * does not let happen: the Python side refuses a tick without an anchor sole) */
 static void mean_rows(const double *rows, const double *on, double *o) {
     if (on[0] != 0.0 && on[1] != 0.0) {
         for (int i = 0; i < 3; i++) o[i] = (rows[i] + rows[3 + i]) / 2;
@@ -178,7 +179,7 @@ static int estimate(const hs_params *p, const double *in, double *st, double *ou
     }
     for (int i = 0; i < 3; i++) out[O_COM + i] = in[I_C + i] + anchor[i];
     if (fz > 0) zmp[0] = num[0] / fz, zmp[1] = num[1] / fz;
-    return fz > 0;
+    return !isnan(zmp[0]) && !isnan(zmp[1]); /* none loaded, or a sensor's NaN: not measured */
 }
 
 /* the ankles' damping control: each loaded support sole's tilt towards its share of p_d */
@@ -250,7 +251,7 @@ void humanoid_tick(const hs_params *p, const double *in, double *st, double *out
     int measured = estimate(p, in, st, out, zmp, loads, cops);
     const double *rc = in + I_COM, *rz = in + I_ZMP;
     double h = rc[2] - in[I_GROUND];
-    double omega = sqrt(in[I_GRAVITY] / (h > 0.2 ? h : 0.2)), w2 = omega * omega;
+    double omega = sqrt(in[I_GRAVITY] / (0.2 > h ? 0.2 : h)), w2 = omega * omega; /* Python's max(h, 0.2) */
     double c[2] = {out[O_COM] + st[S_OFFSET], out[O_COM + 1] + st[S_OFFSET + 1]};
     if (measured) {
         for (int i = 0; i < 2; i++) {

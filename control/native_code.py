@@ -17,6 +17,7 @@ import platform
 import shlex
 import shutil
 import subprocess
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -81,6 +82,21 @@ def load(package: str, name: str, stem: str, advice: str,
         fn = getattr(lib, fn_name)
         fn.argtypes, fn.restype = list(args), None
     return lib, ""
+
+
+def load_once(slot: list[ctypes.CDLL | None], source: tuple[str, str, str], advice: str,
+              functions: dict[str, Sequence[Any]], unavailable: str) -> ctypes.CDLL | None:
+    """:func:`load` of ``source`` (package, C file, stem) once per process (kept in ``slot``): the
+    library, or None with a warning ``unavailable`` (what is not available, then what runs
+    instead) with why and what to do."""
+    if not slot:
+        lib, why = load(*source, advice, functions)
+        if lib is None:
+            what, instead = unavailable.split(": ", 1)
+            warnings.warn(f"{what} ({why}): {instead}; install a C compiler (or set $CC to one)", RuntimeWarning,
+                          stacklevel=3)
+        slot.append(lib)
+    return slot[0]
 
 
 def _compile(source: bytes, name: str, cc: list[str], target: Path) -> bytes:

@@ -14,7 +14,6 @@ on either (``WbcSettings(compiled=False)`` keeps the Python path).
 from __future__ import annotations
 
 import ctypes
-import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -49,16 +48,12 @@ def wbc_library() -> ctypes.CDLL | None:
     """The compiled whole-body tick (built on first use, then loaded from the cache), or None
     without a C compiler or when it fails to build or load (the Python path then runs; a warning
     says why)."""
-    if not _LIB:
-        lib, why = native_code.load("skatelib.control", "wbc_tick.c", "wbc_tick", ADVICE,
-                                    {"wbc_targets": [ctypes.c_void_p] * 3,
-                                     "wbc_assemble": [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-                                                      *[ctypes.c_void_p] * 6]})
-        if lib is None:
-            warnings.warn(f"the whole-body tick's C code is not available ({why}): its Python path runs, about "
-                          f"twice as slow; install a C compiler (or set $CC to one)", RuntimeWarning, stacklevel=2)
-        _LIB.append(lib)
-    return _LIB[0]
+    return native_code.load_once(_LIB, ("skatelib.control", "wbc_tick.c", "wbc_tick"), ADVICE,
+                                 {"wbc_targets": [ctypes.c_void_p] * 3,
+                                  "wbc_assemble": [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                                   *[ctypes.c_void_p] * 6]},
+                                 "the whole-body tick's C code is not available: its Python path runs, about twice "
+                                 "as slow")
 
 
 class CompiledTargets:

@@ -113,6 +113,35 @@ def test_a_singular_correction_takes_the_least_norm_change(hrp2_walk_path, monke
     assert c.native is not None and c.native.out[humanoid_native.O_SINGULAR] == 1.0
 
 
+@compiled
+def test_a_sensor_reading_nan_is_taken_as_the_python_path_takes_it(hrp2_walk_path):
+    """An ankle torque reading NaN on a loaded sole: the measured ZMP NaN in both paths, the COM
+    offset observer not fed it (its state stays finite), the outputs the same NaN or number."""
+    lib = MotionLibrary.open(hrp2_walk_path)
+    key = next(e.key for e in lib if e.success)
+    f, c, py = _pair(lib, key, StabilizerGains())
+    plant = HumanoidPlant(f)
+    plant.step(f.q0_rad, 200)  # standing, both soles loaded
+    ref = HumanoidReference(lib[key], lib.humanoid_model)
+    r = plant.readings()
+    s = ref.sample(0.0)
+    bad = r.ft_torque.copy()
+    bad[0, 0] = np.nan
+    measured = []
+    for torque in (r.ft_torque, bad, r.ft_torque):
+        args = (s, r.q, r.imu_quat_wxyz[[1, 2, 3, 0]], r.ft_force, torque)
+        a, b = py.tick(*args), c.tick(*args)
+        for x, y in zip(dataclasses.astuple(a), dataclasses.astuple(b), strict=True):
+            x, y = np.asarray(x, float), np.asarray(y, float)
+            assert np.array_equal(np.isnan(x), np.isnan(y)) and np.allclose(x, y, atol=TOL, rtol=0, equal_nan=True)
+        measured.append(np.isnan(b.zmp_measured).all())
+    assert measured == [False, True, False]  # the NaN reading's tick has no measured ZMP
+    assert c.native is not None
+    offset = c.native.state[humanoid_native.S_OFFSET:humanoid_native.S_OFFSET + 2]
+    assert np.isfinite(offset).all() and np.isfinite(py.offset).all()
+    assert np.allclose(offset, py.offset, atol=TOL, rtol=0)
+
+
 def test_a_compiler_that_fails_leaves_the_python_tick(monkeypatch, tmp_path, hrp2_walk_path):
     monkeypatch.setattr(humanoid_native, "_LIB", [])
     monkeypatch.setenv("CC", "false")
@@ -152,8 +181,8 @@ def test_the_verdicts_support_margins_are_the_controllers_polygon():
 
 def test_support_margins_by_hand():
     """One sole at the origin, 0.24 x 0.14 m: its centre 7 cm inside, 1 cm beyond its toe 1 cm
-    outside; two soles side by side: the middle between them inside by half the gap's width; no
-    contact (the ZMP NaN) -inf; no support sole inf."""
+    outside; two soles side by side, 6 cm apart: the point between them inside by half a sole's
+    length (the hull spans the gap); no contact (the ZMP NaN) -inf; no support sole inf."""
     size = (0.24, 0.14)
     c = np.array([[[0.0, 0.0], [5.0, 5.0]]] * 2 + [[[0.0, -0.1], [0.0, 0.1]]] * 3)
     on = np.array([[True, False]] * 2 + [[True, True], [True, True], [False, False]])

@@ -190,3 +190,20 @@ def test_the_soles_wrenches_are_their_contacts(skate):
             missed = max(missed, float(np.abs(tr.sole_force[i] - (force[i] - fw)).max()))
         both += int((force[:, 2] > 1.0).all())
     assert both > 300 and missed > 1.0  # both soles loaded (452 ticks); one contact's loss seen (newtons)
+
+
+def test_a_twin_without_its_force_sensors_is_refused(skate, monkeypatch):
+    """The truth's wrenches need MuJoCo to compute the feet's external forces, which it does for
+    the ankles' force sensors: a twin with its sensors disabled is refused, not read as weightless."""
+    from skatelib.sim.humanoid import plant as humanoid_plant
+
+    real = humanoid_plant.humanoid_spec
+
+    def without_sensors(f):
+        spec = real(f)
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_SENSOR
+        return spec
+
+    monkeypatch.setattr(humanoid_plant, "humanoid_spec", without_sensors)
+    with pytest.raises(ValueError, match="ankle force sensors"):
+        HumanoidPlant(figures_for(MotionLibrary.open(skate), KEY))

@@ -12,7 +12,6 @@ revolute joints) or a machine without a working C compiler keeps the Python tick
 from __future__ import annotations
 
 import ctypes
-import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -52,16 +51,11 @@ _LIB: list[ctypes.CDLL | None] = []
 def tick_library() -> ctypes.CDLL | None:
     """The compiled tick (built on first use, then loaded from the cache), or None without a C
     compiler or when it fails to build or load (the Python tick then runs; a warning says why)."""
-    if not _LIB:
-        lib, why = native_code.load(
-            "skatelib.control.estimator", "tick.c", "estimator_tick", ADVICE,
-            {"est_tick": [ctypes.c_void_p] * 3, "est_legs": [ctypes.c_void_p] * 3,
-             "est_static_loads": [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_void_p]})
-        if lib is None:
-            warnings.warn(f"the estimator's C tick is not available ({why}): the Python tick runs, about 16 times "
-                          f"slower; install a C compiler (or set $CC to one)", RuntimeWarning, stacklevel=2)
-        _LIB.append(lib)
-    return _LIB[0]
+    return native_code.load_once(
+        _LIB, ("skatelib.control.estimator", "tick.c", "estimator_tick"), ADVICE,
+        {"est_tick": [ctypes.c_void_p] * 3, "est_legs": [ctypes.c_void_p] * 3,
+         "est_static_loads": [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_void_p]},
+        "the estimator's C tick is not available: the Python tick runs, about 16 times slower")
 
 
 def leg_chains(kin: LegKinematics) -> tuple[np.ndarray, ...] | None:

@@ -110,6 +110,12 @@ class HumanoidPlant:
         self.on_floor[self.soles] = True
         if f.board is not None:
             self.on_floor[[m.geom(w).id for w in WHEELS]] = True
+        # truth() reads the soles' wrenches from cfrc_ext, which MuJoCo computes at each step only for
+        # sensors that need it (the ankles' force sensors)
+        if not (m.sensor_type == mujoco.mjtSensor.mjSENS_FORCE).any() or (
+                m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_SENSOR):
+            raise ValueError("the humanoid twin needs its ankle force sensors on: its ground truth reads the soles' "
+                             "wrenches that MuJoCo computes for them")
         mujoco.mj_resetDataKeyframe(m, self.d, m.key("initial").id)
         self.d.ctrl[self.act] = f.q0_rad
         mujoco.mj_forward(m, self.d)
