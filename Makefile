@@ -79,12 +79,12 @@ certify: venv-build
 # each file's shared libraries are made once per process (docs/benchmarks.md, "The test suite").
 TEST_WORKERS ?= 2
 test: venv
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=15
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder --durations=15
 
 # Everything but the tests marked slow (pyproject.toml names the marker; docs/benchmarks.md what
 # each part takes). make test runs them all.
 test-fast: venv
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile -m "not slow"
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder -m "not slow"
 
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
 PACKAGES := pipeline library runtime control sim proving

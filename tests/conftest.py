@@ -9,6 +9,9 @@ import fcntl
 import os
 import pickle
 import shutil
+import signal
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -19,15 +22,62 @@ from skatelib.pipeline.quadruped.model.system import SkateSystem
 
 from tests.helpers import TINY, run_cli
 
+# Compiles the tiny config's stage functions (the default model's: one library serves its start-ups
+# and transitions) or finds them compiled; exits at once without a C compiler.
+PRECOMPILE = f"""
+from skatelib.pipeline.ocp.stagewise import c_compiler
+if c_compiler() is not None:
+    from skatelib.pipeline.config import load_config
+    from skatelib.pipeline.quadruped.config import QuadrupedConfig
+    from skatelib.pipeline.quadruped.problem.pushoff import problem_for
+    problem_for(load_config({str(TINY)!r}, QuadrupedConfig), 1)
+"""
+_precompile: list[subprocess.Popen] = []
+
 
 def pytest_configure(config: pytest.Config) -> None:
     """Compiled code (the stage functions of the tiny config's model, the estimator's tick) kept where
     a build of the developer's would keep it (``$SKATELIB_COMPILE_DIR``, else the cache folder),
     whatever entry cache a test points ``SKATELIB_CACHE_DIR`` to: compiled once per machine and
-    model, not once per test (the processes a test starts inherit the variable)."""
+    model, not once per test (the processes a test starts inherit the variable). Where no stage
+    functions are compiled yet (a fresh machine), the run's first process starts compiling them in
+    the background at once (some 100 s of one core), so that the tests that do not solve
+    (:data:`FIRST`) run meanwhile and the first that solves finds them compiled or waits on the
+    compile's lock, instead of compiling them itself while the other worker waits; the compile is
+    stopped when the run ends first."""
     from skatelib.library import trust
 
     os.environ[trust.COMPILE_ENV] = str(trust.compile_dir())
+    compiled = list(trust.compile_dir().glob("stage_*.so"))  # any: a changed model compiles in its first test
+    if not compiled and not hasattr(config, "workerinput"):  # the controller of an xdist run, or no xdist
+        _precompile.append(subprocess.Popen([sys.executable, "-c", PRECOMPILE], stdout=subprocess.DEVNULL,
+                                            stderr=subprocess.DEVNULL, start_new_session=True))
+
+
+# Test files that neither solve nor build a quadruped entry (the humanoid's, the installs', the
+# readers', the docs', the rides of tests/data's libraries): scheduled first, while the stage
+# functions compile in the background. A file here that comes to need the compiled code only waits.
+FIRST = ("test_certify", "test_footage", "test_video", "test_fitted", "test_track_report", "test_humanoid",
+         "test_rerun_humanoid_twin", "test_controller_install", "test_runtime_install", "test_cpp_reader",
+         "test_docs", "test_twin_board", "test_urdf")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The files of :data:`FIRST` first, then the others; in each part the files with more tests
+    first, as pytest-xdist's loadfile orders files by default (the Makefile turns its own ordering
+    off, ``--no-loadscope-reorder``, to keep this one). Each file's tests stay in their order."""
+    by_file: dict[Path, list[pytest.Item]] = {}
+    for item in items:
+        by_file.setdefault(item.path, []).append(item)
+    files = sorted(by_file, key=lambda f: (not f.name.startswith(FIRST), -len(by_file[f])))
+    items[:] = [item for f in files for item in by_file[f]]
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    for process in _precompile:
+        if process.poll() is None:  # its process group: the C compiler it runs too
+            os.killpg(process.pid, signal.SIGTERM)
+            process.wait()
 
 
 class CliBuild(NamedTuple):
