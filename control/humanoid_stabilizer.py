@@ -198,13 +198,12 @@ class LipStabilizer:
         _anchors(r)
         measured = self.kin.measure(self.kin.configuration(quat_xyzw, q))
         rows = self.kin.rows(self.kin.configuration(r.base_quat_xyzw, r.q, r.base_pos)) if self.g.enabled else None
-        o = native(r, measured, force, torque, rows)
-        dq = o[humanoid_native.OUT_FIXED + 6:]
-        if o[humanoid_native.O_SINGULAR] and rows is not None:  # the least-norm change, as the Python path's
+        o, n = native(r, measured, force, torque, rows), humanoid_native
+        dq = o[n.OUT_FIXED + 6:]
+        if o[n.O_SINGULAR] and rows is not None:  # the least-norm change, as the Python path's
             st = native.state
-            dq = solve_rows(*rows, np.append(st[0:2], 0.0), st[humanoid_native.S_TILT:humanoid_native.S_TILT + 4]
-                            .reshape(2, 2), st[humanoid_native.S_LIFT:humanoid_native.S_LIFT + 2])
-        n = humanoid_native
+            dq = solve_rows(*rows, np.append(st[n.S_DC:n.S_DC + 2], 0.0), st[n.S_TILT:n.S_TILT + 4].reshape(2, 2),
+                            st[n.S_LIFT:n.S_LIFT + 2])
         return StabilizerOutput(r.q + dq, o[n.O_COM:n.O_COM + 3], o[n.O_XI:n.O_XI + 2], o[n.O_ZMP:n.O_ZMP + 2],
                                 o[n.O_PD:n.O_PD + 2], o[n.O_DC:n.O_DC + 2], r.support.copy())
 

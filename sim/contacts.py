@@ -11,6 +11,13 @@ import numpy as np
 NO_CONTACT, ON_DECK, ON_FLOOR = 0, 1, 2
 
 
+def stray_on_floor(g1: np.ndarray, g2: np.ndarray, floor: int, planned: np.ndarray) -> set[int]:
+    """The geoms (ids) of the contacts ``g1``, ``g2`` (MuJoCo's contact arrays) that touch the
+    ``floor`` and are not ``planned`` there (``planned``: a flag per geom of the model)."""
+    other = np.where(g1 == floor, g2, g1)
+    return set(other[((g1 == floor) | (g2 == floor)) & ~planned[other]].tolist())
+
+
 class FootContacts:
     """The contact tables of a compiled twin: each geom's foot, and the geoms planned on the floor."""
 
@@ -47,8 +54,6 @@ class FootContacts:
                 touch[i] = ON_DECK if on_deck[k] else ON_FLOOR
                 points[:, i] = pos[k]
                 loads[i] += self._force[0]
-        other = np.where(g1 == self.floor, g2, g1)
-        stray = ((g1 == self.floor) | (g2 == self.floor)) & ~self.planned[other]
-        for g in set(other[stray].tolist()):
+        for g in stray_on_floor(g1, g2, self.floor, self.planned):
             others.add(m.geom(g).name or f"geom {g} of body {m.body(m.geom_bodyid[g]).name}")
         return touch, loads, others

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from skatelib.sim.contacts import stray_on_floor
 from skatelib.sim.humanoid.errors import HumanoidErrors
 from skatelib.sim.humanoid.figures import (
     FEET,
@@ -188,13 +189,8 @@ class HumanoidPlant:
         d, m = self.d, self.m
         if d.ncon == 0:
             return ()
-        g1, g2 = d.contact.geom1, d.contact.geom2
-        at_floor = (g1 == self.floor) | (g2 == self.floor)
-        other = np.where(g1 == self.floor, g2, g1)
-        stray = other[at_floor & ~self.on_floor[other]]
-        if not len(stray):
-            return ()
-        return tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray.tolist()}))
+        stray = stray_on_floor(d.contact.geom1, d.contact.geom2, self.floor, self.on_floor)
+        return tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray}))
 
     def truth(self, plane_z: float = 0.0) -> Truth:
         """What happened; the soles' joint ZMP on the plane at height ``plane_z`` [m]."""
