@@ -116,6 +116,10 @@ class ContactTable:
     def at(self, t: float) -> np.ndarray:
         return self.codes[self.index(t)]
 
+    def at_times(self, t: np.ndarray) -> np.ndarray:
+        """(n, 4) the codes at the times ``t`` (n,), as :meth:`at` gives each."""
+        return self.codes[np.clip(np.rint((t - self.t0) / self.step), 0, len(self.codes) - 1).astype(np.intp)]
+
 
 @dataclass
 class TargetMaker:

@@ -34,7 +34,7 @@ from skatelib.library.channels import BOARD
 from skatelib.library.rotations import rpy_matrices
 from skatelib.proving.setup import ClosedLoop
 from skatelib.proving.twin.estimate import EstimatedFeedback, EstimatorErrors, start_state
-from skatelib.proving.twin.metrics import Meter, TwinMeasures, planned_floor_near
+from skatelib.proving.twin.metrics import Meter, MeterPlan, TwinMeasures
 from skatelib.proving.twin.record import TwinRecord
 from skatelib.proving.twin.sensors import MultibodyPlant, SensedState, Sensors
 from skatelib.runtime import Entry, MotionLibrary
@@ -107,9 +107,9 @@ class TwinRun:
     mpc_times_s: list[float] = field(default_factory=list)
     qpos: list[np.ndarray] = field(default_factory=list)
     record: TwinRecord = field(default_factory=TwinRecord)
-    # Per tick: t, deck roll, the trunk's offset from the deck's centre line, feet touching, the
-    # smallest foot normal force.
-    ticks: list[tuple[float, float, float, int, float]] = field(default_factory=list)
+    # (ticks, 5) per tick: t, deck roll, the trunk's offset from the deck's centre line, feet
+    # touching, the smallest foot normal force.
+    ticks: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
     estimator: EstimatorErrors | None = None  # the estimator's errors against the truth (fed the estimate)
 
 
@@ -132,10 +132,10 @@ class TwinLoop:
         self.ctrl = SkateController(lib, ride.ref, ride.plan, p, loop.mpc, self.cfg.wbc, rates, keeper)
         self.dt = rates.update_s
         self.sensed = SensedState(self.cfg.sensors, self.tick_s, loop.settings.seed)
-        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, self.ref.stage_ends, plant.axle_below_deck_m)
-        self.run = TwinRun(self.meter.m)
-        self.board_end = ride.board_end
         self._start(ride)
+        plan = MeterPlan(self.ref.t_end, ride.board_end, self.contacts.at_times, self.ref.stage_ends)
+        self.meter = Meter(self.tick_s, self.kin.torque_limit_Nm, plan, plant.axle_below_deck_m)
+        self.run = TwinRun(self.meter.m)
         self.feedback: Callable[[Any], Any] = self.sensed
         self._truth_dyn: RobotDynamics | None = None
         if self.cfg.state == "estimate":
@@ -183,6 +183,7 @@ class TwinLoop:
             if self.run.fall:
                 break
         self.meter.finish()
+        self.run.ticks = self.meter.table
         return self.run
 
     def tick(self, update: bool = False) -> None:
@@ -213,12 +214,7 @@ class TwinLoop:
             self.plant.push(np.zeros(3))
         self.t += self.tick_s
         after = self._true = self.plant.state()
-        self.meter.tick(after, tick.out.tau, planned_floor_near(self.contacts.at, self.t))
-        self.meter.speeds(after, self.t, self.ref.t_end, np.array([np.cos(after.deck_yaw), np.sin(after.deck_yaw)]))
-        self.meter.drift(after, self.t, self.ref.t_end, self.board_end)
-        side = np.array([-np.sin(after.deck_yaw), np.cos(after.deck_yaw)])
-        self.run.ticks.append((self.t, after.deck_roll, float(side @ (after.trunk_pos[0:2] - after.deck_pos[0:2])),
-                               int(np.sum(after.foot_touch > 0)), float(np.min(after.foot_load_N))))
+        self.meter.tick(self.t, after, tick.out.tau)
         self.run.fall = self._fall(after)
 
     def _true_model_state(self) -> np.ndarray:

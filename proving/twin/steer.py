@@ -69,7 +69,7 @@ def steer_twin(lib: Any, loop: ClosedLoop, plant: MultibodyPlant, target_velocit
     ride = steer_ride(lib, loop, target_velocity_mps, duration_s, radius, cfg.adapt_stiffness)
     loop_ = TwinLoop(lib, ride, loop, plant, cfg.loop)
     run = loop_.ride()
-    ticks = np.array(run.ticks) if run.ticks else np.zeros((0, 5))
+    ticks = run.ticks
     settled = ticks[:, 0] >= 1.0
     steer_ref = ride.ref
     assert isinstance(steer_ref, SteerReference)
