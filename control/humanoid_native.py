@@ -2,7 +2,7 @@
 arithmetic after its kinematics (the estimate, the offset observer, the DCM feedback and the
 support polygon, the COM command, the ankles, the swing soles and the correction's solve) in C
 (``humanoid_tick.c``: the same equations in the same order; the Python module documents them),
-built and kept as the controller's C code is (:mod:`skatelib.control.native_code`) and called
+built and kept as the controller's C code is (:mod:`skatelib.library.native_code`) and called
 through ctypes once per tick. Pinocchio's kinematics before it are compiled code already; what the
 C replaces is some hundred small numpy operations, whose calls cost more than their arithmetic
 (about 0.5 ms a tick on the 2-core x86 VM of the benchmarks, a quarter of a 500 Hz cycle).
@@ -18,7 +18,7 @@ import ctypes
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from skatelib.control import native_code
+from skatelib.library import native_code
 
 if TYPE_CHECKING:
     from skatelib.control.humanoid_reference import ReferenceSample

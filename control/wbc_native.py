@@ -1,7 +1,7 @@
 """The whole-body tick compiled: :class:`skatelib.control.wbc_targets.TargetMaker`'s targets and
 :class:`skatelib.control.wbc.WholeBodyController`'s assembly of its QP from the default tasks and
 constraints, in C (``wbc_tick.c``: the same equations in the same order; the Python modules
-document them), built and kept as the controller's C code is (:mod:`skatelib.control.native_code`)
+document them), built and kept as the controller's C code is (:mod:`skatelib.library.native_code`)
 and called through ctypes, one call each per tick. Pinocchio's terms before them and the QP's
 backend after them are compiled code already; what the C replaces is some hundred small numpy
 operations, whose calls cost more than their arithmetic.
@@ -17,8 +17,8 @@ import ctypes
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from skatelib.control import native_code
 from skatelib.control.wbc_settings import NV, WbcSettings
+from skatelib.library import native_code
 
 if TYPE_CHECKING:
     from skatelib.control.params import SkateParams

@@ -37,9 +37,8 @@ class FootContacts:
         import mujoco
 
         touch, loads = np.zeros(4, dtype=np.int8), np.zeros(4)
-        others: set[str] = set()
         if d.ncon == 0:
-            return touch, loads, others
+            return touch, loads, set()
         m, con = self.m, d.contact
         g1, g2 = con.geom1, con.geom2
         f1, f2 = self.foot_of[g1], self.foot_of[g2]
@@ -54,6 +53,15 @@ class FootContacts:
                 touch[i] = ON_DECK if on_deck[k] else ON_FLOOR
                 points[:, i] = pos[k]
                 loads[i] += self._force[0]
-        for g in stray_on_floor(g1, g2, self.floor, self.planned):
-            others.add(m.geom(g).name or f"geom {g} of body {m.body(m.geom_bodyid[g]).name}")
-        return touch, loads, others
+        return touch, loads, {self.name(g) for g in stray_on_floor(g1, g2, self.floor, self.planned)}
+
+    def stray(self, d: Any) -> set[int]:
+        """The geoms other than feet and wheels on the floor (ids)."""
+        if d.ncon == 0:
+            return set()
+        return stray_on_floor(d.contact.geom1, d.contact.geom2, self.floor, self.planned)
+
+    def name(self, g: int) -> str:
+        """Geom ``g``'s name, or which body's it is."""
+        m = self.m
+        return m.geom(g).name or f"geom {g} of body {m.body(m.geom_bodyid[g]).name}"

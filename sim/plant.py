@@ -8,115 +8,26 @@ The controller's side does not import this module: it reads a :class:`TwinState`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import numpy as np
-from skatelib.library.rotations import roll_of, yaw_of
 from skatelib.sim.contacts import FootContacts
 from skatelib.sim.errors import TwinErrors
 from skatelib.sim.figures import TwinFigures
+from skatelib.sim.native import N_STRAY, S_N_STRAY, S_STRAY, S_WHEEL_LOAD, CompiledTwin, readout, twin_library
 from skatelib.sim.robot import JOINTS, LEGS
 from skatelib.sim.rolling import WHEELS, RollingResistance, step
-from skatelib.sim.scene import pose_qpos, scene_spec
+from skatelib.sim.scene import pose_qpos
+from skatelib.sim.twin_spec import TIMESTEP_S, twin_spec
+from skatelib.sim.twin_state import TwinState
 
-if TYPE_CHECKING:  # mujoco is imported where the twin is built (the [sim] extra)
-    import mujoco
-
-TIMESTEP_S = 1.0 / 1020.0  # two steps per 510 Hz whole-body tick, 34 per 30 Hz MPC update
-
-
-@dataclass
-class TwinState:
-    """One instant of the twin (world frame unless named otherwise).
-
-    Attributes:
-        trunk_omega: Angular velocity of the trunk in the trunk frame.
-        deck_omega: Angular velocity of the deck in the world frame.
-        foot_centres / foot_velocities: (3, 4) the foot spheres' centres and their velocities.
-        foot_touch: (4,) per foot NO_CONTACT, ON_DECK or ON_FLOOR.
-        contact_points: (3, 4) where each touching foot touches (its centre less a radius along
-            the surface normal otherwise).
-        foot_spins: (3, 4) the foot spheres' angular velocities (for the slip at the contact point).
-        foot_load_N: (4,) each foot's normal force on what it touches.
-        wheel_load_N: (4,) normal force of each wheel on the floor.
-        wheel_force_N: (3,) the floor's force on all four wheels.
-        system_v: (3,) velocity of the centre of mass of robot and board together.
-        system_mass_kg: Their mass.
-        floor_touches: Names of the geoms other than feet and wheels that touch the floor.
-    """
-
-    t: float
-    trunk_pos: np.ndarray
-    trunk_R: np.ndarray
-    trunk_v: np.ndarray
-    trunk_omega: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    deck_pos: np.ndarray
-    deck_R: np.ndarray
-    deck_v: np.ndarray
-    deck_omega: np.ndarray
-    foot_centres: np.ndarray
-    foot_velocities: np.ndarray
-    foot_touch: np.ndarray
-    contact_points: np.ndarray
-    foot_spins: np.ndarray
-    foot_load_N: np.ndarray
-    wheel_load_N: np.ndarray
-    wheel_force_N: np.ndarray
-    system_v: np.ndarray
-    system_mass_kg: float
-    floor_touches: tuple[str, ...]
-
-    @property
-    def deck_yaw(self) -> float:
-        return yaw_of(self.deck_R)
-
-    @property
-    def deck_roll(self) -> float:
-        """Roll about the deck's own x axis (Z-Y-X angles)."""
-        return roll_of(self.deck_R)
-
-
-def twin_spec(f: TwinFigures, errors: TwinErrors) -> mujoco.MjSpec:
-    """The scene with ``errors`` applied (links, floor, trucks, wheels, rotors, a payload)."""
-    import mujoco
-
-    spec = scene_spec(f)
-    spec.option.timestep = TIMESTEP_S
-    robot_bodies = {b.name for b in spec.body("trunk").find_all(mujoco.mjtObj.mjOBJ_BODY)} | {"trunk"}
-    for b in spec.bodies:
-        scale = errors.mass_scale if b.name in robot_bodies else errors.deck_mass_scale if b.name == "deck" else 1.0
-        if scale != 1.0:
-            b.mass *= scale
-            b.inertia = [scale * i for i in b.inertia]
-            b.fullinertia = [scale * i for i in b.fullinertia]
-    for name in JOINTS:
-        j = spec.joint(name)
-        j.armature *= errors.armature_scale
-        spec.actuator(name).gear = [errors.motor_scale, 0, 0, 0, 0, 0]
-    for name in ("truck_front", "truck_rear"):
-        j = spec.joint(name)
-        j.stiffness = [j.stiffness[0] * errors.kb_scale, 0, 0]
-        j.damping = [j.damping[0] * errors.bb_scale, 0, 0]
-    if errors.floor_mu is not None:  # MuJoCo takes the larger of two geoms' friction
-        spec.geom("floor").friction = [errors.floor_mu, 0, 0]
-        for leg in LEGS:
-            g = spec.geom(f"{leg}_foot")
-            g.friction = [errors.floor_mu, g.friction[1], g.friction[2]]
-        spec.geom("deck").friction = [f.friction_mu, 0.005, 0.0001]
-    if errors.payload_kg > 0:
-        load = spec.body("trunk").add_body(name="payload", pos=list(errors.payload_pos_m))
-        load.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.03, 0.03, 0.01], mass=errors.payload_kg,
-                      contype=0, conaffinity=0, rgba=[0.8, 0.3, 0.2, 1])
-    return spec
+__all__ = ["TIMESTEP_S", "TwinPlant", "TwinState", "twin_spec"]
 
 
 class TwinPlant:
     """The twin's ``MjModel`` and ``MjData``, stepped with joint torques."""
 
-    def __init__(self, f: TwinFigures, errors: TwinErrors | None = None):
+    def __init__(self, f: TwinFigures, errors: TwinErrors | None = None, compiled: bool = True):
+        """``compiled``: step and read the twin in C (:mod:`skatelib.sim.native`) where it can be
+        built; False keeps the Python path (the same states to the bit, slower)."""
         import mujoco
 
         self.f = f
@@ -142,6 +53,11 @@ class TwinPlant:
         # the wheels' floor loads :meth:`state` read, for the next step's first rolling torque (None:
         # the contacts have changed since)
         self._wheel_loads: np.ndarray | None = None
+        self._system_mass = float(m.body_subtreemass[0])
+        self._native: CompiledTwin | None = None
+        if compiled:
+            lib = twin_library()
+            self._native = CompiledTwin(lib, self) if lib is not None else None
 
     @property
     def timestep_s(self) -> float:
@@ -209,20 +125,31 @@ class TwinPlant:
         the wheels' loads the last :meth:`state` read (the same contacts); the plant's own methods
         that move the twin drop them, and so must a caller that runs ``mj_forward`` on ``d`` itself
         between a state and a step (:meth:`contacts_changed`)."""
-        self.d.ctrl[self.robot_actuators] = tau
         loads, self._wheel_loads = self._wheel_loads, None
+        if self._native is not None:
+            self._native.step(tau, n, loads)
+            return
+        self.d.ctrl[self.robot_actuators] = tau
         step(self.m, self.d, self.rolling, n, loads)
 
     def state(self) -> TwinState:
         """What the twin is doing now (contact forces evaluated at the last step)."""
         import mujoco
 
+        if self._native is not None:
+            s = self._native.state()
+            self._wheel_loads = s[S_WHEEL_LOAD:S_WHEEL_LOAD + 4]  # the next step's first rolling torque
+            k = int(s[S_N_STRAY])
+            stray = s[S_STRAY:S_STRAY + k].astype(int) if k <= N_STRAY else self.contacts.stray(self.d)
+            return readout(s, self._system_mass, tuple(sorted({self.contacts.name(int(g)) for g in stray})))
+
         m, d = self.m, self.d
         R = d.xmat[self.trunk].reshape(3, 3).copy()
         R_deck = d.xmat[self.deck].reshape(3, 3).copy()
         deck_pos = d.xpos[self.deck].copy()
         deck_v = d.qvel[self.deck_v:self.deck_v + 3].copy()
-        deck_w = R_deck @ d.qvel[self.deck_v + 3:self.deck_v + 6]
+        w = d.qvel[self.deck_v + 3:self.deck_v + 6]
+        deck_w = R_deck[:, 0] * w[0] + R_deck[:, 1] * w[1] + R_deck[:, 2] * w[2]  # as the C path sums
         centres = self.foot_centres()
         vel = np.zeros((3, 4))
         spins = np.zeros((3, 4))
@@ -244,5 +171,5 @@ class TwinPlant:
             deck_v=deck_v, deck_omega=deck_w, foot_centres=centres, foot_velocities=vel, foot_touch=touch,
             contact_points=points, foot_spins=spins, foot_load_N=foot_loads, wheel_load_N=loads,
             wheel_force_N=wheel_force,
-            system_v=d.subtree_linvel[0].copy(), system_mass_kg=float(m.body_subtreemass[0]),
+            system_v=d.subtree_linvel[0].copy(), system_mass_kg=self._system_mass,
             floor_touches=tuple(sorted(others)))

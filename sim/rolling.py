@@ -13,6 +13,7 @@ Every stepping of the twin goes through :func:`step` (the torque follows the loa
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -74,7 +75,8 @@ class RollingResistance:
         for k, hit, second in zip(picked, wheels, on_geom2, strict=True):
             mujoco.mj_contactForce(self.m, d, k, self._force)
             loads[hit] += self._force[0]
-            force = frames[k].reshape(3, 3).T @ self._force[:3]  # on geom2 (the wheel, or the floor)
+            fr, f = frames[k], self._force
+            force = fr[0:3] * f[0] + fr[3:6] * f[1] + fr[6:9] * f[2]  # on geom2 (the wheel, or the floor)
             total += force if second else -force
         return loads, total
 
@@ -84,7 +86,9 @@ class RollingResistance:
         v = d.qvel[self.dofs] * self.radius
         if loads is None:
             loads = self.wheel_loads(d)
-        d.ctrl[self.actuators] = -self.coefficient * self.radius * loads * np.tanh(v / SMOOTHING_MPS)
+        # the C library's tanh, as the compiled twin's (numpy's own differs in the last bit)
+        smooth = np.array([math.tanh(x) for x in v / SMOOTHING_MPS])
+        d.ctrl[self.actuators] = -self.coefficient * self.radius * loads * smooth
 
 
 def add_rolling_actuators(spec: Any) -> None:

@@ -1,6 +1,6 @@
 """The estimator's tick compiled: :class:`skatelib.control.estimator.estimator.StateEstimator`'s
 ``__call__`` in C (``tick.c``, the same equations in the same order on the same state), built once
-and kept as the controller's C code is (:mod:`skatelib.control.native_code`), called through
+and kept as the controller's C code is (:mod:`skatelib.library.native_code`), called through
 ctypes: numpy and the standard library only, one call per tick.
 
 The legs' kinematics are the model's own: each leg's three revolute joints (their placements and
@@ -15,7 +15,7 @@ import ctypes
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from skatelib.control import native_code
+from skatelib.library import native_code
 
 if TYPE_CHECKING:
     from skatelib.control.estimator.reading import Reading

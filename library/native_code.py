@@ -1,10 +1,10 @@
-"""The controller's C code (the estimator's tick, the whole-body tick's targets and assembly): a C
-file shipped in the package, built once by the system's C compiler (``$CC``, else gcc or cc;
-:data:`FLAGS`) into the cache folder (``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``),
-kept and loaded under the rules the build's compiled code follows
-(:mod:`skatelib.library.compiled`: a folder of the user's own that no one else can write, a lock,
-a SHA-256 record checked before each load, a private copy of the checked bytes loaded), and called
-through ctypes: numpy and the standard library only.
+"""The C code shipped in the package (the controller's: the estimator's tick, the whole-body and
+the humanoid stabilizer's ticks; the twin's step and readout): a C file, built once by the
+system's C compiler (``$CC``, else gcc or cc; :data:`FLAGS`) into the cache folder
+(``$SKATELIB_CACHE_DIR`` or ~/.cache/skatelib, ``native/``), kept and loaded under the rules the
+build's compiled code follows (:mod:`skatelib.library.compiled`: a folder of the user's own that
+no one else can write, a lock, a SHA-256 record checked before each load, a private copy of the
+checked bytes loaded), and called through ctypes: numpy and the standard library only.
 """
 
 from __future__ import annotations
@@ -55,22 +55,22 @@ class CompileFailed(Exception):
     """The C compiler did not build the code (the message says why)."""
 
 
-def load(package: str, name: str, stem: str, advice: str,
-         functions: dict[str, Sequence[Any]]) -> tuple[ctypes.CDLL | None, str]:
+def load(package: str, name: str, stem: str, advice: str, functions: dict[str, Sequence[Any]],
+         extra: Sequence[str] = ()) -> tuple[ctypes.CDLL | None, str]:
     """The C file ``name`` of ``package`` compiled (or loaded from the cache, as ``stem`` and a
-    hash of the source and the compiler) with ``functions``' argument types set (their results
-    void), and ''; or None and why not (no compiler, a failed compile, a cache folder it may not
-    use: ``advice`` says what to do then)."""
+    hash of the source, the compiler and the ``extra`` arguments: include folders, libraries to
+    link) with ``functions``' argument types set (their results void), and ''; or None and why not
+    (no compiler, a failed compile, a cache folder it may not use: ``advice`` says what to do then)."""
     source = importlib.resources.files(package).joinpath(name).read_bytes()
     cc = compiler()
     if cc is None:
         asked = os.environ.get("CC")
         return None, f"$CC={asked!r} is not on the PATH" if asked else "no C compiler: neither gcc nor cc on the PATH"
-    key = " ".join((*cc, *FLAGS, platform.machine(), platform.system(), str(ctypes.sizeof(ctypes.c_void_p))))
+    key = " ".join((*cc, *FLAGS, *extra, platform.machine(), platform.system(), str(ctypes.sizeof(ctypes.c_void_p))))
     folder = cache_dir()
     target = folder / f"{stem}_{hashlib.sha256(source + key.encode()).hexdigest()[:20]}.so"
     try:
-        code = cached_or_compiled(target, advice, lambda: _compile(source, name, cc, target))
+        code = cached_or_compiled(target, advice, lambda: _compile(source, name, cc, target, extra))
         remove_stale_temporaries(folder)  # what a killed process left: a compile's folder, a private copy
         with private_copy(code, folder, f"{Path(name).stem}.so") as so:
             lib = ctypes.CDLL(str(so))
@@ -85,12 +85,12 @@ def load(package: str, name: str, stem: str, advice: str,
 
 
 def load_once(slot: list[ctypes.CDLL | None], source: tuple[str, str, str], advice: str,
-              functions: dict[str, Sequence[Any]], unavailable: str) -> ctypes.CDLL | None:
+              functions: dict[str, Sequence[Any]], unavailable: str, extra: Sequence[str] = ()) -> ctypes.CDLL | None:
     """:func:`load` of ``source`` (package, C file, stem) once per process (kept in ``slot``): the
     library, or None with a warning ``unavailable`` (what is not available, then what runs
     instead) with why and what to do."""
     if not slot:
-        lib, why = load(*source, advice, functions)
+        lib, why = load(*source, advice, functions, extra)
         if lib is None:
             what, instead = unavailable.split(": ", 1)
             warnings.warn(f"{what} ({why}): {instead}; install a C compiler (or set $CC to one)", RuntimeWarning,
@@ -99,9 +99,10 @@ def load_once(slot: list[ctypes.CDLL | None], source: tuple[str, str, str], advi
     return slot[0]
 
 
-def _compile(source: bytes, name: str, cc: list[str], target: Path) -> bytes:
-    """``source`` compiled into ``target`` with its SHA-256 record (in a private folder beside it,
-    then moved); its bytes.
+def _compile(source: bytes, name: str, cc: list[str], target: Path, extra: Sequence[str] = ()) -> bytes:
+    """``source`` compiled into ``target`` (``extra``: include folders and libraries, after the
+    source, so that the libraries it needs are linked) with its SHA-256 record (in a private folder
+    beside it, then moved); its bytes.
 
     Raises:
         CompileFailed: The compiler failed or timed out.
@@ -110,8 +111,8 @@ def _compile(source: bytes, name: str, cc: list[str], target: Path) -> bytes:
         src, out = tmp / name, tmp / f"{Path(name).stem}.so"
         src.write_bytes(source)
         try:
-            done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
-                                  timeout=COMPILE_TIMEOUT_S)
+            done = subprocess.run([*cc, *FLAGS, "-o", str(out), str(src), *extra, "-lm"], capture_output=True,
+                                  text=True, timeout=COMPILE_TIMEOUT_S)
         except subprocess.TimeoutExpired:
             raise CompileFailed(f"{' '.join(cc)} took more than {COMPILE_TIMEOUT_S} s on {name}") from None
         if done.returncode != 0:

@@ -1,0 +1,160 @@
+/* The quadruped twin's physics steps with the wheels' rolling torques, and its readout, in C:
+ * skatelib.sim.plant's TwinPlant.step and TwinPlant.state (skatelib.sim.rolling,
+ * skatelib.sim.contacts), the same MuJoCo calls and the same arithmetic in the same order, called
+ * through ctypes once per whole-body tick instead of some hundred small Python and numpy calls.
+ * Built with -ffp-contract=off against the MuJoCo library of the Python package (its headers and
+ * its libmujoco), on the model and data of the Python bindings (their _address). */
+
+#include <math.h>
+#include <string.h>
+#include <mujoco/mujoco.h>
+
+typedef struct {
+    int robot_act[12];
+    int wheel_geom[4], wheel_dof[4], wheel_act[4];
+    double radius[4];
+    double coefficient, smoothing;
+    int floor, deck_geom;
+    int feet[4];
+    double foot_radius;
+    int trunk, deck, trunk_q, trunk_v, deck_v;
+    int qadr[12], dadr[12];
+    const int *foot_of;            /* ngeom: each geom's foot, -1 for none */
+    const unsigned char *planned;  /* ngeom: a foot or a wheel (its place is on the floor) */
+} twin_t;
+
+/* The readout's layout (skatelib.sim.native's S_ offsets). */
+enum {
+    S_T = 0, S_TRUNK_POS = 1, S_TRUNK_R = 4, S_TRUNK_V = 13, S_TRUNK_W = 16, S_Q = 19, S_QD = 31,
+    S_DECK_POS = 43, S_DECK_R = 46, S_DECK_V = 55, S_DECK_W = 58, S_CENTRES = 61, S_FOOT_V = 73,
+    S_SPINS = 85, S_POINTS = 97, S_FOOT_LOAD = 109, S_WHEEL_LOAD = 113, S_WHEEL_FORCE = 117,
+    S_SYSTEM_V = 120, S_TOUCH = 123, S_N_STRAY = 127, S_STRAY = 128, N_STRAY = 8, S_N = 136
+};
+
+/* The wheel of a contact of a wheel with the floor, else -1. */
+static int wheel_of(const twin_t *t, int g1, int g2)
+{
+    for (int i = 0; i < 4; i++)
+        if ((g1 == t->floor && g2 == t->wheel_geom[i]) || (g2 == t->floor && g1 == t->wheel_geom[i]))
+            return i;
+    return -1;
+}
+
+/* Each wheel's normal force on the floor (RollingResistance.floor_forces), and the floor's force
+ * on the four wheels, world frame, when total is not NULL. */
+static void wheel_forces(const mjModel *m, const mjData *d, const twin_t *t, double *loads, double *total)
+{
+    double f[6];
+    for (int i = 0; i < 4; i++) loads[i] = 0.0;
+    if (total) total[0] = total[1] = total[2] = 0.0;
+    for (int k = 0; k < d->ncon; k++) {
+        const mjContact *c = d->contact + k;
+        int w = wheel_of(t, c->geom[0], c->geom[1]);
+        if (w < 0) continue;
+        mj_contactForce(m, d, k, f);
+        loads[w] += f[0];
+        if (!total) continue;
+        int second = c->geom[1] != t->floor;  /* the force is on geom 2: the wheel, or the floor */
+        for (int j = 0; j < 3; j++) {
+            double force = c->frame[j] * f[0] + c->frame[3 + j] * f[1] + c->frame[6 + j] * f[2];
+            total[j] += second ? force : -force;
+        }
+    }
+}
+
+/* n steps with the joint torques tau (12), the rolling torques before each (RollingResistance.apply);
+ * loads (4): the wheels' loads of the contacts as they are for the first, or NULL. */
+void twin_step(const mjModel *m, mjData *d, const twin_t *t, const double *tau, int n, const double *loads)
+{
+    double own[4];
+    for (int i = 0; i < 12; i++) d->ctrl[t->robot_act[i]] = tau[i];
+    for (int k = 0; k < n; k++) {
+        const double *l = loads;
+        if (k > 0 || !loads) {
+            wheel_forces(m, d, t, own, NULL);
+            l = own;
+        }
+        for (int i = 0; i < 4; i++) {
+            double v = d->qvel[t->wheel_dof[i]] * t->radius[i];
+            d->ctrl[t->wheel_act[i]] = -t->coefficient * t->radius[i] * l[i] * tanh(v / t->smoothing);
+        }
+        mj_step(m, d);
+    }
+}
+
+/* The feet's contacts (FootContacts.read): touch codes, contact points, normal loads. */
+static void feet(const mjModel *m, const mjData *d, const twin_t *t, double *s)
+{
+    double f[6];
+    for (int i = 0; i < 4; i++) s[S_TOUCH + i] = s[S_FOOT_LOAD + i] = 0.0;
+    for (int k = 0; k < d->ncon; k++) {
+        const mjContact *c = d->contact + k;
+        int a = t->foot_of[c->geom[0]], b = t->foot_of[c->geom[1]];
+        if (a < 0 && b < 0) continue;
+        mj_contactForce(m, d, k, f);
+        int order[2] = {a < b ? a : b, a < b ? b : a}, n = a == b ? 1 : 2;  /* a foot on a foot: both */
+        double code = (c->geom[0] == t->deck_geom || c->geom[1] == t->deck_geom) ? 1.0 : 2.0;
+        for (int j = 0; j < n; j++) {
+            int i = order[j];
+            if (i < 0) continue;
+            s[S_TOUCH + i] = code;
+            for (int x = 0; x < 3; x++) s[S_POINTS + 4 * x + i] = c->pos[x];
+            s[S_FOOT_LOAD + i] += f[0];
+        }
+    }
+}
+
+/* The geoms other than feet and wheels on the floor (sim.contacts.stray_on_floor), each once;
+ * more than N_STRAY: the count N_STRAY + 1 (the caller reads them from the contacts). */
+static void stray(const mjData *d, const twin_t *t, double *s)
+{
+    int n = 0;
+    for (int k = 0; k < d->ncon; k++) {
+        int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
+        if (g1 != t->floor && g2 != t->floor) continue;
+        int other = g1 == t->floor ? g2 : g1, seen = 0;
+        if (t->planned[other]) continue;
+        for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[S_STRAY + j] == other;
+        if (seen) continue;
+        if (n < N_STRAY) s[S_STRAY + n] = other;
+        n += n <= N_STRAY;
+    }
+    s[S_N_STRAY] = n;
+}
+
+/* The twin now (TwinPlant.state) into s (S_N): the contact forces those of the last step. */
+void twin_state(const mjModel *m, mjData *d, const twin_t *t, double *s)
+{
+    double v6[6];
+    s[S_T] = d->time;
+    for (int i = 0; i < 3; i++) {
+        s[S_TRUNK_POS + i] = d->qpos[t->trunk_q + i];
+        s[S_TRUNK_V + i] = d->qvel[t->trunk_v + i];
+        s[S_TRUNK_W + i] = d->qvel[t->trunk_v + 3 + i];
+        s[S_DECK_POS + i] = d->xpos[3 * t->deck + i];
+        s[S_DECK_V + i] = d->qvel[t->deck_v + i];
+    }
+    memcpy(s + S_TRUNK_R, d->xmat + 9 * t->trunk, 9 * sizeof(double));
+    memcpy(s + S_DECK_R, d->xmat + 9 * t->deck, 9 * sizeof(double));
+    const double *R = s + S_DECK_R, *w = d->qvel + t->deck_v + 3;
+    for (int i = 0; i < 3; i++) s[S_DECK_W + i] = R[3 * i] * w[0] + R[3 * i + 1] * w[1] + R[3 * i + 2] * w[2];
+    for (int i = 0; i < 12; i++) {
+        s[S_Q + i] = d->qpos[t->qadr[i]];
+        s[S_QD + i] = d->qvel[t->dadr[i]];
+    }
+    for (int j = 0; j < 4; j++) {
+        mj_objectVelocity(m, d, mjOBJ_GEOM, t->feet[j], v6, 0);
+        for (int x = 0; x < 3; x++) {
+            double centre = d->geom_xpos[3 * t->feet[j] + x];
+            s[S_CENTRES + 4 * x + j] = centre;
+            s[S_FOOT_V + 4 * x + j] = v6[3 + x];
+            s[S_SPINS + 4 * x + j] = v6[x];
+            s[S_POINTS + 4 * x + j] = centre - (x == 2 ? t->foot_radius : 0.0);
+        }
+    }
+    wheel_forces(m, d, t, s + S_WHEEL_LOAD, s + S_WHEEL_FORCE);
+    feet(m, d, t, s);
+    stray(d, t, s);
+    mj_subtreeVel(m, d);
+    for (int i = 0; i < 3; i++) s[S_SYSTEM_V + i] = d->subtree_linvel[i];
+}
