@@ -1,10 +1,11 @@
-"""The quadruped twin's step and readout compiled (``twin_tick.c``): the rolling torques before each
-physics step and :meth:`skatelib.sim.plant.TwinPlant.state`'s readout, the same MuJoCo calls and
-arithmetic as the Python path (:mod:`skatelib.sim.rolling`, :mod:`skatelib.sim.contacts`), one
-ctypes call each per whole-body tick. Built against the MuJoCo package's own headers and library,
-on the bindings' model and data, and kept as the controller's C code is
-(:mod:`skatelib.library.native_code`). Without a C compiler, or a MuJoCo package without its C
-headers, the Python path runs (a warning says why); both give the same states to the bit.
+"""The twins' physics steps and the quadruped twin's readout compiled (``twin_tick.c``): the
+rolling torques before each physics step (and the humanoid's shove) and
+:meth:`skatelib.sim.plant.TwinPlant.state`'s readout, the same MuJoCo calls and arithmetic as the
+Python path (:mod:`skatelib.sim.rolling`, :mod:`skatelib.sim.contacts`), one ctypes call each per
+tick. Built against the MuJoCo package's own headers and library, on the bindings' model and data,
+and kept as the controller's C code is (:mod:`skatelib.library.native_code`). Without a C compiler,
+or a MuJoCo package without its C headers, the Python path runs (a warning says why); both give the
+same states to the bit.
 """
 
 from __future__ import annotations
@@ -26,17 +27,36 @@ S_FOOT_LOAD, S_WHEEL_LOAD, S_WHEEL_FORCE, S_SYSTEM_V, S_TOUCH, S_N_STRAY, S_STRA
 N_STRAY, S_N = 8, 136
 
 _I, _D = ctypes.c_int, ctypes.c_double
+_P = ctypes.c_void_p
+
+
+class RollingTables(ctypes.Structure):
+    """twin_tick.c's ``rolling_t``: the wheels (geoms, hinges, torque actuators, radii), the
+    rolling resistance's coefficient and smoothing speed, the floor."""
+
+    _fields_ = [("wheel_geom", _I * 4), ("wheel_dof", _I * 4), ("wheel_act", _I * 4), ("radius", _D * 4),
+                ("coefficient", _D), ("smoothing", _D), ("floor", _I)]
 
 
 class TwinTables(ctypes.Structure):
-    """twin_tick.c's ``twin_t``, field for field: the twin's actuators, wheels, feet, bodies and
-    joints, the rolling resistance's figures and the contact tables."""
+    """twin_tick.c's ``twin_t``, field for field: the rolling resistance's tables, the twin's
+    actuators, feet, bodies and joints and the contact tables."""
 
-    _fields_ = [("robot_act", _I * 12), ("wheel_geom", _I * 4), ("wheel_dof", _I * 4), ("wheel_act", _I * 4),
-                ("radius", _D * 4), ("coefficient", _D), ("smoothing", _D), ("floor", _I), ("deck_geom", _I),
-                ("feet", _I * 4), ("foot_radius", _D), ("trunk", _I), ("deck", _I), ("trunk_q", _I),
-                ("trunk_v", _I), ("deck_v", _I), ("qadr", _I * 12), ("dadr", _I * 12), ("foot_of", ctypes.c_void_p),
-                ("planned", ctypes.c_void_p)]
+    _fields_ = [("roll", RollingTables), ("robot_act", _I * 12), ("deck_geom", _I), ("feet", _I * 4),
+                ("foot_radius", _D), ("trunk", _I), ("deck", _I), ("trunk_q", _I), ("trunk_v", _I), ("deck_v", _I),
+                ("qadr", _I * 12), ("dadr", _I * 12), ("foot_of", ctypes.c_void_p), ("planned", ctypes.c_void_p)]
+
+
+def rolling_tables(r: Any) -> RollingTables:
+    """The C tables of a :class:`skatelib.sim.rolling.RollingResistance`."""
+    from skatelib.sim.rolling import SMOOTHING_MPS
+
+    t = RollingTables()
+    for name, values in (("wheel_geom", r.geoms), ("wheel_dof", r.dofs), ("wheel_act", r.actuators)):
+        getattr(t, name)[:] = [int(v) for v in values]
+    t.radius[:] = [float(v) for v in r.radius]
+    t.coefficient, t.smoothing, t.floor = float(r.coefficient), SMOOTHING_MPS, int(r.floor)
+    return t
 
 
 _LIB: list[ctypes.CDLL | None] = []
@@ -66,8 +86,9 @@ def twin_library() -> ctypes.CDLL | None:
             _LIB.append(None)
         else:
             native_code.load_once(_LIB, ("skatelib.sim", "twin_tick.c", "twin_tick"), ADVICE,
-                                  {"twin_step": [ctypes.c_void_p] * 4 + [ctypes.c_int, ctypes.c_void_p],
-                                   "twin_state": [ctypes.c_void_p] * 4},
+                                  {"twin_step": [_P] * 4 + [ctypes.c_int, _P],
+                                   "twin_state": [_P] * 4,
+                                   "rolling_steps": [_P] * 3 + [ctypes.c_int, _P, ctypes.c_int, _P]},
                                   "the twin's C code is not available: its Python path runs, its rides about a "
                                   "third slower", extra=extra)
     return _LIB[0]
@@ -78,16 +99,13 @@ class CompiledTwin:
     ``MjModel`` and ``MjData``."""
 
     def __init__(self, lib: ctypes.CDLL, plant: Any):
-        from skatelib.sim.rolling import SMOOTHING_MPS
-
-        self.lib, t, r = lib, TwinTables(), plant.rolling
-        for name, values in (("robot_act", plant.robot_actuators), ("wheel_geom", r.geoms), ("wheel_dof", r.dofs),
-                             ("wheel_act", r.actuators), ("feet", plant.feet), ("qadr", plant.qadr),
+        self.lib, t = lib, TwinTables()
+        t.roll = rolling_tables(plant.rolling)
+        for name, values in (("robot_act", plant.robot_actuators), ("feet", plant.feet), ("qadr", plant.qadr),
                              ("dadr", plant.dadr)):
             getattr(t, name)[:] = [int(v) for v in values]
-        t.radius[:] = [float(v) for v in r.radius]
-        t.coefficient, t.smoothing, t.foot_radius = float(r.coefficient), SMOOTHING_MPS, float(plant.f.foot_radius_m)
-        t.floor, t.deck_geom, t.trunk, t.deck = plant.floor, plant.deck_geom, plant.trunk, plant.deck
+        t.foot_radius, t.deck_geom = float(plant.f.foot_radius_m), plant.deck_geom
+        t.trunk, t.deck = plant.trunk, plant.deck
         t.trunk_q, t.trunk_v, t.deck_v = int(plant.trunk_q), int(plant.trunk_v), int(plant.deck_v)
         self._foot_of = np.ascontiguousarray(plant.contacts.foot_of, dtype=np.intc)
         self._planned = np.ascontiguousarray(plant.contacts.planned, dtype=np.uint8)
@@ -111,6 +129,25 @@ class CompiledTwin:
         s = np.empty(S_N)
         self.lib.twin_state(*self._md, s.ctypes.data)
         return s
+
+
+class CompiledSteps:
+    """Physics steps in C with a board's rolling torques before each (``rolling``: a
+    :class:`skatelib.sim.rolling.RollingResistance`, or None without a board) and a shove
+    (``shove``: the body, the force along y [N], its start and length [s]; None: no shove)."""
+
+    def __init__(self, lib: ctypes.CDLL, m: Any, d: Any, rolling: Any | None,
+                 shove: tuple[int, float, float, float] | None):
+        self.lib = lib
+        self.tables = rolling_tables(rolling) if rolling is not None else None
+        self._shove = np.array(shove[1:] if shove is not None else (0.0, 0.0, 0.0), dtype=np.float64)
+        self._args = (ctypes.c_void_p(m._address), ctypes.c_void_p(d._address),
+                      ctypes.addressof(self.tables) if self.tables is not None else None)
+        self._after = (None, shove[0] if shove is not None else -1, self._shove.ctypes.data)
+
+    def __call__(self, n: int) -> None:
+        """``n`` physics steps."""
+        self.lib.rolling_steps(*self._args, n, *self._after)
 
 
 def readout(s: np.ndarray, system_mass_kg: float, floor_touches: tuple[str, ...]) -> TwinState:

@@ -1,6 +1,7 @@
 /* The quadruped twin's physics steps with the wheels' rolling torques, and its readout, in C:
  * skatelib.sim.plant's TwinPlant.step and TwinPlant.state (skatelib.sim.rolling,
- * skatelib.sim.contacts), the same MuJoCo calls and the same arithmetic in the same order, called
+ * skatelib.sim.contacts), and the humanoid twin's steps (its shove, its board's rolling torques),
+ * the same MuJoCo calls and the same arithmetic in the same order, called
  * through ctypes once per whole-body tick instead of some hundred small Python and numpy calls.
  * Built with -ffp-contract=off against the MuJoCo library of the Python package (its headers and
  * its libmujoco), on the model and data of the Python bindings (their _address). */
@@ -10,11 +11,16 @@
 #include <mujoco/mujoco.h>
 
 typedef struct {
-    int robot_act[12];
     int wheel_geom[4], wheel_dof[4], wheel_act[4];
     double radius[4];
     double coefficient, smoothing;
-    int floor, deck_geom;
+    int floor;
+} rolling_t;
+
+typedef struct {
+    rolling_t roll;
+    int robot_act[12];
+    int deck_geom;
     int feet[4];
     double foot_radius;
     int trunk, deck, trunk_q, trunk_v, deck_v;
@@ -32,29 +38,29 @@ enum {
 };
 
 /* The wheel of a contact of a wheel with the floor, else -1. */
-static int wheel_of(const twin_t *t, int g1, int g2)
+static int wheel_of(const rolling_t *r, int g1, int g2)
 {
     for (int i = 0; i < 4; i++)
-        if ((g1 == t->floor && g2 == t->wheel_geom[i]) || (g2 == t->floor && g1 == t->wheel_geom[i]))
+        if ((g1 == r->floor && g2 == r->wheel_geom[i]) || (g2 == r->floor && g1 == r->wheel_geom[i]))
             return i;
     return -1;
 }
 
 /* Each wheel's normal force on the floor (RollingResistance.floor_forces), and the floor's force
  * on the four wheels, world frame, when total is not NULL. */
-static void wheel_forces(const mjModel *m, const mjData *d, const twin_t *t, double *loads, double *total)
+static void wheel_forces(const mjModel *m, const mjData *d, const rolling_t *r, double *loads, double *total)
 {
     double f[6];
     for (int i = 0; i < 4; i++) loads[i] = 0.0;
     if (total) total[0] = total[1] = total[2] = 0.0;
     for (int k = 0; k < d->ncon; k++) {
         const mjContact *c = d->contact + k;
-        int w = wheel_of(t, c->geom[0], c->geom[1]);
+        int w = wheel_of(r, c->geom[0], c->geom[1]);
         if (w < 0) continue;
         mj_contactForce(m, d, k, f);
         loads[w] += f[0];
         if (!total) continue;
-        int second = c->geom[1] != t->floor;  /* the force is on geom 2: the wheel, or the floor */
+        int second = c->geom[1] != r->floor;  /* the force is on geom 2: the wheel, or the floor */
         for (int j = 0; j < 3; j++) {
             double force = c->frame[j] * f[0] + c->frame[3 + j] * f[1] + c->frame[6 + j] * f[2];
             total[j] += second ? force : -force;
@@ -62,24 +68,41 @@ static void wheel_forces(const mjModel *m, const mjData *d, const twin_t *t, dou
     }
 }
 
-/* n steps with the joint torques tau (12), the rolling torques before each (RollingResistance.apply);
- * loads (4): the wheels' loads of the contacts as they are for the first, or NULL. */
-void twin_step(const mjModel *m, mjData *d, const twin_t *t, const double *tau, int n, const double *loads)
+/* n physics steps, the rolling torques before each (RollingResistance.apply; r NULL: no board);
+ * loads (4): the wheels' loads of the contacts as they are for the first step, or NULL. With
+ * shove_body >= 0 a force shove[0] along y on that body before each step while
+ * shove[1] <= time < shove[1] + shove[2], none otherwise (HumanoidErrors.push). */
+void rolling_steps(const mjModel *m, mjData *d, const rolling_t *r, int n, const double *loads, int shove_body,
+                   const double *shove)
 {
     double own[4];
-    for (int i = 0; i < 12; i++) d->ctrl[t->robot_act[i]] = tau[i];
     for (int k = 0; k < n; k++) {
-        const double *l = loads;
-        if (k > 0 || !loads) {
-            wheel_forces(m, d, t, own, NULL);
-            l = own;
+        if (shove_body >= 0) {
+            int on = shove[0] != 0.0 && shove[1] <= d->time && d->time < shove[1] + shove[2];
+            d->xfrc_applied[6 * shove_body] = 0.0;
+            d->xfrc_applied[6 * shove_body + 1] = on ? shove[0] : 0.0;
+            d->xfrc_applied[6 * shove_body + 2] = 0.0;
         }
-        for (int i = 0; i < 4; i++) {
-            double v = d->qvel[t->wheel_dof[i]] * t->radius[i];
-            d->ctrl[t->wheel_act[i]] = -t->coefficient * t->radius[i] * l[i] * tanh(v / t->smoothing);
+        if (r) {
+            const double *l = loads;
+            if (k > 0 || !loads) {
+                wheel_forces(m, d, r, own, NULL);
+                l = own;
+            }
+            for (int i = 0; i < 4; i++) {
+                double v = d->qvel[r->wheel_dof[i]] * r->radius[i];
+                d->ctrl[r->wheel_act[i]] = -r->coefficient * r->radius[i] * l[i] * tanh(v / r->smoothing);
+            }
         }
         mj_step(m, d);
     }
+}
+
+/* The quadruped's n steps with the joint torques tau (12) (TwinPlant.step). */
+void twin_step(const mjModel *m, mjData *d, const twin_t *t, const double *tau, int n, const double *loads)
+{
+    for (int i = 0; i < 12; i++) d->ctrl[t->robot_act[i]] = tau[i];
+    rolling_steps(m, d, &t->roll, n, loads, -1, NULL);
 }
 
 /* The feet's contacts (FootContacts.read): touch codes, contact points, normal loads. */
@@ -111,8 +134,8 @@ static void stray(const mjData *d, const twin_t *t, double *s)
     int n = 0;
     for (int k = 0; k < d->ncon; k++) {
         int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
-        if (g1 != t->floor && g2 != t->floor) continue;
-        int other = g1 == t->floor ? g2 : g1, seen = 0;
+        if (g1 != t->roll.floor && g2 != t->roll.floor) continue;
+        int other = g1 == t->roll.floor ? g2 : g1, seen = 0;
         if (t->planned[other]) continue;
         for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[S_STRAY + j] == other;
         if (seen) continue;
@@ -152,7 +175,7 @@ void twin_state(const mjModel *m, mjData *d, const twin_t *t, double *s)
             s[S_POINTS + 4 * x + j] = centre - (x == 2 ? t->foot_radius : 0.0);
         }
     }
-    wheel_forces(m, d, t, s + S_WHEEL_LOAD, s + S_WHEEL_FORCE);
+    wheel_forces(m, d, &t->roll, s + S_WHEEL_LOAD, s + S_WHEEL_FORCE);
     feet(m, d, t, s);
     stray(d, t, s);
     mj_subtreeVel(m, d);

@@ -93,7 +93,7 @@ def test_the_compiled_twin_is_the_python_twin_fallen_on_the_floor(figures):
 def test_a_changed_rolling_resistance_is_seen(figures):
     """The comparison sees a rolling coefficient 1 % off in the C plant's tables."""
     c, py = _pair(figures)
-    c._native.tables.coefficient *= 1.01
+    c._native.tables.roll.coefficient *= 1.01
     for p in (c, py):
         _stance(p)
         p.launch(0.8)
@@ -113,3 +113,36 @@ def test_without_a_compiler_the_python_twin_runs(figures, monkeypatch, tmp_path)
     for plant in (p, compiled):
         _stance(plant)
     _assert_same(p.state(), compiled.state())
+
+
+def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
+    """The humanoid skate's twin under its default errors and a shove: the physics steps in C (the
+    shove, the board's rolling torques) give the Python loop's states to the bit, tick by tick;
+    a shove 1 N stronger in the C plant is seen."""
+    from skatelib.proving.humanoid.loop import figures_for
+    from skatelib.runtime import MotionLibrary
+    from skatelib.sim.humanoid.errors import DEFAULT_HUMANOID_PERTURBATION, parse_humanoid_perturbation
+    from skatelib.sim.humanoid.plant import HumanoidPlant
+
+    lib = MotionLibrary.open(hrp2_skate_v100)
+    f = figures_for(lib, next(e.key for e in lib if e.success))
+    errors = parse_humanoid_perturbation(f"{DEFAULT_HUMANOID_PERTURBATION},shove=40,shove_t=0.1")
+
+    FIELDS = ("qpos", "qvel", "ctrl", "xfrc_applied")
+
+    def run(c: HumanoidPlant, py: HumanoidPlant) -> tuple[bool, float]:
+        same, gap = True, 0.0
+        for k in range(150):
+            target = f.q0_rad + 0.05 * np.sin(0.1 * k + np.arange(len(f.q0_rad)))
+            for p in (c, py):
+                p.step(target, 2)
+            gap = max(gap, float(np.max(np.abs(c.d.qpos - py.d.qpos))))
+            same &= all(np.array_equal(getattr(c.d, a), getattr(py.d, a)) for a in FIELDS)
+        return same, gap
+
+    c, py = HumanoidPlant(f, errors), HumanoidPlant(f, errors, compiled=False)
+    assert c._steps is not None and py._steps is None and c.rolling is not None
+    assert run(c, py) == (True, 0.0)
+    stronger = HumanoidPlant(f, dataclasses.replace(errors, shove_N=errors.shove_N + 1.0))
+    same, gap = run(stronger, HumanoidPlant(f, errors, compiled=False))
+    assert not same and gap > 0.0

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.sim.contacts import stray_on_floor
-from skatelib.sim.humanoid.errors import HumanoidErrors
+from skatelib.sim.humanoid.errors import SHOVE_S, HumanoidErrors
 from skatelib.sim.humanoid.figures import (
     FEET,
     SERVO_KD_NMS_PER_RAD,
@@ -18,6 +18,7 @@ from skatelib.sim.humanoid.figures import (
     HumanoidFigures,
 )
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
+from skatelib.sim.native import CompiledSteps, twin_library
 from skatelib.sim.rolling import WHEELS, RollingResistance
 
 
@@ -80,7 +81,11 @@ class Truth:
 class HumanoidPlant:
     """The twin's ``MjModel`` and ``MjData``, stepped with joint angle targets."""
 
-    def __init__(self, f: HumanoidFigures, errors: HumanoidErrors | None = None, seed: int = 0):
+    def __init__(self, f: HumanoidFigures, errors: HumanoidErrors | None = None, seed: int = 0,
+                 compiled: bool = True):
+        """``compiled``: the physics steps (the shove, a board's rolling torques) in C
+        (:mod:`skatelib.sim.native`) where it can be built; False keeps the Python loop (the same
+        states to the bit)."""
         import mujoco
 
         self.f, self.errors = f, errors or HumanoidErrors()
@@ -127,6 +132,11 @@ class HumanoidPlant:
         self._ext, self._com, self._comvel = d.cfrc_ext, d.subtree_com, d.subtree_linvel
         self._gpos, self._gmat, self._xpos, self._xmat = d.geom_xpos, d.geom_xmat, d.xpos, d.xmat
         self._torques = d.actuator_force
+        self._steps: CompiledSteps | None = None
+        lib = twin_library() if compiled else None
+        if lib is not None:
+            e = self.errors
+            self._steps = CompiledSteps(lib, m, d, self.rolling, (self.root, e.shove_N, e.shove_t_s, SHOVE_S))
 
     @property
     def timestep_s(self) -> float:
@@ -146,6 +156,9 @@ class HumanoidPlant:
         if tau_ff is not None:
             extra += tau_ff
         self._ctrl[self.act] = q_target + extra / SERVO_KP_NM_PER_RAD
+        if self._steps is not None:
+            self._steps(n)
+            return
         for _ in range(n):
             self.errors.push(self.d, self.root)
             if self.rolling is not None:
