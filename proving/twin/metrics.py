@@ -4,11 +4,9 @@ wheels off the floor, torque saturation, the speeds the verdict needs.
 
 Slip is the contact point's material velocity relative to the surface under it (the foot sphere's
 centre velocity plus its spin times the lever to the contact, less the deck point's velocity),
-integrated over each stance: a rolling foot does not slip, a sliding one does.
-
-The meter keeps each tick's state and measures them a chunk of ticks at a time, each figure over
-the whole chunk at once (the same operations, in the same order, as tick by tick): a run's figures
-cost a small part of what they cost measured at every tick.
+integrated over each stance: a rolling foot does not slip, a sliding one does. The meter keeps
+each tick's state and measures a chunk of ticks at once, with the operations (and the NaN rules) of
+tick by tick: a small part of what measuring at every tick costs.
 """
 
 from __future__ import annotations
@@ -83,7 +81,6 @@ class Meter:
         self.unloaded = np.zeros(4, dtype=int)
         self._kept: list[tuple[float, Any, np.ndarray]] = []
         self._tables: list[np.ndarray] = []
-        self._measured = 0  # ticks measured before the kept ones
 
     def tick(self, t: float, st: Any, tau_cmd: np.ndarray) -> None:
         """One tick: the run's clock ``t`` [s] after it, the plant's true state, the torques commanded."""
@@ -112,10 +109,10 @@ class Meter:
         m = self.m
         m.ticks += len(t)
         top = np.max(np.abs(tau), axis=1)
-        m.max_torque_Nm = max(m.max_torque_Nm, min(float(np.max(top)), self.limit))
+        m.max_torque_Nm = max(m.max_torque_Nm, min(_top(top), self.limit))
         m.saturated_ticks += int(np.sum(top >= self.limit * 0.999))
         roll = np.array([st.deck_roll for st in states])
-        m.max_deck_roll_rad = max(m.max_deck_roll_rad, float(np.max(np.abs(roll))))
+        m.max_deck_roll_rad = max(m.max_deck_roll_rad, _top(np.abs(roll)))
         touch = np.array([st.foot_touch for st in states])
         self._slips(states, touch)
         self._floor(t, states, touch)
@@ -128,7 +125,6 @@ class Meter:
         side = -heading[:, 1] * offsets[:, 0] + heading[:, 0] * offsets[:, 1]
         lowest = np.array([np.min(st.foot_load_N) for st in states])
         self._tables.append(np.column_stack([t, roll, side, np.sum(touch > 0, axis=1), lowest]))
-        self._measured += len(t)
 
     def _slips(self, states: list[Any], touch: np.ndarray) -> None:
         """Each stance's slip: the contact point's velocity against the surface under it, summed
@@ -151,7 +147,7 @@ class Meter:
                 going_on = a == 0 and self.touching[i]
                 start = self.slip[:, i] if going_on else np.zeros(3)
                 s = np.cumsum(np.vstack([start, v[:, a:b, i].T * self.tick_s]), axis=0)[1:]
-                top = max(float(self.slip_max[i]) if going_on else 0.0, float(np.max(np.sqrt(np.sum(s * s, axis=1)))))
+                top = max(float(self.slip_max[i]) if going_on else 0.0, _top(np.sqrt(np.sum(s * s, axis=1))))
                 self.slip[:, i], self.slip_max[i] = s[-1], top
                 if b < len(on):
                     ended.append((int(b), i, top))
@@ -174,7 +170,8 @@ class Meter:
     def _wheels(self, loads: np.ndarray) -> None:
         """The lowest wheel load, and the wheels off the floor: ticks in a row without load."""
         m = self.m
-        m.min_wheel_load_N = min(m.min_wheel_load_N, float(np.min(loads)))
+        # tick by tick: a tick whose lowest load is NaN is passed over
+        m.min_wheel_load_N = min(m.min_wheel_load_N, float(np.fmin.reduce(np.min(loads, axis=1))))
         n = len(loads)
         idx = np.arange(n)[:, None]
         free = loads <= 0.0
@@ -213,15 +210,16 @@ class Meter:
         if rolling.any():
             across = v_axle[1] * heading[:, 0] - v_axle[0] * heading[:, 1]
             crab = np.abs(np.arctan2(across[rolling], np.abs(forward[rolling])))
-            m.max_crab_rad = max(m.max_crab_rad, float(np.max(crab)))
+            m.max_crab_rad = max(m.max_crab_rad, _top(crab))
 
     def _drift(self, t: np.ndarray, states: list[Any], yaw: np.ndarray) -> None:
         """The board's heading and lateral position against the plan's when the entry ends, and
         the heading since."""
         m, board_end = self.m, self.plan.board_end
         yaw_error = yaw - board_end[3]
-        if np.isnan(m.heading_at_end_rad) and np.any(t >= self.plan.t_end):
-            k = int(np.argmax(t >= self.plan.t_end))
+        at = (t >= self.plan.t_end) & ~np.isnan(yaw_error)  # a NaN is measured again at the next tick
+        if np.isnan(m.heading_at_end_rad) and np.any(at):
+            k = int(np.argmax(at))
             m.heading_at_end_rad = float(yaw_error[k])
             lateral = np.array([-np.sin(board_end[3]), np.cos(board_end[3])])
             m.lateral_at_end_m = float((states[k].deck_pos[0:2] - board_end[0:2]) @ lateral)
@@ -234,10 +232,16 @@ def _stacked(states: list[Any], name: str) -> np.ndarray:
 
 
 def _first(value: float, reached: np.ndarray, along: np.ndarray) -> float:
-    """``value`` if already measured, else ``along`` at the first tick ``reached``."""
-    if not np.isnan(value) or not reached.any():
+    """``value`` if measured, else ``along`` at the first tick ``reached`` where it is a number."""
+    at = reached & ~np.isnan(along)
+    if not np.isnan(value) or not at.any():
         return value
-    return float(along[int(np.argmax(reached))])
+    return float(along[int(np.argmax(at))])
+
+
+def _top(values: np.ndarray) -> float:
+    """The largest number of ``values`` (NaN if none), as a running ``max`` passes over a NaN."""
+    return float(np.fmax.reduce(values, axis=None))
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

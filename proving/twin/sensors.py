@@ -42,7 +42,10 @@ class MultibodyPlant(Protocol):
 
     def step(self, tau: np.ndarray, n: int = 1) -> None: ...
 
-    def state(self) -> Any: ...
+    def state(self) -> Any:
+        """The plant now, a state of its own: the run's meter keeps up to a chunk of them before it
+        measures them, so no later step may change one."""
+        ...
 
 
 
