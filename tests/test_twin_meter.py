@@ -8,13 +8,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
 from skatelib.library.channels import GROUND
 from skatelib.proving.twin import metrics
 from skatelib.proving.twin.metrics import Meter, MeterPlan, TwinMeasures
+from skatelib.sim.twin_state import TwinState
 
 TICK_S = 0.002
 N = 1000  # 2 s: past the entry's end (0.9 s) and a second after it
@@ -22,36 +22,7 @@ LIMIT_NM = 5.0
 AXLE_Z = -0.07
 
 
-@dataclass
-class State:
-    t: float
-    trunk_pos: np.ndarray
-    deck_pos: np.ndarray
-    deck_R: np.ndarray
-    deck_v: np.ndarray
-    deck_omega: np.ndarray
-    foot_centres: np.ndarray
-    foot_velocities: np.ndarray
-    foot_touch: np.ndarray
-    contact_points: np.ndarray
-    foot_spins: np.ndarray
-    foot_load_N: np.ndarray
-    wheel_load_N: np.ndarray
-    wheel_force_N: np.ndarray
-    system_v: np.ndarray
-    system_mass_kg: float = 10.0
-    floor_touches: tuple[str, ...] = field(default=())
-
-    @property
-    def deck_yaw(self) -> float:
-        return float(np.arctan2(self.deck_R[1, 0], self.deck_R[0, 0]))
-
-    @property
-    def deck_roll(self) -> float:
-        return float(np.arctan2(self.deck_R[2, 1], self.deck_R[2, 2]))
-
-
-def _states(seed: int, rolling_mps: float = 0.5, nan: bool = False) -> list[State]:
+def _states(seed: int, rolling_mps: float = 0.5, nan: bool = False) -> list[TwinState]:
     """Stances opening and closing at random ticks (two ending on one tick), a wheel off the floor
     across the first chunk's end, the deck rolling at ``rolling_mps`` along its heading; with
     ``nan`` a NaN in a wheel load, the system's velocity and the deck's attitude on single ticks."""
@@ -79,13 +50,14 @@ def _states(seed: int, rolling_mps: float = 0.5, nan: bool = False) -> list[Stat
             loads[0] = -1.0  # below every other load, on a tick passed over
         if nan and k in (449, 700):
             R = R * math.nan
-        out.append(State(
-            t=k * TICK_S, trunk_pos=rng.normal(size=3), deck_pos=rng.normal(size=3), deck_R=R,
+        out.append(TwinState(
+            t=k * TICK_S, trunk_pos=rng.normal(size=3), trunk_R=np.eye(3), trunk_v=np.zeros(3),
+            trunk_omega=np.zeros(3), q=np.zeros(12), qd=np.zeros(12), deck_pos=rng.normal(size=3), deck_R=R,
             deck_v=deck_v, deck_omega=rng.normal(0.0, 0.01, 3), foot_centres=rng.normal(size=(3, 4)),
             foot_velocities=rng.normal(0.0, 0.01, (3, 4)), foot_touch=touch.copy(),
             contact_points=rng.normal(size=(3, 4)),
             foot_spins=rng.normal(0.0, 0.01, (3, 4)), foot_load_N=rng.normal(10, 3, 4), wheel_load_N=loads,
-            wheel_force_N=rng.normal(size=3), system_v=system_v,
+            wheel_force_N=rng.normal(size=3), system_v=system_v, system_mass_kg=10.0,
             floor_touches=("knee",) if k in (611, 650) else ()))
     return out
 
@@ -107,7 +79,7 @@ def _taus() -> np.ndarray:
     return taus
 
 
-def _metered(states: list[State]) -> Meter:
+def _metered(states: list[TwinState]) -> Meter:
     meter = Meter(TICK_S, LIMIT_NM, PLAN, axle_below_deck_m=-AXLE_Z)
     for st, tau in zip(states, _taus(), strict=True):
         meter.tick(st.t + TICK_S, st, tau)
@@ -115,7 +87,7 @@ def _metered(states: list[State]) -> Meter:
     return meter
 
 
-def _slips(states: list[State]) -> list[float]:
+def _slips(states: list[TwinState]) -> list[float]:
     """Each stance's largest integrated slip, in the order the stances end (by foot within a tick)."""
     slip, peak, touching = np.zeros((3, 4)), np.zeros(4), np.zeros(4, dtype=bool)
     slips: list[float] = []
@@ -136,7 +108,7 @@ def _slips(states: list[State]) -> list[float]:
     return slips + [float(s) for s, t in zip(peak, touching, strict=True) if t]
 
 
-def _reference(states: list[State]) -> TwinMeasures:
+def _reference(states: list[TwinState]) -> TwinMeasures:
     """The figures tick by tick, written plainly with Python's max and min (which pass over a NaN
     on their right)."""
     m = TwinMeasures(slips_m=_slips(states))
@@ -184,7 +156,7 @@ def _reference(states: list[State]) -> TwinMeasures:
 
 
 @functools.cache
-def _case(nan: bool) -> tuple[list[State], TwinMeasures]:
+def _case(nan: bool) -> tuple[list[TwinState], TwinMeasures]:
     """The states of seed 3 and their reference figures (computed once a run)."""
     states = _states(3, nan=nan)
     return states, _reference(states)
