@@ -112,6 +112,7 @@ static void feet(const mjModel *m, const mjData *d, const twin_t *t, double *s)
     for (int i = 0; i < 4; i++) s[S_TOUCH + i] = s[S_FOOT_LOAD + i] = 0.0;
     for (int k = 0; k < d->ncon; k++) {
         const mjContact *c = d->contact + k;
+        if (c->geom[0] < 0 || c->geom[1] < 0) continue;  /* a flex's contact: the twin has none */
         int a = t->foot_of[c->geom[0]], b = t->foot_of[c->geom[1]];
         if (a < 0 && b < 0) continue;
         mj_contactForce(m, d, k, f);
@@ -134,7 +135,7 @@ static void stray(const mjData *d, const twin_t *t, double *s)
     int n = 0;
     for (int k = 0; k < d->ncon; k++) {
         int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
-        if (g1 != t->roll.floor && g2 != t->roll.floor) continue;
+        if (g1 < 0 || g2 < 0 || (g1 != t->roll.floor && g2 != t->roll.floor)) continue;
         int other = g1 == t->roll.floor ? g2 : g1, seen = 0;
         if (t->planned[other]) continue;
         for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[S_STRAY + j] == other;
