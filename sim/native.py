@@ -25,6 +25,10 @@ S_T, S_TRUNK_POS, S_TRUNK_R, S_TRUNK_V, S_TRUNK_W, S_Q, S_QD = 0, 1, 4, 13, 16, 
 S_DECK_POS, S_DECK_R, S_DECK_V, S_DECK_W, S_CENTRES, S_FOOT_V, S_SPINS, S_POINTS = 43, 46, 55, 58, 61, 73, 85, 97
 S_FOOT_LOAD, S_WHEEL_LOAD, S_WHEEL_FORCE, S_SYSTEM_V, S_TOUCH, S_N_STRAY, S_STRAY = 109, 113, 117, 120, 123, 127, 128
 N_STRAY, S_N = 8, 136
+# twin_tick.c's humanoid truth layout (the joint torques after H_N)
+H_T, H_COM, H_COM_V, H_BASE_POS, H_BASE_R, H_FORCE, H_SOLE_ZMP, H_ZMP = 0, 1, 4, 7, 10, 19, 25, 29
+H_SOLE_POS, H_YAW, H_SOLE_V, H_WZ, H_DECK_POS, H_DECK_R, H_DECK_V, H_N_STRAY, H_STRAY, H_N = (
+    31, 37, 39, 45, 47, 50, 59, 62, 63, 71)
 
 _I, _D = ctypes.c_int, ctypes.c_double
 _P = ctypes.c_void_p
@@ -45,6 +49,14 @@ class TwinTables(ctypes.Structure):
     _fields_ = [("roll", RollingTables), ("robot_act", _I * 12), ("deck_geom", _I), ("feet", _I * 4),
                 ("foot_radius", _D), ("trunk", _I), ("deck", _I), ("trunk_q", _I), ("trunk_v", _I), ("deck_v", _I),
                 ("qadr", _I * 12), ("dadr", _I * 12), ("foot_of", ctypes.c_void_p), ("planned", ctypes.c_void_p)]
+
+
+class HumanoidTables(ctypes.Structure):
+    """twin_tick.c's ``hum_t``: the humanoid twin's root and deck bodies, the floor, the joint
+    actuators, the soles' bodies and geoms, half a sole's thickness, the geoms planned on the floor."""
+
+    _fields_ = [("root", _I), ("deck", _I), ("floor", _I), ("n_act", _I), ("feet", _I * 2), ("soles", _I * 2),
+                ("half_sole", _D), ("act", ctypes.c_void_p), ("on_floor", ctypes.c_void_p)]
 
 
 def rolling_tables(r: Any) -> RollingTables:
@@ -88,7 +100,8 @@ def twin_library() -> ctypes.CDLL | None:
             native_code.load_once(_LIB, ("skatelib.sim", "twin_tick.c", "twin_tick"), ADVICE,
                                   {"twin_step": [_P] * 4 + [ctypes.c_int, _P],
                                    "twin_state": [_P] * 4,
-                                   "rolling_steps": [_P] * 3 + [ctypes.c_int, _P, ctypes.c_int, _P]},
+                                   "rolling_steps": [_P] * 3 + [ctypes.c_int, _P, ctypes.c_int, _P],
+                                   "humanoid_truth": [_P] * 3 + [_D, _P]},
                                   "the twin's C code is not available: its Python path runs, its rides about a "
                                   "third slower", extra=extra)
     return _LIB[0]
@@ -148,6 +161,28 @@ class CompiledSteps:
     def __call__(self, n: int) -> None:
         """``n`` physics steps."""
         self.lib.rolling_steps(*self._args, n, *self._after)
+
+
+class CompiledTruth:
+    """The humanoid twin's truth (:meth:`skatelib.sim.humanoid.plant.HumanoidPlant.truth`) read in C."""
+
+    def __init__(self, lib: ctypes.CDLL, plant: Any, half_sole_m: float):
+        self.lib, t = lib, HumanoidTables()
+        t.root, t.deck, t.floor, t.n_act = int(plant.root), int(plant.deck), int(plant.floor), len(plant.act)
+        t.feet[:] = [int(b) for b in plant.feet]
+        t.soles[:] = [int(g) for g in plant.soles]
+        t.half_sole = half_sole_m
+        self._act = np.ascontiguousarray(plant.act, dtype=np.intc)
+        self._on_floor = np.ascontiguousarray(plant.on_floor, dtype=np.uint8)
+        t.act, t.on_floor = self._act.ctypes.data, self._on_floor.ctypes.data
+        self.tables, self.size = t, H_N + len(plant.act)
+        self._args = (ctypes.c_void_p(plant.m._address), ctypes.c_void_p(plant.d._address), ctypes.addressof(t))
+
+    def __call__(self, plane_z: float) -> np.ndarray:
+        """The readout (a fresh vector, the ``H_`` layout)."""
+        s = np.empty(self.size)
+        self.lib.humanoid_truth(*self._args, plane_z, s.ctypes.data)
+        return s
 
 
 def readout(s: np.ndarray, system_mass_kg: float, floor_touches: tuple[str, ...]) -> TwinState:

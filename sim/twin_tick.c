@@ -182,3 +182,94 @@ void twin_state(const mjModel *m, mjData *d, const twin_t *t, double *s)
     mj_subtreeVel(m, d);
     for (int i = 0; i < 3; i++) s[S_SYSTEM_V + i] = d->subtree_linvel[i];
 }
+
+/* The humanoid twin's tables (skatelib.sim.native's HumanoidTables). */
+typedef struct {
+    int root, deck, floor, n_act;
+    int feet[2], soles[2];    /* the soles' bodies and box geoms, right then left */
+    double half_sole;         /* half the sole's thickness */
+    const int *act;           /* n_act joint actuators */
+    const unsigned char *on_floor;  /* ngeom: planned on the floor (the soles, the wheels) */
+} hum_t;
+
+/* The humanoid's truth layout (skatelib.sim.native's H_ offsets); the torques after H_N. */
+enum {
+    H_T = 0, H_COM = 1, H_COM_V = 4, H_BASE_POS = 7, H_BASE_R = 10, H_FORCE = 19, H_SOLE_ZMP = 25, H_ZMP = 29,
+    H_SOLE_POS = 31, H_YAW = 37, H_SOLE_V = 39, H_WZ = 45, H_DECK_POS = 47, H_DECK_R = 50, H_DECK_V = 59,
+    H_N_STRAY = 62, H_STRAY = 63, H_N = 71
+};
+
+/* The centre of pressure on the plane at height z of a force f with the moment tau about c (_cop). */
+static void cop(const double *f, const double *tau, const double *c, double z, double *out)
+{
+    double h = z - c[2];
+    out[0] = c[0] + (h * f[0] - tau[1]) / f[2];
+    out[1] = c[1] + (tau[0] + h * f[1]) / f[2];
+}
+
+/* What happened (HumanoidPlant.truth) into s (H_N + n_act): the soles' wrenches from their feet's
+ * cfrc_ext (a torque about the robot's COM and a force), the joint ZMP on the plane at plane_z. */
+void humanoid_truth(const mjModel *m, mjData *d, const hum_t *h, double plane_z, double *s)
+{
+    double w[6], tau[2][3], total_f[3], total_tau[3];
+    const double *c = d->subtree_com + 3 * h->root;
+    s[H_T] = d->time;
+    for (int j = 0; j < 2; j++) {
+        const double *ext = d->cfrc_ext + 6 * h->feet[j];
+        for (int x = 0; x < 3; x++) {
+            tau[j][x] = ext[x];
+            s[H_FORCE + 3 * j + x] = ext[3 + x];
+            s[H_SOLE_POS + 3 * j + x] = d->geom_xpos[3 * h->soles[j] + x];
+        }
+    }
+    const double *force = s + H_FORCE;
+    for (int j = 0; j < 2; j++) {
+        if (force[3 * j + 2] > 1.0)
+            cop(force + 3 * j, tau[j], c, s[H_SOLE_POS + 3 * j + 2] - h->half_sole, s + H_SOLE_ZMP + 2 * j);
+        else
+            s[H_SOLE_ZMP + 2 * j] = s[H_SOLE_ZMP + 2 * j + 1] = NAN;
+    }
+    for (int x = 0; x < 3; x++) {
+        total_f[x] = force[x] + force[3 + x];
+        total_tau[x] = tau[0][x] + tau[1][x];
+    }
+    if (total_f[2] > 1.0)
+        cop(total_f, total_tau, c, plane_z, s + H_ZMP);
+    else
+        s[H_ZMP] = s[H_ZMP + 1] = NAN;
+    for (int j = 0; j < 2; j++) {
+        const double *R = d->geom_xmat + 9 * h->soles[j];
+        s[H_YAW + j] = atan2(R[3], R[0]);
+        mj_objectVelocity(m, d, mjOBJ_GEOM, h->soles[j], w, 0);
+        for (int x = 0; x < 3; x++) s[H_SOLE_V + 3 * j + x] = w[3 + x];
+        s[H_WZ + j] = w[2];
+    }
+    mj_subtreeVel(m, d);
+    for (int x = 0; x < 3; x++) {
+        s[H_COM + x] = c[x];
+        s[H_COM_V + x] = d->subtree_linvel[3 * h->root + x];
+        s[H_BASE_POS + x] = d->xpos[3 * h->root + x];
+    }
+    memcpy(s + H_BASE_R, d->xmat + 9 * h->root, 9 * sizeof(double));
+    if (h->deck >= 0) {
+        mj_objectVelocity(m, d, mjOBJ_BODY, h->deck, w, 0);
+        for (int x = 0; x < 3; x++) {
+            s[H_DECK_POS + x] = d->xpos[3 * h->deck + x];
+            s[H_DECK_V + x] = w[3 + x];
+        }
+        memcpy(s + H_DECK_R, d->xmat + 9 * h->deck, 9 * sizeof(double));
+    }
+    int n = 0;
+    for (int k = 0; k < d->ncon; k++) {
+        int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
+        if (g1 < 0 || g2 < 0 || (g1 != h->floor && g2 != h->floor)) continue;
+        int other = g1 == h->floor ? g2 : g1, seen = 0;
+        if (h->on_floor[other]) continue;
+        for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[H_STRAY + j] == other;
+        if (seen) continue;
+        if (n < N_STRAY) s[H_STRAY + n] = other;
+        n += n <= N_STRAY;
+    }
+    s[H_N_STRAY] = n;
+    for (int i = 0; i < h->n_act; i++) s[H_N + i] = d->actuator_force[h->act[i]];
+}

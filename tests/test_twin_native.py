@@ -115,10 +115,23 @@ def test_without_a_compiler_the_python_twin_runs(figures, monkeypatch, tmp_path)
     _assert_same(p.state(), compiled.state())
 
 
+def _same_truth(a, b) -> bool:
+    """Every field of two humanoid truths equal (NaN to NaN)."""
+    for field in dataclasses.fields(a):
+        x, y = getattr(a, field.name), getattr(b, field.name)
+        if isinstance(x, tuple) or x is None or y is None:
+            if x != y if isinstance(x, tuple) else (x is None) != (y is None):
+                return False
+        elif not np.array_equal(x, y, equal_nan=True):
+            return False
+    return True
+
+
 def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
-    """The humanoid skate's twin under its default errors and a shove: the physics steps in C (the
-    shove, the board's rolling torques) give the Python loop's states to the bit, tick by tick;
-    a shove 1 N stronger in the C plant is seen."""
+    """The humanoid skate's twin under its default errors and a shove: the physics steps and the
+    ground truth in C (the shove, the board's rolling torques; the soles' wrenches, ZMPs and
+    velocities, the deck) give the Python loop's states and truths to the bit, tick by tick; a
+    shove 1 N stronger in the C plant is seen."""
     from skatelib.proving.humanoid.loop import figures_for
     from skatelib.runtime import MotionLibrary
     from skatelib.sim.humanoid.errors import DEFAULT_HUMANOID_PERTURBATION, parse_humanoid_perturbation
@@ -138,10 +151,11 @@ def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
                 p.step(target, 2)
             gap = max(gap, float(np.max(np.abs(c.d.qpos - py.d.qpos))))
             same &= all(np.array_equal(getattr(c.d, a), getattr(py.d, a)) for a in FIELDS)
+            same &= _same_truth(c.truth(0.012), py.truth(0.012))
         return same, gap
 
     c, py = HumanoidPlant(f, errors), HumanoidPlant(f, errors, compiled=False)
-    assert c._steps is not None and py._steps is None and c.rolling is not None
+    assert c._steps is not None and py._steps is None and c._truth is not None and c.rolling is not None
     assert run(c, py) == (True, 0.0)
     stronger = HumanoidPlant(f, dataclasses.replace(errors, shove_N=errors.shove_N + 1.0))
     same, gap = run(stronger, HumanoidPlant(f, errors, compiled=False))

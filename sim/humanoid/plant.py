@@ -5,7 +5,7 @@ controller (the COM, the soles' contacts and slip, the links touching the floor)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
 
 import numpy as np
 from skatelib.sim.contacts import stray_on_floor
@@ -18,64 +18,11 @@ from skatelib.sim.humanoid.figures import (
     HumanoidFigures,
 )
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
-from skatelib.sim.native import CompiledSteps, twin_library
+from skatelib.sim.humanoid.state import Readings, Truth
+from skatelib.sim.native import CompiledSteps, CompiledTruth, twin_library
 from skatelib.sim.rolling import WHEELS, RollingResistance
 
-
-@dataclass(frozen=True)
-class Readings:
-    """The robot's sensors at one instant (noise included).
-
-    Attributes:
-        imu_quat_wxyz / imu_gyro: The waist's orientation and its rate in the waist frame.
-        ft_force / ft_torque: (2, 3) right then left: the wrench the ground side exerts on the foot
-            below each ankle sensor, in the foot frame, about the sensor's point.
-    """
-
-    t: float
-    q: np.ndarray
-    qd: np.ndarray
-    imu_quat_wxyz: np.ndarray
-    imu_gyro: np.ndarray
-    ft_force: np.ndarray
-    ft_torque: np.ndarray
-
-
-@dataclass(frozen=True)
-class Truth:
-    """What happened (world frame): the COM, each sole's contact and the other links on the floor.
-
-    Attributes:
-        sole_force: (2, 3) the floor's (or a skate's deck's) force on each sole box; sole_zmp (2, 2)
-            its centre of pressure on the plane of its bottom (NaN without contact); zmp (2,) both
-            soles' together, on the plane ``truth``'s ``plane_z`` names.
-        sole_pos / sole_yaw: (2, 3) / (2,) the soles' frames; sole_v / sole_wz their velocity and
-            yaw rate.
-    """
-
-    t: float
-    com: np.ndarray
-    com_v: np.ndarray
-    base_pos: np.ndarray
-    base_R: np.ndarray
-    sole_force: np.ndarray
-    sole_zmp: np.ndarray
-    zmp: np.ndarray
-    sole_pos: np.ndarray
-    sole_yaw: np.ndarray
-    sole_v: np.ndarray
-    sole_wz: np.ndarray
-    torque: np.ndarray
-    floor_touches: tuple[str, ...]
-    deck_pos: np.ndarray | None = None  # a skate's deck: its top's centre (3,), orientation (3, 3) and velocity (3,)
-    deck_R: np.ndarray | None = None
-    deck_v: np.ndarray | None = None
-
-    def on_deck(self, p: np.ndarray) -> np.ndarray:
-        """World points (..., 3) in the deck's frame (its top's centre, x forward)."""
-        if self.deck_pos is None or self.deck_R is None:
-            raise ValueError("the twin has no board")
-        return np.asarray((np.asarray(p) - self.deck_pos) @ self.deck_R)
+__all__ = ["HumanoidPlant", "Readings", "Truth"]
 
 
 class HumanoidPlant:
@@ -133,10 +80,12 @@ class HumanoidPlant:
         self._gpos, self._gmat, self._xpos, self._xmat = d.geom_xpos, d.geom_xmat, d.xpos, d.xmat
         self._torques = d.actuator_force
         self._steps: CompiledSteps | None = None
+        self._truth: CompiledTruth | None = None
         lib = twin_library() if compiled else None
         if lib is not None:
             e = self.errors
             self._steps = CompiledSteps(lib, m, d, self.rolling, (self.root, e.shove_N, e.shove_t_s, SHOVE_S))
+            self._truth = CompiledTruth(lib, self, SOLE_THICKNESS_M / 2)
 
     @property
     def timestep_s(self) -> float:
@@ -202,13 +151,20 @@ class HumanoidPlant:
         d, m = self.d, self.m
         if d.ncon == 0:
             return ()
-        stray = stray_on_floor(d.contact.geom1, d.contact.geom2, self.floor, self.on_floor)
+        stray = self._stray()
         return tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray}))
+
+    def _stray(self) -> set[int]:
+        """The geoms on the floor other than the soles and the wheels (ids)."""
+        d = self.d
+        return stray_on_floor(d.contact.geom1, d.contact.geom2, self.floor, self.on_floor) if d.ncon else set()
 
     def truth(self, plane_z: float = 0.0) -> Truth:
         """What happened; the soles' joint ZMP on the plane at height ``plane_z`` [m]."""
         import mujoco
 
+        if self._truth is not None:
+            return self._compiled_truth(self._truth(plane_z))
         m, d = self.m, self.d
         # A sole's box touches the floor and the deck alone (its foot's other geoms touch nothing):
         # its foot's external force is its contacts' (MuJoCo's cfrc_ext, computed for the ankle
@@ -222,7 +178,7 @@ class HumanoidPlant:
                 zmp[s] = _cop(force[s], tau[s], c, float(pos[s, 2]) - SOLE_THICKNESS_M / 2)
         total_f, total_tau = force.sum(axis=0), tau.sum(axis=0)
         both = _cop(total_f, total_tau, c, plane_z) if total_f[2] > 1.0 else np.full(2, np.nan)
-        yaw = np.arctan2(R[:, 3], R[:, 0])
+        yaw = np.array([math.atan2(R[s, 3], R[s, 0]) for s in (0, 1)])  # the C library's, as the C path
         v, wz, w = np.zeros((2, 3)), np.zeros(2), np.zeros(6)
         for s, g in enumerate(self.soles):
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, g, w, 0)
@@ -235,6 +191,21 @@ class HumanoidPlant:
         return Truth(float(d.time), c.copy(), self._comvel[self.root].copy(), self._xpos[self.root].copy(),
                      self._xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw, v, wz,
                      self._torques[self.act], self._floor_touches(), *deck)
+
+    def _compiled_truth(self, s: np.ndarray) -> Truth:
+        """A :class:`Truth` of views of the C path's readout ``s`` (:mod:`skatelib.sim.native`'s layout)."""
+        from skatelib.sim import native as n
+
+        k, m = int(s[n.H_N_STRAY]), self.m
+        stray = s[n.H_STRAY:n.H_STRAY + k].astype(int) if k <= n.N_STRAY else self._stray()
+        names = tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray}))
+        deck = (s[n.H_DECK_POS:n.H_DECK_POS + 3], s[n.H_DECK_R:n.H_DECK_R + 9].reshape(3, 3),
+                s[n.H_DECK_V:n.H_DECK_V + 3]) if self.deck >= 0 else (None, None, None)
+        return Truth(float(s[n.H_T]), s[n.H_COM:n.H_COM + 3], s[n.H_COM_V:n.H_COM_V + 3],
+                     s[n.H_BASE_POS:n.H_BASE_POS + 3], s[n.H_BASE_R:n.H_BASE_R + 9].reshape(3, 3),
+                     s[n.H_FORCE:n.H_FORCE + 6].reshape(2, 3), s[n.H_SOLE_ZMP:n.H_SOLE_ZMP + 4].reshape(2, 2),
+                     s[n.H_ZMP:n.H_ZMP + 2], s[n.H_SOLE_POS:n.H_SOLE_POS + 6].reshape(2, 3), s[n.H_YAW:n.H_YAW + 2],
+                     s[n.H_SOLE_V:n.H_SOLE_V + 6].reshape(2, 3), s[n.H_WZ:n.H_WZ + 2], s[n.H_N:], names, *deck)
 
 
 def _cop(f: np.ndarray, tau: np.ndarray, c: np.ndarray, z: float) -> np.ndarray:
