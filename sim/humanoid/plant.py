@@ -6,6 +6,7 @@ controller (the COM, the soles' contacts and slip, the links touching the floor)
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from skatelib.sim.contacts import stray_on_floor
@@ -30,9 +31,9 @@ class HumanoidPlant:
 
     def __init__(self, f: HumanoidFigures, errors: HumanoidErrors | None = None, seed: int = 0,
                  compiled: bool = True):
-        """``compiled``: the physics steps (the shove, a board's rolling torques) in C
-        (:mod:`skatelib.sim.native`) where it can be built; False keeps the Python loop (the same
-        states to the bit)."""
+        """``compiled``: the physics steps (the shove, a board's rolling torques) and the ground
+        truth in C (:mod:`skatelib.sim.native`) where it can be built; False keeps the Python path
+        (the same states and truths to the bit)."""
         import mujoco
 
         self.f, self.errors = f, errors or HumanoidErrors()
@@ -148,11 +149,12 @@ class HumanoidPlant:
 
     def _floor_touches(self) -> tuple[str, ...]:
         """The geoms on the floor other than the soles and the board's wheels, by name."""
-        d, m = self.d, self.m
-        if d.ncon == 0:
-            return ()
-        stray = self._stray()
-        return tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray}))
+        return self._names(self._stray())
+
+    def _names(self, geoms: Any) -> tuple[str, ...]:
+        """The geoms' names (their bodies' for unnamed ones), sorted."""
+        m = self.m
+        return tuple(sorted({m.geom(int(g)).name or m.body(m.geom_bodyid[int(g)]).name for g in geoms}))
 
     def _stray(self) -> set[int]:
         """The geoms on the floor other than the soles and the wheels (ids)."""
@@ -196,9 +198,8 @@ class HumanoidPlant:
         """A :class:`Truth` of views of the C path's readout ``s`` (:mod:`skatelib.sim.native`'s layout)."""
         from skatelib.sim import native as n
 
-        k, m = int(s[n.H_N_STRAY]), self.m
-        stray = s[n.H_STRAY:n.H_STRAY + k].astype(int) if k <= n.N_STRAY else self._stray()
-        names = tuple(sorted({m.geom(g).name or m.body(m.geom_bodyid[g]).name for g in stray}))
+        k = int(s[n.H_N_STRAY])
+        names = self._names(s[n.H_STRAY:n.H_STRAY + k].astype(int) if k <= n.N_STRAY else self._stray())
         deck = (s[n.H_DECK_POS:n.H_DECK_POS + 3], s[n.H_DECK_R:n.H_DECK_R + 9].reshape(3, 3),
                 s[n.H_DECK_V:n.H_DECK_V + 3]) if self.deck >= 0 else (None, None, None)
         return Truth(float(s[n.H_T]), s[n.H_COM:n.H_COM + 3], s[n.H_COM_V:n.H_COM_V + 3],
