@@ -1,8 +1,8 @@
-"""The twins' physics steps and the quadruped twin's readout compiled (``twin_tick.c``): the
-rolling torques before each physics step (and the humanoid's shove) and
-:meth:`skatelib.sim.plant.TwinPlant.state`'s readout, the same MuJoCo calls and arithmetic as the
-Python path (:mod:`skatelib.sim.rolling`, :mod:`skatelib.sim.contacts`), one ctypes call each per
-tick. Built against the MuJoCo package's own headers and library, on the bindings' model and data,
+"""The twins' physics steps and readouts compiled (``twin_tick.c``): the rolling torques before each
+physics step (and the humanoid's shove), :meth:`skatelib.sim.plant.TwinPlant.state`'s readout and
+the humanoid's ground truth (:meth:`skatelib.sim.humanoid.plant.HumanoidPlant.truth`), the same
+MuJoCo calls and arithmetic as the Python path (:mod:`skatelib.sim.rolling`,
+:mod:`skatelib.sim.contacts`, the plants' own), one ctypes call each per tick. Built against the MuJoCo package's own headers and library, on the bindings' model and data,
 and kept as the controller's C code is (:mod:`skatelib.library.native_code`). Without a C compiler,
 or a MuJoCo package without its C headers, the Python path runs (a warning says why); both give the
 same states to the bit.
@@ -88,7 +88,7 @@ def mujoco_build() -> tuple[list[str], str]:
 
 
 def twin_library() -> ctypes.CDLL | None:
-    """The compiled step and readout (built on first use, then loaded from the cache), or None
+    """The compiled steps and readouts (built on first use, then loaded from the cache), or None
     (the Python path then runs; a warning says why)."""
     if not _LIB:
         extra, why = mujoco_build()
