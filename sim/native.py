@@ -2,10 +2,11 @@
 physics step (and the humanoid's shove), :meth:`skatelib.sim.plant.TwinPlant.state`'s readout and
 the humanoid's ground truth (:meth:`skatelib.sim.humanoid.plant.HumanoidPlant.truth`), the same
 MuJoCo calls and arithmetic as the Python path (:mod:`skatelib.sim.rolling`,
-:mod:`skatelib.sim.contacts`, the plants' own), one ctypes call each per tick. Built against the MuJoCo package's own headers and library, on the bindings' model and data,
-and kept as the controller's C code is (:mod:`skatelib.library.native_code`). Without a C compiler,
-or a MuJoCo package without its C headers, the Python path runs (a warning says why); both give the
-same states to the bit.
+:mod:`skatelib.sim.contacts`, the plants' own), one ctypes call each per tick. Built against the
+MuJoCo package's own headers and library, on the bindings' model and data, and kept as the
+controller's C code is (:mod:`skatelib.library.native_code`). Without a C compiler, or a MuJoCo
+package without its C headers, the Python path runs (a warning says why); both give the same
+states to the bit.
 """
 
 from __future__ import annotations

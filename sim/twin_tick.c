@@ -128,22 +128,23 @@ static void feet(const mjModel *m, const mjData *d, const twin_t *t, double *s)
     }
 }
 
-/* The geoms other than feet and wheels on the floor (sim.contacts.stray_on_floor), each once;
- * more than N_STRAY: the count N_STRAY + 1 (the caller reads them from the contacts). */
-static void stray(const mjData *d, const twin_t *t, double *s)
+/* The geoms on the floor that are not planned there (sim.contacts.stray_on_floor), each once, into
+ * ids (N_STRAY) and their count into *count; more than N_STRAY: the count N_STRAY + 1 (the caller
+ * reads them from the contacts). */
+static void stray(const mjData *d, int floor, const unsigned char *planned, double *count, double *ids)
 {
     int n = 0;
     for (int k = 0; k < d->ncon; k++) {
         int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
-        if (g1 < 0 || g2 < 0 || (g1 != t->roll.floor && g2 != t->roll.floor)) continue;
-        int other = g1 == t->roll.floor ? g2 : g1, seen = 0;
-        if (t->planned[other]) continue;
-        for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[S_STRAY + j] == other;
+        if (g1 < 0 || g2 < 0 || (g1 != floor && g2 != floor)) continue;
+        int other = g1 == floor ? g2 : g1, seen = 0;
+        if (planned[other]) continue;
+        for (int j = 0; j < n && j < N_STRAY; j++) seen |= ids[j] == other;
         if (seen) continue;
-        if (n < N_STRAY) s[S_STRAY + n] = other;
+        if (n < N_STRAY) ids[n] = other;
         n += n <= N_STRAY;
     }
-    s[S_N_STRAY] = n;
+    *count = n;
 }
 
 /* The twin now (TwinPlant.state) into s (S_N): the contact forces those of the last step. */
@@ -178,7 +179,7 @@ void twin_state(const mjModel *m, mjData *d, const twin_t *t, double *s)
     }
     wheel_forces(m, d, &t->roll, s + S_WHEEL_LOAD, s + S_WHEEL_FORCE);
     feet(m, d, t, s);
-    stray(d, t, s);
+    stray(d, t->roll.floor, t->planned, s + S_N_STRAY, s + S_STRAY);
     mj_subtreeVel(m, d);
     for (int i = 0; i < 3; i++) s[S_SYSTEM_V + i] = d->subtree_linvel[i];
 }
@@ -259,17 +260,6 @@ void humanoid_truth(const mjModel *m, mjData *d, const hum_t *h, double plane_z,
         }
         memcpy(s + H_DECK_R, d->xmat + 9 * h->deck, 9 * sizeof(double));
     }
-    int n = 0;
-    for (int k = 0; k < d->ncon; k++) {
-        int g1 = d->contact[k].geom[0], g2 = d->contact[k].geom[1];
-        if (g1 < 0 || g2 < 0 || (g1 != h->floor && g2 != h->floor)) continue;
-        int other = g1 == h->floor ? g2 : g1, seen = 0;
-        if (h->on_floor[other]) continue;
-        for (int j = 0; j < n && j < N_STRAY; j++) seen |= s[H_STRAY + j] == other;
-        if (seen) continue;
-        if (n < N_STRAY) s[H_STRAY + n] = other;
-        n += n <= N_STRAY;
-    }
-    s[H_N_STRAY] = n;
+    stray(d, h->floor, h->on_floor, s + H_N_STRAY, s + H_STRAY);
     for (int i = 0; i < h->n_act; i++) s[H_N + i] = d->actuator_force[h->act[i]];
 }
