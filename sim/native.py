@@ -102,7 +102,8 @@ def twin_library() -> ctypes.CDLL | None:
                                   {"twin_step": [_P] * 4 + [ctypes.c_int, _P],
                                    "twin_state": [_P] * 4,
                                    "rolling_steps": [_P] * 3 + [ctypes.c_int, _P, ctypes.c_int, _P],
-                                   "humanoid_truth": [_P] * 3 + [_D, _P]},
+                                   "humanoid_truth": [_P] * 3 + [_D, _P],
+                                   "humanoid_sense": [_P, ctypes.c_int] + [_P] * 4},
                                   "the twin's C code is not available: its Python path runs, its rides about a "
                                   "third slower", extra=extra)
     return _LIB[0]
@@ -184,6 +185,25 @@ class CompiledTruth:
         s = np.empty(self.size)
         self.lib.humanoid_truth(*self._args, plane_z, s.ctypes.data)
         return s
+
+
+class CompiledSense:
+    """The humanoid's sensors read in C (:meth:`skatelib.sim.humanoid.plant.HumanoidPlant.readings`):
+    element i of the readout is ``kind[i]``'s source (0 sensordata, 1 minus sensordata, 2 qpos,
+    3 qvel) at ``idx[i]``, plus the noise's element i; the first four, the IMU's quaternion, unit."""
+
+    def __init__(self, lib: ctypes.CDLL, d: Any, kind: np.ndarray, idx: np.ndarray):
+        self.lib = lib
+        self._kind = np.ascontiguousarray(kind, dtype=np.intc)
+        self._idx = np.ascontiguousarray(idx, dtype=np.intc)
+        self.size = len(self._kind)
+        self._args = (ctypes.c_void_p(d._address), self.size, self._kind.ctypes.data, self._idx.ctypes.data)
+
+    def __call__(self, noise: np.ndarray) -> np.ndarray:
+        """The readout (a fresh vector) with ``noise`` (float64, contiguous, as long)."""
+        out = np.empty(self.size)
+        self.lib.humanoid_sense(*self._args, noise.ctypes.data, out.ctypes.data)
+        return out
 
 
 def readout(s: np.ndarray, system_mass_kg: float, floor_touches: tuple[str, ...]) -> TwinState:

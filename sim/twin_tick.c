@@ -263,3 +263,16 @@ void humanoid_truth(const mjModel *m, mjData *d, const hum_t *h, double plane_z,
     stray(d, h->floor, h->on_floor, s + H_N_STRAY, s + H_STRAY);
     for (int i = 0; i < h->n_act; i++) s[H_N + i] = d->actuator_force[h->act[i]];
 }
+
+/* The humanoid's sensors (HumanoidPlant.readings) into out (n): out[i] the kind[i] source's
+ * element idx[i] (0: sensordata, 1: minus sensordata, 2: qpos, 3: qvel) plus noise[i]; then
+ * out[0..3], the IMU's quaternion, made unit. */
+void humanoid_sense(const mjData *d, int n, const int *kind, const int *idx, const double *noise, double *out)
+{
+    for (int i = 0; i < n; i++) {
+        double v = kind[i] <= 1 ? d->sensordata[idx[i]] : kind[i] == 2 ? d->qpos[idx[i]] : d->qvel[idx[i]];
+        out[i] = (kind[i] == 1 ? -v : v) + noise[i];
+    }
+    double norm = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3]);
+    for (int i = 0; i < 4; i++) out[i] = out[i] / norm;
+}

@@ -116,7 +116,7 @@ def test_without_a_compiler_the_python_twin_runs(figures, monkeypatch, tmp_path)
 
 
 def _same_truth(a, b) -> bool:
-    """Every field of two humanoid truths equal (NaN to NaN)."""
+    """Every field of two humanoid truths (or readings) equal (NaN to NaN)."""
     for field in dataclasses.fields(a):
         x, y = getattr(a, field.name), getattr(b, field.name)
         if isinstance(x, tuple) or x is None or y is None:
@@ -128,10 +128,11 @@ def _same_truth(a, b) -> bool:
 
 
 def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
-    """The humanoid skate's twin under its default errors and a shove: the physics steps and the
-    ground truth in C (the shove, the board's rolling torques; the soles' wrenches, ZMPs and
-    velocities, the deck) give the Python loop's states and truths to the bit, tick by tick; a
-    shove 1 N stronger in the C plant is seen."""
+    """The humanoid skate's twin under its default errors and a shove: the physics steps, the
+    sensors and the ground truth in C (the shove, the board's rolling torques; the noisy readings;
+    the soles' wrenches, ZMPs and velocities, the deck) give the Python path's states, readings and
+    truths to the bit, tick by tick (the two plants draw the same noise); a shove 1 N stronger in
+    the C plant is seen."""
     from skatelib.proving.humanoid.loop import figures_for
     from skatelib.runtime import MotionLibrary
     from skatelib.sim.humanoid.errors import DEFAULT_HUMANOID_PERTURBATION, parse_humanoid_perturbation
@@ -151,11 +152,12 @@ def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
                 p.step(target, 2)
             gap = max(gap, float(np.max(np.abs(c.d.qpos - py.d.qpos))))
             same &= all(np.array_equal(getattr(c.d, a), getattr(py.d, a)) for a in FIELDS)
-            same &= _same_truth(c.truth(0.012), py.truth(0.012))
+            same &= _same_truth(c.truth(0.012), py.truth(0.012)) and _same_truth(c.readings(), py.readings())
         return same, gap
 
     c, py = HumanoidPlant(f, errors), HumanoidPlant(f, errors, compiled=False)
-    assert c._steps is not None and py._steps is None and c._truth is not None and c.rolling is not None
+    assert c._steps is not None and py._steps is None and c._truth is not None and c._sense is not None
+    assert c.rolling is not None and errors.force_noise_N > 0
     assert run(c, py) == (True, 0.0)
     stronger = HumanoidPlant(f, dataclasses.replace(errors, shove_N=errors.shove_N + 1.0))
     same, gap = run(stronger, HumanoidPlant(f, errors, compiled=False))

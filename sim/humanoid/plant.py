@@ -20,7 +20,7 @@ from skatelib.sim.humanoid.figures import (
 )
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
 from skatelib.sim.humanoid.state import Readings, Truth
-from skatelib.sim.native import CompiledSteps, CompiledTruth, twin_library
+from skatelib.sim.native import CompiledSense, CompiledSteps, CompiledTruth, twin_library
 from skatelib.sim.rolling import WHEELS, RollingResistance
 
 __all__ = ["HumanoidPlant", "Readings", "Truth"]
@@ -31,9 +31,9 @@ class HumanoidPlant:
 
     def __init__(self, f: HumanoidFigures, errors: HumanoidErrors | None = None, seed: int = 0,
                  compiled: bool = True):
-        """``compiled``: the physics steps (the shove, a board's rolling torques) and the ground
-        truth in C (:mod:`skatelib.sim.native`) where it can be built; False keeps the Python path
-        (the same states and truths to the bit)."""
+        """``compiled``: the physics steps (the shove, a board's rolling torques), the sensors and
+        the ground truth in C (:mod:`skatelib.sim.native`) where it can be built; False keeps the
+        Python path (the same states, readings and truths to the bit)."""
         import mujoco
 
         self.f, self.errors = f, errors or HumanoidErrors()
@@ -82,11 +82,21 @@ class HumanoidPlant:
         self._torques = d.actuator_force
         self._steps: CompiledSteps | None = None
         self._truth: CompiledTruth | None = None
+        self._sense: CompiledSense | None = None
         lib = twin_library() if compiled else None
         if lib is not None:
-            e = self.errors
-            self._steps = CompiledSteps(lib, m, d, self.rolling, (self.root, e.shove_N, e.shove_t_s, SHOVE_S))
-            self._truth = CompiledTruth(lib, self, SOLE_THICKNESS_M / 2)
+            self._compiled(lib)
+
+    def _compiled(self, lib: Any) -> None:
+        """The steps, the sensors and the truth in C (:mod:`skatelib.sim.native`)."""
+        e, m, d = self.errors, self.m, self.d
+        self._steps = CompiledSteps(lib, m, d, self.rolling, (self.root, e.shove_N, e.shove_t_s, SHOVE_S))
+        self._truth = CompiledTruth(lib, self, SOLE_THICKNESS_M / 2)
+        # the readings' sources in the noise's order: quaternion, forces, torques, angles, rates, gyro
+        parts = ((0, self._quat), (1, self._force.ravel()), (1, self._torque.ravel()), (2, self.qadr),
+                 (3, self.dadr), (0, self._gyro))
+        self._sense = CompiledSense(lib, d, np.concatenate([np.full(len(i), k) for k, i in parts]),
+                                    np.concatenate([i for _, i in parts]))
 
     @property
     def timestep_s(self) -> float:
@@ -140,12 +150,16 @@ class HumanoidPlant:
         rates, gyro."""
         sd, d, n = self._sd, self.d, len(self.qadr)
         noise = self.rng.normal(0.0, self._noise_scale)
+        if self._sense is not None:
+            r = self._sense(noise)
+            return Readings(float(d.time), r[16:16 + n], r[16 + n:16 + 2 * n], r[0:4], r[16 + 2 * n:],
+                            r[4:10].reshape(2, 3), r[10:16].reshape(2, 3))
         quat = sd[self._quat] + noise[0:4]
         force = -sd[self._force] + noise[4:10].reshape(2, 3)
         torque = -sd[self._torque] + noise[10:16].reshape(2, 3)
         q, qd = self._qpos[self.qadr] + noise[16:16 + n], self._qvel[self.dadr] + noise[16 + n:16 + 2 * n]
-        return Readings(float(d.time), q, qd, quat / np.linalg.norm(quat), sd[self._gyro] + noise[16 + 2 * n:], force,
-                        torque)
+        norm = math.sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3])  # as the C
+        return Readings(float(d.time), q, qd, quat / norm, sd[self._gyro] + noise[16 + 2 * n:], force, torque)
 
     def _floor_touches(self) -> tuple[str, ...]:
         """The geoms on the floor other than the soles and the board's wheels, by name."""
