@@ -92,6 +92,8 @@ def speed_verdict(target_velocity_mps: float, delivered: float) -> tuple[float, 
     0.05 m/s, no speed at all), if any."""
     v = target_velocity_mps
     err = (delivered - v) / v if v else delivered
+    if not np.isfinite(delivered):
+        return err, ["delivered speed not measured: the run stopped before a second after the entry's end"]
     if v and (not np.isfinite(err) or abs(err) > SPEED_TOLERANCE):
         return err, [f"delivered speed {delivered:.3f} m/s is {100 * err:+.1f} % from the label {v:.2f}"]
     if not v and not abs(delivered) <= STOP_TOLERANCE_MPS:

@@ -117,3 +117,15 @@ def test_the_twins_verdict_fails_a_board_off_the_plans_line_and_reports_the_crab
     far = result(-0.03)
     assert not far.passed and "to the side" in far.reasons
     assert far.max_crab_rad == 0.004 and far.lateral_drift_m == -0.03
+
+
+def test_a_run_that_stopped_early_says_what_it_did_not_measure():
+    """A run that fell before the entry's end fails on its fall; its speed, heading and line are
+    said to be unmeasured, not printed as NaN."""
+    run = TwinRun(TwinMeasures(system_mass_kg=10.7), fall="trunk 0.099 m above the deck at t = 1.16 s")
+    r = twin_result("v0.30", 0.3, run)
+    assert not r.passed and r.reasons.startswith("delivered speed not measured") and "fall: trunk" in r.reasons
+    assert "heading and line not measured" in r.reasons and "nan" not in r.reasons.lower()
+    stop = twin_result("v0.00", 0.0, run)
+    assert not stop.passed and "delivered speed not measured" in stop.reasons
+

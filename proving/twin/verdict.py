@@ -90,10 +90,13 @@ def twin_result(key: str, target_velocity_mps: float, run: TwinRun) -> TwinResul
         reasons.append(f"unplanned floor contact ({m.floor_touch_first}; {m.floor_touch_ticks} ticks)")
     if m.wheel_lift_ticks:
         reasons.append(f"a wheel left the floor for up to {m.max_wheel_lift_ms:.0f} ms")
-    if not abs(m.heading_at_end_rad) <= HEADING_LIMIT_RAD:
-        reasons.append(f"heading {m.heading_at_end_rad:+.3f} rad from the plan's at the entry's end")
-    if not abs(m.lateral_at_end_m) <= LATERAL_LIMIT_M:
-        reasons.append(f"board {100 * m.lateral_at_end_m:+.1f} cm to the side of the plan's at the entry's end")
+    if np.isnan(m.heading_at_end_rad) or np.isnan(m.lateral_at_end_m):
+        reasons.append("the board's heading and line not measured: the run stopped before the entry's end")
+    else:
+        if abs(m.heading_at_end_rad) > HEADING_LIMIT_RAD:
+            reasons.append(f"heading {m.heading_at_end_rad:+.3f} rad from the plan's at the entry's end")
+        if abs(m.lateral_at_end_m) > LATERAL_LIMIT_M:
+            reasons.append(f"board {100 * m.lateral_at_end_m:+.1f} cm to the side of the plan's at the entry's end")
     return TwinResult(
         key=key, target_velocity_mps=target_velocity_mps, momentum_at_end_mps=m.momentum_at_end_mps,
         delivered_mps=delivered,
