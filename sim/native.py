@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -204,6 +205,14 @@ class CompiledSense:
         out = np.empty(self.size)
         self.lib.humanoid_sense(*self._args, noise.ctypes.data, out.ctypes.data)
         return out
+
+
+def stray_geoms(s: np.ndarray, at: int, on_overflow: Callable[[], Any]) -> Any:
+    """The ids of the geoms on the floor that a readout ``s`` holds at ``at`` (their count, then
+    the ids: ``S_N_STRAY`` or ``H_N_STRAY``), or ``on_overflow()`` where it holds more than it
+    has room for."""
+    k = int(s[at])
+    return s[at + 1:at + 1 + k].astype(int) if k <= N_STRAY else on_overflow()
 
 
 def readout(s: np.ndarray, system_mass_kg: float, floor_touches: tuple[str, ...]) -> TwinState:

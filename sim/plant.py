@@ -12,7 +12,7 @@ import numpy as np
 from skatelib.sim.contacts import FootContacts
 from skatelib.sim.errors import TwinErrors
 from skatelib.sim.figures import TwinFigures
-from skatelib.sim.native import N_STRAY, S_N_STRAY, S_STRAY, S_WHEEL_LOAD, CompiledTwin, readout, twin_library
+from skatelib.sim.native import S_N_STRAY, S_WHEEL_LOAD, CompiledTwin, readout, stray_geoms, twin_library
 from skatelib.sim.robot import JOINTS, LEGS
 from skatelib.sim.rolling import WHEELS, RollingResistance, step
 from skatelib.sim.scene import pose_qpos
@@ -139,8 +139,7 @@ class TwinPlant:
         if self._native is not None:
             s = self._native.state()
             self._wheel_loads = s[S_WHEEL_LOAD:S_WHEEL_LOAD + 4]  # the next step's first rolling torque
-            k = int(s[S_N_STRAY])
-            stray = s[S_STRAY:S_STRAY + k].astype(int) if k <= N_STRAY else self.contacts.stray(self.d)
+            stray = stray_geoms(s, S_N_STRAY, lambda: self.contacts.stray(self.d))
             return readout(s, self._system_mass, tuple(sorted({self.contacts.name(int(g)) for g in stray})))
 
         m, d = self.m, self.d

@@ -212,8 +212,7 @@ class HumanoidPlant:
         """A :class:`Truth` of views of the C path's readout ``s`` (:mod:`skatelib.sim.native`'s layout)."""
         from skatelib.sim import native as n
 
-        k = int(s[n.H_N_STRAY])
-        names = self._names(s[n.H_STRAY:n.H_STRAY + k].astype(int) if k <= n.N_STRAY else self._stray())
+        names = self._names(n.stray_geoms(s, n.H_N_STRAY, self._stray))
         deck = (s[n.H_DECK_POS:n.H_DECK_POS + 3], s[n.H_DECK_R:n.H_DECK_R + 9].reshape(3, 3),
                 s[n.H_DECK_V:n.H_DECK_V + 3]) if self.deck >= 0 else (None, None, None)
         return Truth(float(s[n.H_T]), s[n.H_COM:n.H_COM + 3], s[n.H_COM_V:n.H_COM_V + 3],
