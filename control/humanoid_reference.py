@@ -5,6 +5,9 @@ support soles' rectangles) that holds the desired ZMP."""
 
 from __future__ import annotations
 
+import bisect
+import itertools
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -104,6 +107,8 @@ class ReferenceSample:
     def with_landed(self, load_N: np.ndarray, min_load_N: float, window_m: float) -> ReferenceSample:
         """This sample with the soles landed early among its support: those the plan still swings
         but has within ``window_m`` of the ground, carrying ``min_load_N`` of ``load_N`` (2,)."""
+        if self.support[0] and self.support[1]:
+            return self  # both down: none to land
         landed = (~self.support) & (self.soles[:, 2] - self.sole_plane < window_m) & (np.asarray(load_N) > min_load_N)
         return replace(self, support=self.support | landed) if landed.any() else self
 
@@ -137,11 +142,12 @@ class ReferenceSample:
                        [self.sole_size[0] / 2, self.sole_size[1] / 2])
 
 
-def _ground_anchors(support: np.ndarray, plane: np.ndarray) -> np.ndarray | None:
+def _ground_anchors(on: tuple[bool, bool], levels: tuple[float, float]) -> np.ndarray | None:
     """The support soles on the ground when the others stand on a board (a skate's push), else
     None (all support soles anchor)."""
-    ground, deck = support & (plane == 0.0), support & (plane > 0.0)
-    return ground if ground.any() and deck.any() else None
+    ground = (on[0] and levels[0] == 0.0, on[1] and levels[1] == 0.0)
+    deck = (on[0] and levels[0] > 0.0) or (on[1] and levels[1] > 0.0)
+    return np.array(ground) if (ground[0] or ground[1]) and deck else None
 
 
 class HumanoidReference:
@@ -173,8 +179,11 @@ class HumanoidReference:
         parts = (self.q, self.base, self.feet.reshape(len(self.t), -1), self.com, self.com_vel, self.com_acc,
                  self.zmp, self.sole_vel.reshape(len(self.t), -1))
         self._knots = np.hstack(parts)
-        self._cols = np.cumsum([0, *(x.shape[1] for x in parts)])
+        cols = np.cumsum([0, *(x.shape[1] for x in parts)]).tolist()
+        self._slices = tuple(slice(a, b) for a, b in itertools.pairwise(cols))
         self._width = self.feet.shape[2]
+        self._times = self.t.tolist()  # a sample's search in a list: a tenth of numpy's on one value
+        self._planes = [(float(a), float(b)) for a, b in self.plane]
 
     def _lowest(self, feet: np.ndarray) -> np.ndarray:
         """Each sole's lowest edge (..., 2): its toe on a heel raised (pitched) sole."""
@@ -184,30 +193,39 @@ class HumanoidReference:
     def _knot(self, t: float) -> tuple[int, float, int]:
         """The knot interval ``t`` [s] falls in, the weight of its end (clamped to the entry) and the
         last knot at or before ``t``."""
-        after = int(np.searchsorted(self.t, t, side="right")) - 1
-        k = min(max(after, 0), len(self.t) - 2)
-        w = min(max(float((t - self.t[k]) / (self.t[k + 1] - self.t[k])), 0.0), 1.0)
-        return k, w, min(max(after, 0), len(self.t) - 1)
+        times = self._times
+        after = bisect.bisect_right(times, t) - 1
+        k = min(max(after, 0), len(times) - 2)
+        w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
+        return k, w, min(max(after, 0), len(times) - 1)
 
     def sample(self, t: float) -> ReferenceSample:
         """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
         the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
         k, w, last = self._knot(t)
         x = (1 - w) * self._knots[k] + w * self._knots[k + 1]
-        q, base, feet, com, com_vel, com_acc, zmp, sole_vel = (x[a:b] for a, b in zip(self._cols[:-1], self._cols[1:],
-                                                                                       strict=True))
+        q, base, feet, com, com_vel, com_acc, zmp, sole_vel = map(x.__getitem__, self._slices)
         feet = feet.reshape(2, self._width)
         m = self.model
         still = t >= self.duration_s
         plane = self.plane[last]
         support = self._lowest(feet) - plane < GROUND_M
-        return ReferenceSample(q=q, base_pos=base[0:3], base_quat_xyzw=base[3:7] / np.linalg.norm(
-            base[3:7]), soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=support,
+        on = (bool(support[0]), bool(support[1]))
+        levels = self._planes[last]
+        quat = base[3:7]
+        return ReferenceSample(q=q, base_pos=base[0:3], base_quat_xyzw=quat / math.sqrt(quat.dot(quat)),
+            soles=feet[:, 0:3], sole_yaw=feet[:, 3], support=support,
             com=com, com_vel=np.zeros(3) if still else com_vel,
             com_acc=np.zeros(3) if still else com_acc,
             zmp=self.com[-1, 0:2].copy() if still else zmp, gravity=m.gravity_mps2,
-            sole_size=(m.foot_length_m, m.foot_width_m),
-            ground_z=float(plane[support].mean()) if support.any() else 0.0,
+            sole_size=(m.foot_length_m, m.foot_width_m), ground_z=_ground(on, levels),
             sole_pitch=feet[:, 4].copy() if feet.shape[1] > 4 else np.zeros(2),
             sole_vel=np.zeros((2, 3)) if still else sole_vel.reshape(2, 3), sole_plane=plane.copy(),
-            anchored=_ground_anchors(support, plane), hulls=self.hulls)
+            anchored=_ground_anchors(on, levels), hulls=self.hulls)
+
+
+def _ground(on: tuple[bool, bool], levels: tuple[float, float]) -> float:
+    """The support soles' plane: the mean of the surfaces under them (0: none supports)."""
+    if on[0] and on[1]:
+        return (levels[0] + levels[1]) / 2
+    return levels[0] if on[0] else levels[1] if on[1] else 0.0
