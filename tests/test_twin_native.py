@@ -18,6 +18,7 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig  # noqa: E402
 from skatelib.pipeline.twin import twin_figures  # noqa: E402
 from skatelib.sim import native  # noqa: E402
 from skatelib.sim.errors import parse_twin_perturbation  # noqa: E402
+from skatelib.sim.humanoid.state import TRUTH_LAYOUT, truth_columns  # noqa: E402
 from skatelib.sim.plant import TwinPlant, TwinState  # noqa: E402
 from skatelib.sim.stand import StandController  # noqa: E402
 
@@ -127,6 +128,13 @@ def _same_truth(a, b) -> bool:
     return True
 
 
+def _same_rows(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two truth rows equal in every field of the layout (NaN to NaN) and the joints' torques."""
+    cols = (*TRUTH_LAYOUT, "torque")
+    return all(np.array_equal(x, y, equal_nan=True) for x, y in zip(
+        truth_columns(a[None], cols).values(), truth_columns(b[None], cols).values(), strict=True))
+
+
 def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
     """The humanoid skate's twin under its default errors and a shove: the physics steps, the
     sensors and the ground truth in C (the shove, the board's rolling torques; the noisy readings;
@@ -153,12 +161,22 @@ def test_the_humanoid_twins_steps_in_c_are_the_python_steps(hrp2_skate_v100):
             gap = max(gap, float(np.max(np.abs(c.d.qpos - py.d.qpos))))
             same &= all(np.array_equal(getattr(c.d, a), getattr(py.d, a)) for a in FIELDS)
             same &= _same_truth(c.truth(0.012), py.truth(0.012)) and _same_truth(c.readings(), py.readings())
+            rows = (c.truth_row(0.012), py.truth_row(0.012))
+            same &= _same_rows(*rows) and c.floor_touches(rows[0]) == py.floor_touches(rows[1])
+            kept.append((rows[0], c.truth_of(rows[0])))
         return same, gap
+
+    kept: list = []
 
     c, py = HumanoidPlant(f, errors), HumanoidPlant(f, errors, compiled=False)
     assert c._steps is not None and py._steps is None and c._truth is not None and c._sense is not None
     assert c.rolling is not None and errors.force_noise_N > 0
     assert run(c, py) == (True, 0.0)
+    # a run's table of rows, by column, is its truths' fields stacked
+    columns = truth_columns(np.array([r for r, _ in kept]), (*TRUTH_LAYOUT, "torque"))
+    truths = [t for _, t in kept]
+    assert all(np.array_equal(v, np.array([getattr(t, k) for t in truths]), equal_nan=True) for k, v in columns.items())
+    assert columns["deck_R"].shape == (150, 3, 3) and columns["t"].shape == (150,)
     stronger = HumanoidPlant(f, dataclasses.replace(errors, shove_N=errors.shove_N + 1.0))
     same, gap = run(stronger, HumanoidPlant(f, errors, compiled=False))
     assert not same and gap > 0.0

@@ -19,7 +19,8 @@ from skatelib.proving.humanoid import support
 from skatelib.runtime import MotionLibrary
 from skatelib.sim.humanoid.errors import HumanoidErrors
 from skatelib.sim.humanoid.figures import HumanoidFigures
-from skatelib.sim.humanoid.plant import HumanoidPlant, Truth
+from skatelib.sim.humanoid.plant import HumanoidPlant
+from skatelib.sim.humanoid.state import DECK_FIELDS, TRUTH_LAYOUT, truth_columns
 
 STEPS_PER_TICK = 2  # 1 ms physics, a 500 Hz stabilizer
 HOLD_S = 1.0  # after the entry, the reference holds its end
@@ -27,6 +28,8 @@ FALLEN_HEIGHT_M = 0.4  # the waist lower than this: fallen
 FALLEN_TILT_RAD = 0.5
 COS_FALLEN_TILT = float(np.cos(FALLEN_TILT_RAD))
 LANDING = StabilizerGains()  # the landing rule the verdict's support polygon follows
+T_AT = TRUTH_LAYOUT["t"][0]  # where a truth row holds the time, the waist's height and its R[2, 2]
+BASE_Z, BASE_R22 = TRUTH_LAYOUT["base_pos"][0] + 2, TRUTH_LAYOUT["base_R"][0] + 8
 
 
 @dataclass(frozen=True)
@@ -85,13 +88,16 @@ def push_end_s(lib: MotionLibrary, key: str) -> float | None:
     return float(json.loads(str(lib[key].attrs[schema.A_PLAN]))[0]["duration_s"])
 
 
-def _fallen(tr: Truth) -> str:
-    if tr.base_pos[2] < FALLEN_HEIGHT_M:
-        return f"waist at {tr.base_pos[2]:.2f} m"
-    if tr.base_R[2, 2] < COS_FALLEN_TILT:  # tilted more than FALLEN_TILT_RAD
-        return f"waist tilted {float(np.arccos(np.clip(tr.base_R[2, 2], -1.0, 1.0))):.2f} rad"
-    if tr.floor_touches:
-        return f"{', '.join(tr.floor_touches)} on the floor"
+def _fallen(row: np.ndarray, plant: HumanoidPlant) -> str:
+    """Why the twin has fallen by its :meth:`~HumanoidPlant.truth_row` ``row`` ("": it has not)."""
+    z, tilt = float(row[BASE_Z]), float(row[BASE_R22])
+    if z < FALLEN_HEIGHT_M:
+        return f"waist at {z:.2f} m"
+    if tilt < COS_FALLEN_TILT:  # tilted more than FALLEN_TILT_RAD
+        return f"waist tilted {float(np.arccos(np.clip(tilt, -1.0, 1.0))):.2f} rad"
+    touches = plant.floor_touches(row)
+    if touches:
+        return f"{', '.join(touches)} on the floor"
     return ""
 
 
@@ -141,7 +147,7 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
     dt = STEPS_PER_TICK * plant.timestep_s
     stab = LipStabilizer(HumanoidKinematics(lib.urdf, f.joint_names), dt, gains)
     torques = PlannedTorques(HumanoidKinematics(lib.urdf, f.joint_names), ref)
-    truths: list[Truth] = []
+    rows: list[np.ndarray] = []
     samples: list[ReferenceSample] = []
     measured: list[np.ndarray] = []
     poses: list[tuple[np.ndarray, np.ndarray]] = []
@@ -155,35 +161,34 @@ def run_entry(lib: MotionLibrary, key: str, errors: HumanoidErrors | None = None
             plant.step(out.q_target, STEPS_PER_TICK, qd, tau)
         else:
             plant.step(out.q_target, STEPS_PER_TICK)
-        tr = plant.truth(s.ground_z)
-        truths.append(tr)
+        row = plant.truth_row(s.ground_z)
+        rows.append(row)
         samples.append(s)
         measured.append(out.zmp_measured)
         if o.keep_poses:
             poses.append((plant.d.qpos.copy(), plant.pose_qpos(s.base_pos, s.base_quat_xyzw[WXYZ], s.q)))
-        reason = _fallen(tr)
+        reason = _fallen(row, plant)
         if reason:
-            fell_at = tr.t
+            fell_at = float(row[T_AT])
             break
-    return _run(lib, key, f, (truths, samples, measured, poses), (fell_at, reason),
+    return _run(lib, key, f, (np.array(rows), samples, measured, poses), (fell_at, reason),
                 plant.layout() if o.keep_poses else None)
 
 
 XYZW, WXYZ = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # a quaternion's components reordered
 
 
-def _run(lib: MotionLibrary, key: str, f: HumanoidFigures, ticks: tuple[list, list, list, list],
+def _run(lib: MotionLibrary, key: str, f: HumanoidFigures, ticks: tuple[np.ndarray, list, list, list],
          fall: tuple[float | None, str], layout: tuple[int, np.ndarray, int] | None) -> HumanoidRun:
-    """The run's arrays from each tick's truth, reference sample and measured ZMP (and poses); when
-    and why it fell."""
-    truths, samples, measured, poses = ticks
+    """The run's arrays from each tick's truth row, reference sample and measured ZMP (and poses);
+    when and why it fell."""
+    table, samples, measured, poses = ticks
     fell_at, reason = fall
-    twin = {name: np.array([getattr(x, name) for x in truths]) for name in (
-        "t", "com", "zmp", "sole_pos", "sole_yaw", "sole_force", "torque", *(("deck_pos", "deck_R", "deck_v")
-                                                                             if f.board is not None else ()))}
+    twin = truth_columns(table, ("t", "com", "zmp", "sole_pos", "sole_yaw", "sole_force", "torque",
+                                 *(DECK_FIELDS if f.board is not None else ())))
     plan = {name: np.array([getattr(x, name) for x in samples]) for name in (
         "soles", "sole_yaw", "com", "zmp", "support", "sole_plane")}
-    n, skate = len(truths), f.board is not None
+    n, skate = len(table), f.board is not None
     # On a board the robot is where its board has rolled to: a skate's COM and ZMP are taken
     # relative to the board sole (the plan's and the twin's), its support polygon where the
     # soles are (the plan's slide has no rolling resistance; the twin's board falls behind it).

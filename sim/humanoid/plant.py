@@ -19,7 +19,7 @@ from skatelib.sim.humanoid.figures import (
     HumanoidFigures,
 )
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
-from skatelib.sim.humanoid.state import Readings, Truth
+from skatelib.sim.humanoid.state import Readings, Truth, truth_row
 from skatelib.sim.native import CompiledSense, CompiledSteps, CompiledTruth, twin_library
 from skatelib.sim.rolling import WHEELS, RollingResistance
 
@@ -177,10 +177,27 @@ class HumanoidPlant:
 
     def truth(self, plane_z: float = 0.0) -> Truth:
         """What happened; the soles' joint ZMP on the plane at height ``plane_z`` [m]."""
+        return self._python_truth(plane_z) if self._truth is None else self.truth_of(self._truth(plane_z))
+
+    def truth_row(self, plane_z: float = 0.0) -> np.ndarray:
+        """:meth:`truth` as one row of numbers (a fresh vector: :mod:`skatelib.sim.humanoid.state`'s
+        ``TRUTH_LAYOUT``, the geoms on the floor as :meth:`floor_touches` reads them): what a run
+        keeps of every tick."""
+        if self._truth is not None:
+            return self._truth(plane_z)
+        return truth_row(self._python_truth(plane_z), sorted(self._stray()))
+
+    def floor_touches(self, row: np.ndarray) -> tuple[str, ...]:
+        """The geoms on the floor other than the soles and the board's wheels, by name, from a
+        :meth:`truth_row` taken now."""
+        from skatelib.sim import native as n
+
+        return self._names(n.stray_geoms(row, n.H_N_STRAY, self._stray)) if row[n.H_N_STRAY] else ()
+
+    def _python_truth(self, plane_z: float) -> Truth:
+        """:meth:`truth` read through MuJoCo's Python bindings."""
         import mujoco
 
-        if self._truth is not None:
-            return self._compiled_truth(self._truth(plane_z))
         m, d = self.m, self.d
         # A sole's box touches the floor and the deck alone (its foot's other geoms touch nothing):
         # its foot's external force is its contacts' (MuJoCo's cfrc_ext, computed for the ankle
@@ -208,18 +225,18 @@ class HumanoidPlant:
                      self._xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw, v, wz,
                      self._torques[self.act], self._floor_touches(), *deck)
 
-    def _compiled_truth(self, s: np.ndarray) -> Truth:
-        """A :class:`Truth` of views of the C path's readout ``s`` (:mod:`skatelib.sim.native`'s layout)."""
+    def truth_of(self, s: np.ndarray) -> Truth:
+        """A :class:`Truth` of views of a :meth:`truth_row` ``s`` taken now."""
         from skatelib.sim import native as n
 
-        names = self._names(n.stray_geoms(s, n.H_N_STRAY, self._stray))
         deck = (s[n.H_DECK_POS:n.H_DECK_POS + 3], s[n.H_DECK_R:n.H_DECK_R + 9].reshape(3, 3),
                 s[n.H_DECK_V:n.H_DECK_V + 3]) if self.deck >= 0 else (None, None, None)
         return Truth(float(s[n.H_T]), s[n.H_COM:n.H_COM + 3], s[n.H_COM_V:n.H_COM_V + 3],
                      s[n.H_BASE_POS:n.H_BASE_POS + 3], s[n.H_BASE_R:n.H_BASE_R + 9].reshape(3, 3),
                      s[n.H_FORCE:n.H_FORCE + 6].reshape(2, 3), s[n.H_SOLE_ZMP:n.H_SOLE_ZMP + 4].reshape(2, 2),
                      s[n.H_ZMP:n.H_ZMP + 2], s[n.H_SOLE_POS:n.H_SOLE_POS + 6].reshape(2, 3), s[n.H_YAW:n.H_YAW + 2],
-                     s[n.H_SOLE_V:n.H_SOLE_V + 6].reshape(2, 3), s[n.H_WZ:n.H_WZ + 2], s[n.H_N:], names, *deck)
+                     s[n.H_SOLE_V:n.H_SOLE_V + 6].reshape(2, 3), s[n.H_WZ:n.H_WZ + 2], s[n.H_N:],
+                     self.floor_touches(s), *deck)
 
 
 def _cop(f: np.ndarray, tau: np.ndarray, c: np.ndarray, z: float) -> np.ndarray:

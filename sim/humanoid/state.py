@@ -1,11 +1,14 @@
 """What the humanoid twin tells: its sensors' readings (:class:`Readings`) and what happened
-(:class:`Truth`), as :class:`skatelib.sim.humanoid.plant.HumanoidPlant` reads them."""
+(:class:`Truth`), as :class:`skatelib.sim.humanoid.plant.HumanoidPlant` reads them; a truth as one
+row of numbers (:mod:`skatelib.sim.native`'s ``H_`` layout), a run's rows as one table and its
+columns (:func:`truth_columns`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+from skatelib.sim import native as n
 
 
 @dataclass(frozen=True)
@@ -62,3 +65,41 @@ class Truth:
         if self.deck_pos is None or self.deck_R is None:
             raise ValueError("the twin has no board")
         return np.asarray((np.asarray(p) - self.deck_pos) @ self.deck_R)
+
+
+# Each field of a truth row: where it starts and its shape (the joints' torques from H_N to the end).
+TRUTH_LAYOUT: dict[str, tuple[int, tuple[int, ...]]] = {
+    "t": (n.H_T, ()), "com": (n.H_COM, (3,)), "com_v": (n.H_COM_V, (3,)), "base_pos": (n.H_BASE_POS, (3,)),
+    "base_R": (n.H_BASE_R, (3, 3)), "sole_force": (n.H_FORCE, (2, 3)), "sole_zmp": (n.H_SOLE_ZMP, (2, 2)),
+    "zmp": (n.H_ZMP, (2,)), "sole_pos": (n.H_SOLE_POS, (2, 3)), "sole_yaw": (n.H_YAW, (2,)),
+    "sole_v": (n.H_SOLE_V, (2, 3)), "sole_wz": (n.H_WZ, (2,)), "deck_pos": (n.H_DECK_POS, (3,)),
+    "deck_R": (n.H_DECK_R, (3, 3)), "deck_v": (n.H_DECK_V, (3,))}
+DECK_FIELDS = ("deck_pos", "deck_R", "deck_v")
+
+
+def truth_row(tr: Truth, stray: list[int]) -> np.ndarray:
+    """``tr`` as a row of ``TRUTH_LAYOUT`` (no board: zeros), the ids of the ``stray`` geoms on the
+    floor (the first ``N_STRAY`` of them, and how many)."""
+    row = np.zeros(n.H_N + len(tr.torque))
+    for name, (at, shape) in TRUTH_LAYOUT.items():
+        value = getattr(tr, name)
+        if value is not None:
+            row[at:at + int(np.prod(shape, dtype=int))] = np.ravel(value)
+    row[n.H_N_STRAY] = len(stray)
+    row[n.H_STRAY:n.H_STRAY + min(len(stray), n.N_STRAY)] = stray[:n.N_STRAY]
+    row[n.H_N:] = tr.torque
+    return row
+
+
+def truth_columns(table: np.ndarray, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The fields ``names`` (``TRUTH_LAYOUT``'s, and ``torque``) of a table of truth rows (N, width),
+    each (N, *shape): copies, the table may go."""
+    out = {}
+    for name in names:
+        if name == "torque":
+            out[name] = table[:, n.H_N:].copy()
+            continue
+        at, shape = TRUTH_LAYOUT[name]
+        size = int(np.prod(shape, dtype=int))
+        out[name] = table[:, at:at + size].reshape(len(table), *shape).copy() if shape else table[:, at].copy()
+    return out
