@@ -1,30 +1,69 @@
 """Stage functions as C: generated, compiled into one shared library beside its SHA-256 record,
-under a lock so that processes started together compile once (:mod:`.stagewise` decides when)."""
+under a lock so that processes started together compile once (:mod:`.stagewise` decides when).
+
+Each function is generated in its own file, and a long one's body is cut in parts, each in a file
+of its own (:mod:`.c_split`): gcc's time on one function grows faster than its length, and the
+files compile at once on the machine's cores, then link into the one library."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import casadi as ca
 from skatelib.library.compiled import private_copy, record_and_place
 from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
+from skatelib.pipeline.ocp.c_split import split_source
+
+SPLIT_STATEMENTS = 200_000  # a function with more statements than this is compiled in parts
+# Where its body is cut (fractions of its statements): the first quarter (the forward sweep, whose
+# values the rest reads) takes gcc about three times as long per statement as the rest, so it is
+# cut in three; the push-off's Hessian compiles in six parts in 42 s of wall time on 2 cores
+# against 66 s whole (docs/design-notes.md).
+CUTS = (1 / 12, 2 / 12, 3 / 12, 1 / 2, 3 / 4)
+
+
+def _sources(f: ca.Function, cut: bool) -> list[tuple[str, str]]:
+    """``f``'s C files (name, text): one, or (``cut``) a long function's driver and its parts."""
+    gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+    gen.add(f)
+    text = gen.dump()
+    split = split_source(text, f.name(), CUTS) if cut and text.count("\n") > SPLIT_STATEMENTS else None
+    if split is None:
+        return [(f"{f.name()}.c", text)]
+    return [(f"{f.name()}.c", split.main), *((f"{f.name()}_part{k}.c", p) for k, p in enumerate(split.parts))]
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _compile(cc: str, flags: Sequence[str], src: Path) -> Path:
+    obj = src.with_suffix(".o")
+    subprocess.run([cc, *flags, "-fPIC", "-Werror=implicit-function-declaration", "-c", str(src), "-o", str(obj)],
+                   check=True, capture_output=True)
+    return obj
 
 
 def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[str], lib: Path) -> bytes:
     """``functions`` as C, compiled with ``cc flags`` into ``lib`` with its SHA-256 record beside it;
-    returns the compiled bytes (read in this process's private folder, before they are moved)."""
-    gen = ca.CodeGenerator("skatelib_stage.c", {"with_header": False})
-    for f in functions:
-        gen.add(f)
-    remove_stale_temporaries(lib.parent)  # a compile killed earlier left its stage.c
-    with temporary_folder(lib.parent, "compile") as tmp:
-        c_file = Path(tmp) / "stage.c"
-        c_file.write_text(gen.dump())
-        so_tmp = Path(tmp) / "stage.so"
-        subprocess.run([cc, *flags, "-shared", "-fPIC", str(c_file), "-o", str(so_tmp)], check=True,
-                       capture_output=True)
+    returns the compiled bytes (read in this process's private folder, before they are moved). Each
+    file is compiled as soon as it is written, on as many cores as the machine gives this process
+    (the long function last in ``functions`` is cut while the others compile)."""
+    remove_stale_temporaries(lib.parent)  # a compile killed earlier left its sources
+    cores = _cores()
+    with temporary_folder(lib.parent, "compile") as tmp, ThreadPoolExecutor(max_workers=cores) as pool:
+        folder, jobs = Path(tmp), []
+        for f in functions:  # on one core the parts would only add up to more than the whole
+            for name, text in _sources(f, cores > 1):
+                (folder / name).write_text(text)
+                jobs.append(pool.submit(_compile, cc, flags, folder / name))
+        objects = [job.result() for job in jobs]
+        so_tmp = folder / "stage.so"
+        subprocess.run([cc, *flags, "-shared", *map(str, objects), "-o", str(so_tmp)], check=True, capture_output=True)
         return record_and_place(so_tmp, lib)
 
 
