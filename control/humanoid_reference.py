@@ -196,7 +196,8 @@ class HumanoidReference:
         times = self._times
         after = bisect.bisect_right(times, t) - 1
         k = min(max(after, 0), len(times) - 2)
-        w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
+        span = times[k + 1] - times[k]
+        w = min(max((t - times[k]) / span, 0.0), 1.0) if span > 0.0 else 1.0
         return k, w, min(max(after, 0), len(times) - 1)
 
     def sample(self, t: float) -> ReferenceSample:

@@ -182,8 +182,8 @@ class CompiledTruth:
         self._args = (ctypes.c_void_p(plant.m._address), ctypes.c_void_p(plant.d._address), ctypes.addressof(t))
 
     def __call__(self, plane_z: float) -> np.ndarray:
-        """The readout (a fresh vector, the ``H_`` layout)."""
-        s = np.empty(self.size)
+        """The readout (a fresh vector, the ``H_`` layout; what the C leaves, a walk's deck, zeros)."""
+        s = np.zeros(self.size)
         self.lib.humanoid_truth(*self._args, plane_z, s.ctypes.data)
         return s
 

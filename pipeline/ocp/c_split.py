@@ -30,6 +30,10 @@ _KNOWN = {"arg", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "
           "copysign", "hypot", "fmod"}
 
 
+# a part is called only from its own library's driver: not exported from it
+_HIDDEN = '#if defined(__GNUC__)\n__attribute__((visibility("hidden")))\n#endif'
+
+
 @dataclass(frozen=True)
 class SplitSource:
     """A generated file with its function's body in parts: ``main`` (the file, its function now
@@ -112,7 +116,7 @@ def _part(name: str, body: list[Stmt], live: tuple[set[str], set[str]], slots: d
     names = sorted(assigned, key=lambda v: int(v[1:]))
     decl = [f"  casadi_real {', '.join(names[i:i + 12])};" for i in range(0, len(names), 12)]
     return "\n".join(["#include <math.h>", "#define casadi_real double", *helpers.values(),
-                      f"void {name}(const casadi_real** arg, casadi_real** res, casadi_real* s) {{",
+                      _HIDDEN, f"void {name}(const casadi_real** arg, casadi_real** res, casadi_real* s) {{",
                       *decl, *out, "}", ""])
 
 

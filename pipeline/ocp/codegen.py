@@ -7,6 +7,7 @@ files compile at once on the machine's cores, then link into the one library."""
 
 from __future__ import annotations
 
+import logging
 import os
 import subprocess
 from collections.abc import Sequence
@@ -24,6 +25,8 @@ SPLIT_STATEMENTS = 200_000  # a function with more statements than this is compi
 # cut in three; the push-off's Hessian compiles in six parts in 42 s of wall time on 2 cores
 # against 66 s whole (docs/design-notes.md).
 CUTS = (1 / 12, 2 / 12, 3 / 12, 1 / 2, 3 / 4)
+MAX_JOBS = 4  # compilers at once (a part takes gcc up to 1 GB)
+LOG = logging.getLogger("skatelib.compile")
 
 
 def _sources(f: ca.Function, cut: bool) -> list[tuple[str, str]]:
@@ -31,20 +34,29 @@ def _sources(f: ca.Function, cut: bool) -> list[tuple[str, str]]:
     gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
     gen.add(f)
     text = gen.dump()
-    split = split_source(text, f.name(), CUTS) if cut and text.count("\n") > SPLIT_STATEMENTS else None
+    long = cut and text.count("\n") > SPLIT_STATEMENTS
+    split = split_source(text, f.name(), CUTS) if long else None
     if split is None:
+        if long:
+            LOG.info("%s: generated code of a form the splitter does not know, compiled whole", f.name())
         return [(f"{f.name()}.c", text)]
     return [(f"{f.name()}.c", split.main), *((f"{f.name()}_part{k}.c", p) for k, p in enumerate(split.parts))]
 
 
 def _cores() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    """The compilers run at once: the cores this process may use, at most ``MAX_JOBS``."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(cores, MAX_JOBS))
 
 
 def _compile(cc: str, flags: Sequence[str], src: Path) -> Path:
     obj = src.with_suffix(".o")
-    subprocess.run([cc, *flags, "-fPIC", "-Werror=implicit-function-declaration", "-c", str(src), "-o", str(obj)],
-                   check=True, capture_output=True)
+    try:
+        subprocess.run([cc, *flags, "-fPIC", "-Werror=implicit-function-declaration", "-c", str(src), "-o",
+                        str(obj)], check=True, capture_output=True)
+    except subprocess.CalledProcessError as e:
+        e.add_note(f"{src.name}: {(e.stderr or b'').decode(errors='replace')[-2000:]}")
+        raise
     return obj
 
 
@@ -61,7 +73,11 @@ def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[s
             for name, text in _sources(f, cores > 1):
                 (folder / name).write_text(text)
                 jobs.append(pool.submit(_compile, cc, flags, folder / name))
-        objects = [job.result() for job in jobs]
+        try:
+            objects = [job.result() for job in jobs]
+        except BaseException:
+            pool.shutdown(cancel_futures=True)  # the files not started yet are not compiled
+            raise
         so_tmp = folder / "stage.so"
         subprocess.run([cc, *flags, "-shared", *map(str, objects), "-o", str(so_tmp)], check=True, capture_output=True)
         return record_and_place(so_tmp, lib)

@@ -149,7 +149,7 @@ class HumanoidPlant:
         one draw of every sensor's noise a tick, in the order quaternion, forces, torques, angles,
         rates, gyro."""
         sd, d, n = self._sd, self.d, len(self.qadr)
-        noise = self.rng.standard_normal(len(self._noise_scale)) * self._noise_scale  # normal(0, scale)'s draws
+        noise = self.rng.standard_normal(len(self._noise_scale)) * self._noise_scale + 0.0  # normal(0, scale)'s bits
         if self._sense is not None:
             r = self._sense(noise)
             return Readings(float(d.time), r[16:16 + n], r[16 + n:16 + 2 * n], r[0:4], r[16 + 2 * n:],
