@@ -19,7 +19,7 @@ from skatelib.sim.humanoid.figures import (
     HumanoidFigures,
 )
 from skatelib.sim.humanoid.robot import ROOT, humanoid_spec, sole_geom
-from skatelib.sim.humanoid.state import Readings, Truth, truth_row
+from skatelib.sim.humanoid.state import Readings, Truth, truth_of_row, truth_row
 from skatelib.sim.native import CompiledSense, CompiledSteps, CompiledTruth, twin_library
 from skatelib.sim.rolling import WHEELS, RollingResistance
 
@@ -227,16 +227,7 @@ class HumanoidPlant:
 
     def truth_of(self, s: np.ndarray) -> Truth:
         """A :class:`Truth` of views of a :meth:`truth_row` ``s`` taken now."""
-        from skatelib.sim import native as n
-
-        deck = (s[n.H_DECK_POS:n.H_DECK_POS + 3], s[n.H_DECK_R:n.H_DECK_R + 9].reshape(3, 3),
-                s[n.H_DECK_V:n.H_DECK_V + 3]) if self.deck >= 0 else (None, None, None)
-        return Truth(float(s[n.H_T]), s[n.H_COM:n.H_COM + 3], s[n.H_COM_V:n.H_COM_V + 3],
-                     s[n.H_BASE_POS:n.H_BASE_POS + 3], s[n.H_BASE_R:n.H_BASE_R + 9].reshape(3, 3),
-                     s[n.H_FORCE:n.H_FORCE + 6].reshape(2, 3), s[n.H_SOLE_ZMP:n.H_SOLE_ZMP + 4].reshape(2, 2),
-                     s[n.H_ZMP:n.H_ZMP + 2], s[n.H_SOLE_POS:n.H_SOLE_POS + 6].reshape(2, 3), s[n.H_YAW:n.H_YAW + 2],
-                     s[n.H_SOLE_V:n.H_SOLE_V + 6].reshape(2, 3), s[n.H_WZ:n.H_WZ + 2], s[n.H_N:],
-                     self.floor_touches(s), *deck)
+        return truth_of_row(s, self.floor_touches(s), self.deck >= 0)
 
 
 def _cop(f: np.ndarray, tau: np.ndarray, c: np.ndarray, z: float) -> np.ndarray:

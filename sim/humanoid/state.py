@@ -6,6 +6,7 @@ columns (:func:`truth_columns`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from skatelib.sim import native as n
@@ -75,6 +76,18 @@ TRUTH_LAYOUT: dict[str, tuple[int, tuple[int, ...]]] = {
     "sole_v": (n.H_SOLE_V, (2, 3)), "sole_wz": (n.H_WZ, (2,)), "deck_pos": (n.H_DECK_POS, (3,)),
     "deck_R": (n.H_DECK_R, (3, 3)), "deck_v": (n.H_DECK_V, (3,))}
 DECK_FIELDS = ("deck_pos", "deck_R", "deck_v")
+
+
+def truth_of_row(s: np.ndarray, floor_touches: tuple[str, ...], deck: bool) -> Truth:
+    """A :class:`Truth` of views of a truth row ``s`` (``deck``: the twin has a board, else its deck
+    fields are None)."""
+    fields: dict[str, Any] = {}
+    for name, (at, shape) in TRUTH_LAYOUT.items():
+        if shape == ():
+            fields[name] = float(s[at])
+        elif deck or name not in DECK_FIELDS:
+            fields[name] = s[at:at + int(np.prod(shape, dtype=int))].reshape(shape)
+    return Truth(**fields, torque=s[n.H_N:], floor_touches=floor_touches)
 
 
 def truth_row(tr: Truth, stray: list[int]) -> np.ndarray:
