@@ -132,8 +132,10 @@ def test_the_config_chooses_native_or_portable_code(monkeypatch):
     assert "-march=native" in seen[0].flags and seen[1].flags == stagewise.PORTABLE_FLAGS
 
 
-def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
-    """A compiler that rejects -march=native (it is only an optimization) compiles without it."""
+@pytest.mark.parametrize("rejected", ["-march=native", "-fira-region=one"])
+def test_compiler_without_an_optional_flag_still_compiles(tmp_path, monkeypatch, rejected):
+    """A compiler that rejects -march=native or one of the lean flags (they are only
+    optimizations) compiles without it, and with the other optional flags."""
     from skatelib.pipeline.ocp import stagewise
 
     real = stagewise.c_compiler()
@@ -141,7 +143,7 @@ def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
         pytest.skip("no C compiler")
     fake = tmp_path / "cc-without-native"
     calls = tmp_path / "calls.txt"
-    fake.write_text(f'#!/bin/sh\necho "$@" >> {calls}\nfor a in "$@"; do [ "$a" = -march=native ] && exit 1; done\n'
+    fake.write_text(f'#!/bin/sh\necho "$@" >> {calls}\nfor a in "$@"; do [ "$a" = {rejected} ] && exit 1; done\n'
                     f'exec {real} "$@"\n')
     fake.chmod(0o755)
     monkeypatch.setenv("CC", str(fake))
@@ -152,7 +154,9 @@ def test_compiler_without_native_flag_still_compiles(tmp_path, monkeypatch):
     assert np.allclose(np.asarray(ca.densify(comp.hess(zv, pv, 0.8, lam))),
                        np.asarray(ca.densify(sym.hess(zv, pv, 0.8, lam))), atol=1e-12)
     compiles = [ln for ln in calls.read_text().splitlines() if "-shared" in ln]
-    assert len(compiles) == 1 and "-march=native" not in compiles[0]
+    assert len(compiles) == 1 and rejected not in compiles[0].split()
+    kept = [f for f in ("-march=native", *stagewise.LEAN_FLAGS) if f != rejected]
+    assert all(f in compiles[0].split() for f in kept)
 
 
 def test_builds_started_together_compile_once(tmp_path):
