@@ -33,7 +33,7 @@ define install
 	@$(PYTHON) -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else "skatelib needs Python >= 3.11; found " + sys.version.split()[0] + ": set PYTHON=python3.11 (or newer)")'
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --no-compile --upgrade pip setuptools wheel
-	$(BIN)/python -m pip install -q --no-compile -e '.[$(1)]' --config-settings editable_mode=strict
+	$(BIN)/python -m pip install -q --no-compile --no-build-isolation -e '.[$(1)]' --config-settings editable_mode=strict
 	@find api pipeline library runtime control sim proving \( -name '*.py' -o -name '*.c' \) | sort > $(VENV)/.skatelib-modules
 endef
 
