@@ -16,7 +16,7 @@ from skatelib.pipeline.quadruped.config import QuadrupedConfig
 
 from benchmarks.figures import Figure, Measured
 
-LIBRARY = Figure("library", "default library, 18 start-ups + 25 transitions, 2 workers, --no-cache", "s", 180.0,
+LIBRARY = Figure("library", "default library, 18 start-ups + 25 transitions, 2 workers, --no-cache", "s", 100.0,
                  "the 18 start-ups alone")
 TRANSITION = Figure("transition-entry", "a transition entry's solves (all strides tried) over a start-up's, means",
                     "x", 2.0, "start-up entry")

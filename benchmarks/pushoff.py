@@ -15,11 +15,11 @@ from skatelib.pipeline.quadruped.problem import pushoff
 
 from benchmarks.figures import Figure, Measured
 
-COLD = Figure("pushoff-cold", "push-off 0.5 m/s x 2 strides, build + solve, cold", "s", 1.5,
+COLD = Figure("pushoff-cold", "push-off 0.5 m/s x 2 strides, build + solve, cold", "s", 1.0,
               "stage functions interpreted")
-WARM = Figure("pushoff-warm", "the same, warm-started from 0.45 m/s, fresh build", "s", 0.6,
+WARM = Figure("pushoff-warm", "the same, warm-started from 0.45 m/s, fresh build", "s", 0.5,
               "stage functions interpreted, cold")
-CHAIN = Figure("pushoff-warm-built", "the same, warm, on the problem built before (a chain)", "s", 0.6,
+CHAIN = Figure("pushoff-warm-built", "the same, warm, on the problem built before (a chain)", "s", 0.5,
                "stage functions interpreted, cold")
 FIGURES = (COLD, WARM, CHAIN)
 
