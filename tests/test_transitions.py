@@ -253,3 +253,32 @@ def test_the_frontier_of_speed_ups_brackets_the_fastest_and_agrees_with_the_buil
     assert point.fastest_mps in ok and point.first_failure_mps in bad
     assert 0 < point.first_failure_mps - point.fastest_mps <= 0.2
     assert ride_lib["v0.30-0.40_s1"].success and point.fastest_mps >= 0.4
+
+
+def test_the_transition_tasks_group_what_warm_starts_share():
+    """Every transition of the default config is in exactly one task; within a task the
+    transitions whose planted foot drives alike (push or brake) share their one-stride knot window
+    (what a warm start within the task needs); a task holds the slow-downs from a speed or the
+    speed-ups to one; the build starts the heaviest tasks first."""
+    from skatelib.pipeline.quadruped import builder
+    from skatelib.pipeline.quadruped.problem.problem import system_for
+    from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec
+    from skatelib.pipeline.quadruped.transitions.tasks import TransitionTask, transition_tasks
+
+    cfg = load_config(None)
+    tasks = transition_tasks(cfg)
+    pairs = [p for t in tasks for p in t.pairs]
+    assert sorted(pairs) == sorted(cfg.transitions.pairs())
+    system, tr = system_for(cfg), cfg.transitions
+    for t in tasks:
+        windows: dict[bool, set] = {}
+        for a, b in t.pairs:
+            pushes = system.drive(a, b, tr.touchdown_s + cfg.schedule.period_s) > 0
+            windows.setdefault(pushes, set()).add(PushoffSpec(cfg, b, 1, from_velocity_mps=a).window)
+        assert all(len(w) == 1 for w in windows.values()), t.pairs
+        assert len({a for a, _ in t.pairs}) == 1 or len({b for _, b in t.pairs}) == 1
+        gaps = [abs(b - a) for a, b in t.pairs]
+        assert gaps == sorted(gaps)  # nearest first: each warm-started from its neighbour
+    every = builder.tasks(cfg)
+    assert [t.weight for t in every] == sorted((t.weight for t in every), reverse=True)
+    assert sum(isinstance(t, TransitionTask) for t in every) == len(tasks)

@@ -55,13 +55,13 @@ def one_start_up(cfg: QuadrupedConfig, velocity_mps: float, strides: int) -> Qua
 
 
 def tasks(cfg: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[BuildTask | TransitionTask]:
-    """One task per start speed of the transitions (fastest first), then one warm-start chain per
-    stride count (most strides first): the longest tasks first, so that the workers' last tasks
-    are short and end together (a transition chain, its twin rides included, takes two to eight
-    times a start-up chain)."""
+    """The transitions' tasks (the slow-downs from each riding speed, the speed-ups to each) and one
+    warm-start chain per stride count, the longest first (their ``weight``), so that the workers'
+    last tasks are short and end together."""
     from skatelib.pipeline.quadruped.transitions.tasks import transition_tasks
 
-    return [*transition_tasks(cfg, ipopt), *tasks_for(cfg, ipopt)]
+    every: list[BuildTask | TransitionTask] = [*transition_tasks(cfg, ipopt), *tasks_for(cfg, ipopt)]
+    return sorted(every, key=lambda t: -t.weight)
 
 
 def prepare(cfg: QuadrupedConfig, opts: BuildOptions) -> None:

@@ -1,11 +1,13 @@
-"""The build tasks of the transitions (``[transitions]``): one per start speed, its targets solved
-from the nearest outwards, each with the fewest strides that pass the independent physics checks
-(``[transitions] strides`` tried in order) and, with ``[transitions] twin_judge``, the closed
-loop on the physical twin (:mod:`skatelib.pipeline.quadruped.transitions.twin_judge`); warm-started from the
-last success of the same stride count and knot window in the task (the transitions from the
-fastest speed share one window; a window's kept constraint rows, and so the multipliers a warm
-start carries, differ from another's). A cell that passes with no stride count is stored as the
-failure of the last count tried, with its status."""
+"""The build tasks of the transitions (``[transitions]``): the slow-downs (and the stop) from one
+riding speed, nearest target first, and the speed-ups to one speed, nearest start first; each
+transition with the fewest strides that pass the independent physics checks (``[transitions]
+strides`` tried in order) and, with ``[transitions] twin_judge``, the closed loop on the physical
+twin (:mod:`skatelib.pipeline.quadruped.transitions.twin_judge`); warm-started from the last success
+of the same stride count and knot window in the task. The knot window follows the faster speed and
+whether the planted foot pushes or brakes, so the slow-downs from a speed share theirs, and so do
+the speed-ups to one (a window's kept constraint rows, and so the multipliers a warm start carries,
+differ from another's). A cell that passes with no stride count is stored as the failure of the last
+count tried, with its status."""
 
 from __future__ import annotations
 
@@ -26,51 +28,55 @@ from skatelib.pipeline.views.console import count
 
 @dataclass(frozen=True)
 class TransitionTask:
-    """The transitions from one riding speed: speed-ups, slow-downs and the stop."""
+    """A chain of transitions ``(from, to)`` solved in order: the slow-downs from one riding speed,
+    or the speed-ups to one."""
 
     config: QuadrupedConfig
-    from_velocity_mps: float
-    targets: tuple[float, ...]
+    pairs: tuple[tuple[float, float], ...]
     ipopt: tuple[tuple[str, Any], ...] = ()
 
     @property
     def n_entries(self) -> int:
-        return len(self.targets)
+        return len(self.pairs)
+
+    @property
+    def weight(self) -> float:
+        """Its rough cost in seconds of one core, to start the longest tasks first: about 3.3 s a
+        transition (a candidate's solve and twin rides), more the farther it goes (more strides,
+        more candidates refused)."""
+        return sum(3.3 * (1.0 + 3.0 * abs(b - a)) for a, b in self.pairs)
 
     def run(self, use_cache: bool, events: EventSink | None) -> list[EntryOutcome]:
-        v0 = self.from_velocity_mps
         warm: dict[tuple[int, Window], tuple[WarmStart, str]] = {}
         out = []
-        for v in sorted(self.targets, key=lambda t: (abs(t - v0), t)):
+        for v0, v in self.pairs:
             cell = f"v{v0:.2f}-{v:.2f}"  # the progress display's name: the strides are known at the end
             if events is not None:
                 events.put(EntryEvent(cell, done=False))
-            outcome = self._fewest_strides(v, warm, use_cache)
+            outcome = self._fewest_strides(v0, v, warm, use_cache)
             out.append(outcome)
             if events is not None:
                 r = outcome.result
                 events.put(EntryEvent(cell, True, f"{r.status} ({r.n_strides} strides)", r.success, outcome.cached))
         return out
 
-    def _fewest_strides(self, v: float, warm: dict[tuple[int, Window], tuple[WarmStart, str]], use_cache: bool
-                        ) -> EntryOutcome:
+    def _fewest_strides(self, v0: float, v: float, warm: dict[tuple[int, Window], tuple[WarmStart, str]],
+                        use_cache: bool) -> EntryOutcome:
         outcome = None
-        v0 = self.from_velocity_mps
         refused: list[str] = []
         for n in self.config.transitions.strides:
             with span("candidate", key=schema.entry_key(v, n, v0)) as fields:
-                outcome = self._candidate(v, n, warm, use_cache, refused)
+                outcome = self._candidate(v0, v, n, warm, use_cache, refused)
                 fields["accepted"] = outcome.success
             if outcome.success:
                 break
         assert outcome is not None  # strides is never empty (config check)
         return outcome
 
-    def _candidate(self, v: float, n: int, warm: dict[tuple[int, Window], tuple[WarmStart, str]], use_cache: bool,
-                   refused: list[str]) -> EntryOutcome:
-        """The transition to ``v`` in ``n`` strides: solved (or read from the cache), judged by the
-        physics checks and, when they pass, by the twin; a refusal is added to ``refused``."""
-        v0 = self.from_velocity_mps
+    def _candidate(self, v0: float, v: float, n: int, warm: dict[tuple[int, Window], tuple[WarmStart, str]],
+                   use_cache: bool, refused: list[str]) -> EntryOutcome:
+        """The transition from ``v0`` to ``v`` in ``n`` strides: solved (or read from the cache), judged
+        by the physics checks and, when they pass, by the twin; a refusal is added to ``refused``."""
         entry = schema.entry_key(v, n, v0)
         spec = PushoffSpec(self.config, v, n, ipopt=self.ipopt, from_velocity_mps=v0)
         cell = (n, spec.window)
@@ -95,7 +101,13 @@ class TransitionTask:
 
 
 def transition_tasks(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[TransitionTask]:
-    """One task per start speed of ``[transitions]`` (fastest first: its speed-ups need the most strides)."""
+    """The slow-downs from each riding speed (with its stop) and the speed-ups to each, fastest
+    first within each kind."""
     pairs = config.transitions.pairs()
-    starts = sorted({a for a, _ in pairs}, reverse=True)
-    return [TransitionTask(config, a, tuple(b for a2, b in pairs if a2 == a), ipopt) for a in starts]
+    downs = sorted({a for a, b in pairs if b < a}, reverse=True)
+    ups = sorted({b for a, b in pairs if b > a}, reverse=True)
+    tasks = [TransitionTask(config, tuple(sorted(((a, b) for a2, b in pairs if a2 == a and b < a),
+                                                 key=lambda ab: (ab[0] - ab[1], ab[1]))), ipopt) for a in downs]
+    tasks += [TransitionTask(config, tuple(sorted(((a, b) for a, b2 in pairs if b2 == b and a < b),
+                                                  key=lambda ab: (ab[1] - ab[0], ab[0]))), ipopt) for b in ups]
+    return tasks
