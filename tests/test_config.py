@@ -118,20 +118,3 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
     with pytest.raises(ConfigError, match=r"optimization\.warm_mu_strategy.*'fast'"):
         load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "fast"\n'))
 
-
-def test_a_warm_transition_has_its_own_barrier(tmp_path):
-    """A warm-started transition runs IPOPT with [transitions]' warm barrier, a warm start-up with
-    [optimization]'s; an unknown strategy is refused by its key."""
-    import numpy as np
-    from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, WarmStart, solver_options
-
-    c = load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "monotone"\nwarm_mu_init = 1e-6\n'
-                                     '[transitions]\nspeeds_mps = [0.3, 0.5]\nwarm_mu_strategy = "adaptive"\n'
-                                     'warm_mu_init = 2e-4\n'))
-    warm = WarmStart(w=np.zeros(3), lam_g=np.zeros(2), lam_x=np.zeros(3))
-    transition = solver_options(PushoffSpec(c, 0.5, 1, warm=warm, from_velocity_mps=0.3))
-    start_up = solver_options(PushoffSpec(c, 0.5, 1, warm=warm))
-    assert (transition["mu_strategy"], transition["mu_init"]) == ("adaptive", 2e-4)
-    assert (start_up["mu_strategy"], start_up["mu_init"]) == ("monotone", 1e-6)
-    with pytest.raises(ConfigError, match=r"transitions\.warm_mu_strategy.*'fast'"):
-        load_config(_write(tmp_path, '[transitions]\nwarm_mu_strategy = "fast"\n'))

@@ -203,7 +203,6 @@ def _check_cross_fields(cfg: QuadrupedConfig) -> None:
         ("optimization.friction_model", cfg.optimization.friction_model, FRICTION_MODELS),
         ("optimization.mu_strategy", cfg.optimization.mu_strategy, ("monotone", "adaptive")),
         ("optimization.warm_mu_strategy", cfg.optimization.warm_mu_strategy, ("monotone", "adaptive")),
-        ("transitions.warm_mu_strategy", cfg.transitions.warm_mu_strategy, ("monotone", "adaptive")),
     ):
         if value not in allowed:
             raise ConfigError(p, key, f"{value!r}: use one of {', '.join(map(repr, allowed))}")

@@ -51,11 +51,6 @@ class TransitionsConfig:
                                       "easier than planned [-].", default=0.65)
     stop_speed_tol_mps: float = _f(1e-3, 0.2, "A stop ends with board and robot below this speed [m/s].",
                                    default=0.02)
-    warm_mu_strategy: str = _f(doc="IPOPT barrier strategy of a warm-started transition, 'monotone' or 'adaptive': "
-                               "its neighbour (another target from the same start speed) lies farther than a "
-                               "start-up's (optimization.warm_mu_strategy).", default="adaptive")
-    warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started transition [-].",
-                             default=1e-4)
     twin_judge: tuple[str, ...] = _f(doc="Model-error sets (skatelib track --perturb's, for the twin; 'none': the "
                                      "board as it is) under each of which a transition that passes the physics "
                                      "checks is ridden on the MuJoCo twin; a stride count it fails is not kept (the "

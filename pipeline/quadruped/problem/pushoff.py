@@ -113,12 +113,8 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     if spec.warm is None:
         options.update({"bound_mult_init_val": opt.bound_mult_init, "mu_max": opt.mu_max})
     else:
-        # A transition's neighbour (another target from the same start) lies farther than a start-up's.
-        tr = spec.config.transitions
-        strategy, mu = ((tr.warm_mu_strategy, tr.warm_mu_init) if spec.from_velocity_mps > 0
-                        else (opt.warm_mu_strategy, opt.warm_mu_init))
-        options.update({"warm_start_init_point": "yes", "mu_strategy": strategy,
-                        "mu_init": mu, "warm_start_bound_push": opt.warm_bound_push,
+        options.update({"warm_start_init_point": "yes", "mu_strategy": opt.warm_mu_strategy,
+                        "mu_init": opt.warm_mu_init, "warm_start_bound_push": opt.warm_bound_push,
                         "warm_start_mult_bound_push": opt.warm_bound_push})
     options.update(dict(spec.ipopt))
     return options
