@@ -4,9 +4,9 @@ transition with the fewest strides that pass the independent physics checks (``[
 strides`` tried in order) and, with ``[transitions] twin_judge``, the closed loop on the physical
 twin (:mod:`skatelib.pipeline.quadruped.transitions.twin_judge`); warm-started from the last success
 of the same stride count and knot window in the task. The knot window follows the faster speed and
-whether the planted foot pushes or brakes, so the slow-downs from a speed share theirs, and so do
-the speed-ups to one (a window's kept constraint rows, and so the multipliers a warm start carries,
-differ from another's). A cell that passes with no stride count is stored as the failure of the last
+whether the planted foot pushes or brakes, so the slow-downs from a speed that brake share theirs
+(a slight one may push), and so do the speed-ups to one (a window's kept constraint rows, and so the
+multipliers a warm start carries, differ from another's). A cell that passes with no stride count is stored as the failure of the last
 count tried, with its status."""
 
 from __future__ import annotations
