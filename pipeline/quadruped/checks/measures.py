@@ -35,19 +35,31 @@ def board_lateral_speed(state: np.ndarray) -> float:
     return float(np.abs(np.einsum("kj,kj->k", left, state[:, S_BOARD_V])).max(initial=0.0))
 
 
+_FINE: dict[tuple[int, float, int], tuple[SkateSystem, ca.Function]] = {}
+
+
+def _fine_step(system: SkateSystem, h: float, substeps: int) -> ca.Function:
+    """The fine RK4 step over ``h`` of the accelerating mode's dynamics, built once per process and
+    system (the system is kept with it, so its id stays its own)."""
+    key = (id(system), h, substeps)
+    if key not in _FINE:
+        f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
+        cr = ca.DM(system.stance.cr)
+        x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
+        _FINE[key] = (system, ca.Function("fine", [x_sym, u_sym], [rk4_step(f, x_sym, u_sym, cr, h, substeps)]))
+    return _FINE[key][1]
+
+
 def defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
-    """Largest mismatch between each knot and a fine RK4 re-integration from the one before."""
-    f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
-    cr = ca.DM(system.stance.cr)
-    x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
-    fine: dict[float, ca.Function] = {}
+    """Largest mismatch between each knot and a fine RK4 re-integration from the one before (the
+    intervals of one length integrated together)."""
+    steps = [round(float(t[k + 1] - t[k]), 12) for k in range(len(t) - 1)]
     defect = 0.0
-    for k in range(len(t) - 1):
-        h = round(float(t[k + 1] - t[k]), 12)
-        if h not in fine:
-            fine[h] = ca.Function("fine", [x_sym, u_sym], [rk4_step(f, x_sym, u_sym, cr, h, substeps)])
-        nxt = np.asarray(fine[h](state[k], control[k])).reshape(-1)
-        defect = max(defect, float(np.abs(nxt - state[k + 1]).max()))
+    for h in dict.fromkeys(steps):
+        ks = np.array([k for k, hk in enumerate(steps) if hk == h])
+        fine = _fine_step(system, h, substeps).map(len(ks))
+        nxt = np.asarray(fine(state[ks].T, control[ks].T)).T
+        defect = max(defect, float(np.abs(nxt - state[ks + 1]).max()))
     return defect
 
 
@@ -94,10 +106,16 @@ def swing_clearance(system: SkateSystem, state: np.ndarray, contact: np.ndarray,
     return float(np.minimum(bottom[:, 2], above_deck).min())
 
 
+_TAU: dict[int, tuple[SkateSystem, ca.Function]] = {}
+
+
 def max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> float:
-    x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
-    tau = ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
-    many = tau.map(len(control))
+    """The largest quasi-static joint torque over the control knots [N m] (the function built once
+    per process and system)."""
+    if id(system) not in _TAU:
+        x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
+        _TAU[id(system)] = (system, ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)]))
+    many = _TAU[id(system)][1].map(len(control))
     return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())
 
 

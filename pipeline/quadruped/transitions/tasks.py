@@ -6,8 +6,8 @@ twin (:mod:`skatelib.pipeline.quadruped.transitions.twin_judge`); warm-started f
 of the same stride count and knot window in the task. The knot window follows the faster speed and
 whether the planted foot pushes or brakes, so the slow-downs from a speed that brake share theirs
 (a slight one may push), and so do the speed-ups to one (a window's kept constraint rows, and so the
-multipliers a warm start carries, differ from another's). A cell that passes with no stride count is stored as the failure of the last
-count tried, with its status."""
+multipliers a warm start carries, differ from another's). A cell that passes with no stride count
+is stored as the failure of the last count tried, with its status."""
 
 from __future__ import annotations
 
