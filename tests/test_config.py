@@ -117,4 +117,3 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
     assert w_opts["warm_start_bound_push"] == w_opts["warm_start_mult_bound_push"] == 3e-5
     with pytest.raises(ConfigError, match=r"optimization\.warm_mu_strategy.*'fast'"):
         load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "fast"\n'))
-

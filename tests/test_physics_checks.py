@@ -170,3 +170,22 @@ def test_closed_loop_fails_the_shove_on_speed_and_passes_the_honest_entry(cfg, s
     assert abs(verdicts["honest"].momentum_at_end_mps - 0.3) < 0.05 * 0.3
     assert not verdicts["shove"].passed and "delivered speed" in verdicts["shove"].reasons
     assert verdicts["shove"].momentum_at_end_mps < 0.85 * 0.3
+
+
+def test_the_checks_functions_go_with_their_system(honest, system):
+    """The re-integration and torque functions the checks build are kept per system while it lives
+    (a second check builds nothing) and go with it (a process that makes many systems keeps none)."""
+    import gc
+
+    from skatelib.pipeline.quadruped.checks import measures
+
+    copy = dataclasses.replace(system)  # another system, the same figures
+    first = check_trajectory(copy, Trajectory.of(honest), honest.target_velocity_mps)
+    mine = {k for k in measures._BUILT if k[0] == id(copy)}
+    assert {k[1] for k in mine} == {"fine", "tau"}
+    again = check_trajectory(copy, Trajectory.of(honest), honest.target_velocity_mps)
+    assert again == first and {k for k in measures._BUILT if k[0] == id(copy)} == mine
+    assert first == check_trajectory(system, Trajectory.of(honest), honest.target_velocity_mps)
+    del copy
+    gc.collect()
+    assert not mine & set(measures._BUILT)

@@ -1,6 +1,6 @@
 """The quadruped's part of a build (``pipeline/build/orchestrate.py``): its options check, its tasks (one
-warm-start chain per stride count, one per start speed of the transitions), the library it writes
-(with the frontier when asked) and the table it prints."""
+warm-start chain per stride count, the slow-downs from each riding speed and the speed-ups to each,
+heaviest first), the library it writes (with the frontier when asked) and the table it prints."""
 
 from __future__ import annotations
 

@@ -4,6 +4,9 @@ the swinging foot's clearance and the joint torques. None uses the transcription
 
 from __future__ import annotations
 
+import weakref
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_BOARD_V, S_OMEGA, S_RPY, S_VEL, SWING
@@ -35,19 +38,30 @@ def board_lateral_speed(state: np.ndarray) -> float:
     return float(np.abs(np.einsum("kj,kj->k", left, state[:, S_BOARD_V])).max(initial=0.0))
 
 
-_FINE: dict[tuple[int, float, int], tuple[SkateSystem, ca.Function]] = {}
+# CasADi functions the checks build, per process and system: an entry goes when its system does
+# (weakref.finalize), so an id is never served to another system and a process that makes many
+# systems (validate() on many libraries) does not keep them all.
+_BUILT: dict[tuple[int, str, float, int], ca.Function] = {}
+
+
+def _built(system: SkateSystem, what: str, h: float, substeps: int, build: Callable[[], ca.Function]) -> ca.Function:
+    key = (id(system), what, h, substeps)
+    if key not in _BUILT:
+        _BUILT[key] = build()
+        weakref.finalize(system, _BUILT.pop, key, None)
+    return _BUILT[key]
 
 
 def _fine_step(system: SkateSystem, h: float, substeps: int) -> ca.Function:
-    """The fine RK4 step over ``h`` of the accelerating mode's dynamics, built once per process and
-    system (the system is kept with it, so its id stays its own)."""
-    key = (id(system), h, substeps)
-    if key not in _FINE:
+    """The fine RK4 step over ``h`` of the accelerating mode's dynamics (built once per system)."""
+
+    def build() -> ca.Function:
         f = dynamics_function(system, modes_for(system.push_leg)["accelerating"])
-        cr = ca.DM(system.stance.cr)
         x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
-        _FINE[key] = (system, ca.Function("fine", [x_sym, u_sym], [rk4_step(f, x_sym, u_sym, cr, h, substeps)]))
-    return _FINE[key][1]
+        step = rk4_step(f, x_sym, u_sym, ca.DM(system.stance.cr), h, substeps)
+        return ca.Function("fine", [x_sym, u_sym], [step])
+
+    return _built(system, "fine", h, substeps, build)
 
 
 def defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
@@ -106,16 +120,14 @@ def swing_clearance(system: SkateSystem, state: np.ndarray, contact: np.ndarray,
     return float(np.minimum(bottom[:, 2], above_deck).min())
 
 
-_TAU: dict[int, tuple[SkateSystem, ca.Function]] = {}
-
-
 def max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> float:
-    """The largest quasi-static joint torque over the control knots [N m] (the function built once
-    per process and system)."""
-    if id(system) not in _TAU:
+    """The largest quasi-static joint torque over the control knots [N m]."""
+
+    def build() -> ca.Function:
         x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
-        _TAU[id(system)] = (system, ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)]))
-    many = _TAU[id(system)][1].map(len(control))
+        return ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
+
+    many = _built(system, "tau", 0.0, 0, build).map(len(control))
     return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())
 
 

@@ -101,13 +101,14 @@ class TransitionTask:
 
 
 def transition_tasks(config: QuadrupedConfig, ipopt: tuple[tuple[str, Any], ...] = ()) -> list[TransitionTask]:
-    """The slow-downs from each riding speed (with its stop) and the speed-ups to each, fastest
-    first within each kind."""
+    """The slow-downs from each riding speed (with its stop), nearest target first, and the speed-ups
+    to each, nearest start first; fastest speed first within each kind."""
     pairs = config.transitions.pairs()
+
+    def chain(chosen: list[tuple[float, float]]) -> TransitionTask:
+        return TransitionTask(config, tuple(sorted(chosen, key=lambda ab: (abs(ab[1] - ab[0]), ab[0], ab[1]))), ipopt)
+
     downs = sorted({a for a, b in pairs if b < a}, reverse=True)
     ups = sorted({b for a, b in pairs if b > a}, reverse=True)
-    tasks = [TransitionTask(config, tuple(sorted(((a, b) for a2, b in pairs if a2 == a and b < a),
-                                                 key=lambda ab: (ab[0] - ab[1], ab[1]))), ipopt) for a in downs]
-    tasks += [TransitionTask(config, tuple(sorted(((a, b) for a, b2 in pairs if b2 == b and a < b),
-                                                  key=lambda ab: (ab[1] - ab[0], ab[0]))), ipopt) for b in ups]
-    return tasks
+    return ([chain([(a, b) for a, b in pairs if a == start and b < a]) for start in downs]
+            + [chain([(a, b) for a, b in pairs if b == end and a < b]) for end in ups])
