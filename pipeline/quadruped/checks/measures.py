@@ -41,11 +41,11 @@ def board_lateral_speed(state: np.ndarray) -> float:
 # CasADi functions the checks build, per process and system: an entry goes when its system does
 # (weakref.finalize), so an id is never served to another system and a process that makes many
 # systems (validate() on many libraries) does not keep them all.
-_BUILT: dict[tuple[int, str, float, int], ca.Function] = {}
+_BUILT: dict[tuple[object, ...], ca.Function] = {}
 
 
-def _built(system: SkateSystem, what: str, h: float, substeps: int, build: Callable[[], ca.Function]) -> ca.Function:
-    key = (id(system), what, h, substeps)
+def _built(system: SkateSystem, what: tuple[object, ...], build: Callable[[], ca.Function]) -> ca.Function:
+    key = (id(system), *what)
     if key not in _BUILT:
         _BUILT[key] = build()
         weakref.finalize(system, _BUILT.pop, key, None)
@@ -61,7 +61,7 @@ def _fine_step(system: SkateSystem, h: float, substeps: int) -> ca.Function:
         step = rk4_step(f, x_sym, u_sym, ca.DM(system.stance.cr), h, substeps)
         return ca.Function("fine", [x_sym, u_sym], [step])
 
-    return _built(system, "fine", h, substeps, build)
+    return _built(system, ("fine", h, substeps), build)
 
 
 def defect(system: SkateSystem, t: np.ndarray, state: np.ndarray, control: np.ndarray, substeps: int) -> float:
@@ -127,7 +127,7 @@ def max_torque(system: SkateSystem, state: np.ndarray, control: np.ndarray) -> f
         x_sym, u_sym = ca.SX.sym("x", NX), ca.SX.sym("u", 24)
         return ca.Function("tau", [x_sym, u_sym], [joint_torques(system, x_sym, u_sym)])
 
-    many = _built(system, "tau", 0.0, 0, build).map(len(control))
+    many = _built(system, ("tau",), build).map(len(control))
     return float(np.abs(np.asarray(many(state[:len(control)].T, control.T))).max())
 
 
