@@ -77,14 +77,16 @@ certify: venv-build
 
 # The suite in TEST_WORKERS processes (pytest-xdist), a test file's tests in one process so that
 # each file's shared libraries are made once per process (docs/benchmarks.md, "The test suite").
+# Each worker computes on one thread (BLAS, and a solve's stage derivatives): the workers fill the cores.
 TEST_WORKERS ?= 2
+TEST_ENV := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 test: venv
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder --durations=15
+	$(TEST_ENV) $(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder --durations=15
 
 # Everything but the tests marked slow (pyproject.toml names the marker; docs/benchmarks.md what
 # each part takes). make test runs them all.
 test-fast: venv
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder -m "not slow"
+	$(TEST_ENV) $(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder -m "not slow"
 
 # mypy checks the installed package by its import names (skatelib.*), then the scripts beside it.
 PACKAGES := pipeline library runtime control sim proving

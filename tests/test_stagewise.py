@@ -11,13 +11,13 @@ from skatelib.pipeline.ocp.stagewise import build_stagewise_nlp, stage_functions
 N_V, N_STAGES = 3, 12  # window v = [position, velocity, acceleration]
 
 
-def _toy(keep=None):
+def _toy(keep=None, threads=1):
     z, p = ca.SX.sym("z", 2 * N_V), ca.SX.sym("p", 1)
     x0, u0, x1 = z[0:2], z[2], z[3:5]
     dt = 0.1
     cost = u0**2 + p[0] * (x1[0] - 1) ** 2 + 0.1 * (z[5] - u0) ** 2 + ca.sin(x0[0]) * x0[1] ** 2
     cons = ca.vertcat(x1[0] - (x0[0] + dt * x0[1]), x1[1] - (x0[1] + dt * u0), x1[0] ** 3 - x1[1], ca.cos(u0))
-    return build_stagewise_nlp(stage_functions(z, p, cost, cons), N_STAGES, keep=keep)
+    return build_stagewise_nlp(stage_functions(z, p, cost, cons), N_STAGES, keep=keep, threads=threads)
 
 
 @pytest.mark.parametrize("drop", [False, True])
@@ -42,6 +42,40 @@ def test_assembled_derivatives_equal_casadi_ad(drop):
                        atol=1e-12)
     assert np.allclose(np.asarray(ca.densify(S.options["hess_lag"](wv, pv, 0.7, lv))),
                        np.asarray(ca.densify(ref_hess)), atol=1e-12)
+
+
+@pytest.mark.parametrize("threads", [2, 5, 40])
+def test_threaded_derivatives_equal_serial_to_the_bit(threads):
+    """On several threads (also more than stages) the Jacobian and Hessian are the serial ones exactly."""
+    serial, threaded = _toy(), _toy(threads=threads)
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        wv, pv, lv = rng.normal(size=serial.n_w), rng.uniform(0.5, 2, N_STAGES), rng.normal(size=serial.n_g)
+        for name, args in (("jac_g", (wv, pv)), ("hess_lag", (wv, pv, 0.7, lv))):
+            a, b = serial.options[name](*args), threaded.options[name](*args)
+            a, b = (a[1], b[1]) if name == "jac_g" else (a, b)
+            assert a.sparsity() == b.sparsity()
+            assert np.array_equal(np.asarray(a.nonzeros()), np.asarray(b.nonzeros()))
+
+
+def test_stage_threads_follow_omp_num_threads(monkeypatch):
+    """OMP_NUM_THREADS sets the threads (its first level); unset, the cores this process may use;
+    a value that is no count of threads is an error naming the variable."""
+    import os
+
+    from skatelib.library.errors import SkatelibError
+    from skatelib.pipeline.ocp.threads import stage_threads
+
+    monkeypatch.setenv("OMP_NUM_THREADS", "3")
+    assert stage_threads() == 3
+    monkeypatch.setenv("OMP_NUM_THREADS", "2,1")
+    assert stage_threads() == 2
+    monkeypatch.delenv("OMP_NUM_THREADS")
+    assert stage_threads() == (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())
+    for bad in ("0", "four", "-2"):
+        monkeypatch.setenv("OMP_NUM_THREADS", bad)
+        with pytest.raises(SkatelibError, match="OMP_NUM_THREADS"):
+            stage_threads()
 
 
 def test_solution_equals_plain_nlpsol():

@@ -28,6 +28,7 @@ import numpy as np
 from skatelib.library import trust
 from skatelib.library.compiled import cached_or_compiled
 from skatelib.pipeline.ocp.codegen import compile_library, load_private
+from skatelib.pipeline.ocp.threads import mapped
 
 
 @dataclass(frozen=True)
@@ -183,7 +184,8 @@ class StagewiseNLP:
     kept_rows: np.ndarray
 
 
-def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | None = None) -> StagewiseNLP:
+def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | None = None, threads: int = 1
+                        ) -> StagewiseNLP:
     """Assemble the NLP over ``w = [v_0, ..., v_N]`` and stage windows ``z_k = [v_k, v_{k+1}]``;
     the parameter is the (n_p x N) matrix of per-stage parameters. The sizes (n of each v, n_p,
     the rows per stage) are those of ``fns.value(z, p) -> (l, g)``.
@@ -196,6 +198,7 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
     Args:
         keep: Boolean mask over all stage rows (stage-major); rows left out (free rows with
             infinite bounds on both sides) never reach the solver.
+        threads: Threads the stage Jacobians and Hessians are evaluated on (the same values).
     """
     n, n_p, n_g_stage = fns.value.size1_in(0) // 2, fns.value.size1_in(1), fns.value.size1_out(1)
     n_w = n * (n_stages + 1)
@@ -212,22 +215,21 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
     # The stacked windows are W @ w; W.T adds stage contributions back onto the knots, summing
     # where neighbouring windows share a knot.
     W = _selection(2 * n * n_stages, n_w, window)
-    mode = "serial"
-    L, G = fns.value.map(n_stages, mode)(Z, P)
+    L, G = fns.value.map(n_stages, "serial")(Z, P)
     f = ca.sum2(L)
     g = ca.vec(G)[kept_rows.tolist()]
 
-    grad = ca.mtimes(W.T, ca.vec(fns.grad.map(n_stages, mode)(Z, P)))
+    grad = ca.mtimes(W.T, ca.vec(fns.grad.map(n_stages, "serial")(Z, P)))
 
     # Constraint Jacobian: the stage blocks on the diagonal, the kept rows, the columns moved onto the knots.
-    J_blocks = fns.jac.map(n_stages, mode)(Z, P)
+    J_blocks = mapped(fns.jac, n_stages, threads)(Z, P)
     J = ca.mtimes(_block_diagonal(J_blocks, fns.jac.sparsity_out(0), n_stages)[kept_rows.tolist(), :], W)
 
     # Hessian of the Lagrangian (upper triangle, which W.T (.) W keeps): dropped rows get zero multipliers.
     sigma = ca.MX.sym("lam_f")
     lam = ca.MX.sym("lam_g", n_g)
     lam_full = ca.reshape(ca.mtimes(_selection(n_g, n_full, kept_rows).T, lam), n_g_stage, n_stages)
-    H_blocks = fns.hess.map(n_stages, mode)(Z, P, sigma, lam_full)
+    H_blocks = mapped(fns.hess, n_stages, threads)(Z, P, sigma, lam_full)
     H = ca.mtimes(W.T, ca.mtimes(_block_diagonal(H_blocks, fns.hess.sparsity_out(0), n_stages), W))
 
     grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
