@@ -4,7 +4,8 @@ of its own (``OPENBLAS_CORETYPE`` is read when numpy loads OpenBLAS), after its 
 (a first run compiles the stage code for that kernel set and flags: the problem's constants are
 computed with numpy, so their last bits follow the kernel set); the baseline of each kernel set is
 the same solve with the stage functions interpreted, in the same run. A kernel set this CPU cannot
-run (SkylakeX's AVX-512 on a CPU without it: an illegal instruction) is reported as such."""
+run (SkylakeX's AVX-512 on a CPU without it: an illegal instruction) is reported as such. Like the
+push-off rows, each solve evaluates its stage derivatives on every core the process may use."""
 
 from __future__ import annotations
 
@@ -43,7 +44,7 @@ def _child(code: str) -> None:
 
 def _run(kernel: str, code: str) -> dict[str, float] | str:
     """One variant's figures, or why there are none."""
-    env = {**os.environ, "OPENBLAS_CORETYPE": kernel}
+    env = {k: v for k, v in os.environ.items() if k != "OMP_NUM_THREADS"} | {"OPENBLAS_CORETYPE": kernel}
     done = subprocess.run([sys.executable, "-m", "benchmarks.kernels", code], env=env, capture_output=True,
                           text=True, timeout=1800)
     if done.returncode == -signal.SIGILL:
