@@ -73,6 +73,21 @@ def test_warm_start_cuts_iterations(cfg, solved):
     assert abs(warm.final_velocity_mps - cold.final_velocity_mps) < 0.01
 
 
+def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch):
+    """The stage derivatives on 2 threads (``OMP_NUM_THREADS``) give the serial solve's iterates exactly."""
+    from skatelib.pipeline.quadruped.problem import pushoff
+
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("OMP_NUM_THREADS", threads)
+        monkeypatch.setattr(pushoff, "_PROBLEMS", {})  # built again, on these threads
+        runs.append(solve(PushoffSpec(cfg, 0.3, 1)))
+    serial, threaded = runs
+    assert serial.success and threaded.iterations == serial.iterations
+    for a, b in ((serial.warm.w, threaded.warm.w), (serial.warm.lam_g, threaded.warm.lam_g)):
+        assert np.array_equal(a, b)
+
+
 def test_solution_sits_in_every_named_bound(cfg, solved):
     """Each bound term names its channels; the solved knots (state, board position, control) read
     back by those names lie inside each term's box, e.g. the riding end's trunk height at the last knot."""
