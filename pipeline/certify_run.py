@@ -112,7 +112,7 @@ def run_unordered(jobs: Sequence[CertifyJob], options: CertifyOptions) -> Iterat
         from skatelib.pipeline.build.sweep import call_in_worker
 
         with parallel_config(backend="loky", inner_max_num_threads=1):
-            yield from Parallel(n_jobs=min(options.jobs, len(jobs)), backend="loky", return_as="generator_unordered")(
+            yield from Parallel(n_jobs=min(options.jobs, len(jobs)), return_as="generator_unordered")(
                 delayed(call_in_worker)(job, os.getpid()) for job in jobs)
 
 

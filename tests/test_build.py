@@ -112,6 +112,21 @@ def test_validate_rejects_a_corrupt_file(built, tmp_path):
     assert "bad.h5" in r.stderr and "checksum" in r.stderr and r.stdout == ""
 
 
+def _threads_here() -> tuple[object, ...]:
+    from skatelib.pipeline.ocp.threads import stage_threads
+
+    return (*(os.environ.get(v) for v in sweep.THREAD_VARS), stage_threads())
+
+
+def test_workers_compute_on_one_thread_whatever_the_caller_sets(monkeypatch):
+    """The pool's workers start with BLAS and OpenMP at one thread, so a solve there evaluates its
+    stage derivatives on one; the caller keeps its own setting."""
+    monkeypatch.setenv("OMP_NUM_THREADS", "7")
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "7")
+    assert sweep.run_calls([_threads_here, _threads_here], 2) == [("1", "1", "1", 1)] * 2
+    assert os.environ["OMP_NUM_THREADS"] == "7"
+
+
 def test_resume_uses_the_cache_and_gives_the_same_library(built, cache, tmp_path):
     """A second build finds every entry in the cache and writes identical trajectories."""
     out, _ = built

@@ -127,9 +127,10 @@ def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: 
         drain = threading.Thread(target=_drain, args=(events, on_entry, stop), daemon=True)
         drain.start()
         try:
-            # BLAS and OpenMP at 1 thread in the workers, from their start; the caller's process untouched.
+            # BLAS and OpenMP at 1 thread in the workers, from their start; the caller's process untouched
+            # (Parallel takes no backend of its own: one would drop inner_max_num_threads).
             with parallel_config(backend="loky", inner_max_num_threads=1):
-                results = Parallel(n_jobs=min(jobs, len(tasks)), backend="loky", return_as="generator_unordered")(
+                results = Parallel(n_jobs=min(jobs, len(tasks)), return_as="generator_unordered")(
                     delayed(run_task)(task, use_cache, events, os.getpid(), profile_dir=os.environ.get(ENV, ""))
                     for task in tasks)
                 outcomes = [o for task_out in results for o in task_out]
@@ -212,7 +213,7 @@ def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int, done: Callable[[int]
     from joblib import Parallel, delayed, parallel_config
 
     with parallel_config(backend="loky", inner_max_num_threads=1):
-        for r in Parallel(n_jobs=min(n_jobs, len(jobs)), backend="loky", return_as="generator")(
+        for r in Parallel(n_jobs=min(n_jobs, len(jobs)), return_as="generator")(
                 delayed(call_in_worker)(job, os.getpid()) for job in jobs):
             out.append(r)
             if done is not None:

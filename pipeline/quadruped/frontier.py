@@ -155,7 +155,7 @@ def find_frontier(config: QuadrupedConfig, searches: Sequence[tuple[Lane, int]],
     points: list[FrontierPoint] = []
     order = sorted(searches, key=lambda ls: -ls[1])  # most strides first: the longest solves
     with parallel_config(backend="loky", inner_max_num_threads=1):  # BLAS/OpenMP at 1 thread in the workers only
-        for point in Parallel(n_jobs=min(jobs, len(order)), backend="loky", return_as="generator_unordered")(
+        for point in Parallel(n_jobs=min(jobs, len(order)), return_as="generator_unordered")(
                 delayed(frontier_for)(config, s, search, lane) for lane, s in order):
             points.append(point)
             if done is not None:
