@@ -77,11 +77,14 @@ def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch)
     """The stage derivatives on 2 threads (``OMP_NUM_THREADS``) give the serial solve's iterates exactly."""
     from skatelib.pipeline.quadruped.problem import pushoff
 
-    runs = []
+    runs, maps = [], []
     for threads in ("1", "2"):
         monkeypatch.setenv("OMP_NUM_THREADS", threads)
         monkeypatch.setattr(pushoff, "_PROBLEMS", {})  # built again, on these threads
         runs.append(solve(PushoffSpec(cfg, 0.3, 1)))
+        hess = problem_for(cfg, 1).tr.nlp.options["hess_lag"]
+        maps.append([f.name() for f in hess.find_functions() if f.class_name() == "ThreadMap"])
+    assert maps[0] == [] and len(maps[1]) == 1 and maps[1][0].startswith("threadmap2_")
     serial, threaded = runs
     assert serial.success and threaded.iterations == serial.iterations
     for a, b in ((serial.warm.w, threaded.warm.w), (serial.warm.lam_g, threaded.warm.lam_g)):

@@ -44,10 +44,15 @@ def test_assembled_derivatives_equal_casadi_ad(drop):
                        np.asarray(ca.densify(ref_hess)), atol=1e-12)
 
 
-@pytest.mark.parametrize("threads", [2, 5, 40])
-def test_threaded_derivatives_equal_serial_to_the_bit(threads):
-    """On several threads (also more than stages) the Jacobian and Hessian are the serial ones exactly."""
+@pytest.mark.parametrize(("threads", "used"), [(2, 2), (5, 4), (40, 12)])
+def test_threaded_derivatives_equal_serial_to_the_bit(threads, used):
+    """On several threads (also more than stages: as many as give each the same share of the 12) the
+    Jacobian and Hessian are the serial ones exactly."""
     serial, threaded = _toy(), _toy(threads=threads)
+    for name in ("jac_g", "hess_lag"):
+        maps = [f.name() for f in threaded.options[name].find_functions() if f.class_name() == "ThreadMap"]
+        assert len(maps) == 1 and maps[0].startswith(f"threadmap{used}_"), maps
+        assert not [f for f in serial.options[name].find_functions() if f.class_name() == "ThreadMap"]
     rng = np.random.default_rng(1)
     for _ in range(3):
         wv, pv, lv = rng.normal(size=serial.n_w), rng.uniform(0.5, 2, N_STAGES), rng.normal(size=serial.n_g)
@@ -60,18 +65,22 @@ def test_threaded_derivatives_equal_serial_to_the_bit(threads):
 
 def test_stage_threads_follow_omp_num_threads(monkeypatch):
     """OMP_NUM_THREADS sets the threads (its first level); unset, the cores this process may use;
-    a value that is no count of threads is an error naming the variable."""
-    import os
-
+    at most MAX_THREADS; a value that is no count of threads is an error naming the variable."""
+    import joblib
     from skatelib.library.errors import SkatelibError
+    from skatelib.pipeline.ocp import threads
     from skatelib.pipeline.ocp.threads import stage_threads
 
     monkeypatch.setenv("OMP_NUM_THREADS", "3")
     assert stage_threads() == 3
     monkeypatch.setenv("OMP_NUM_THREADS", "2,1")
     assert stage_threads() == 2
+    monkeypatch.setenv("OMP_NUM_THREADS", "64")
+    assert stage_threads() == threads.MAX_THREADS
     monkeypatch.delenv("OMP_NUM_THREADS")
-    assert stage_threads() == (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())
+    for cores, expected in ((3, 3), (1, 1), (96, threads.MAX_THREADS)):
+        monkeypatch.setattr(joblib, "cpu_count", lambda cores=cores: cores)
+        assert stage_threads() == expected
     for bad in ("0", "four", "-2"):
         monkeypatch.setenv("OMP_NUM_THREADS", bad)
         with pytest.raises(SkatelibError, match="OMP_NUM_THREADS"):

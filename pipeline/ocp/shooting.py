@@ -24,15 +24,16 @@ from skatelib.pipeline.ocp.stagewise import (
     stage_functions,
 )
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, Stage
-from skatelib.pipeline.ocp.threads import stage_threads
 
 
 @dataclass(frozen=True)
 class MultipleShooting:
-    """The transcription settings: number of intervals and their length."""
+    """The transcription settings: number of intervals and their length, and the threads the stage
+    derivatives are evaluated on (:mod:`skatelib.pipeline.ocp.threads`; the same values on any)."""
 
     n_intervals: int
     dt: float
+    threads: int = 1
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,6 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
-    nlp = build_stagewise_nlp(fns, N, keep=keep, threads=stage_threads())
+    nlp = build_stagewise_nlp(fns, N, keep=keep, threads=method.threads)
     return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=hashlib.sha256(text.encode()).hexdigest())
 

@@ -111,9 +111,10 @@ def system_for(config: QuadrupedConfig) -> SkateSystem:
 
 
 class PushoffProblem:
-    """The transcribed NLP for one config, stride count and window, reusable across speeds."""
+    """The transcribed NLP for one config, stride count and window, reusable across speeds; its stage
+    derivatives evaluated on ``threads`` threads."""
 
-    def __init__(self, config: QuadrupedConfig, n_strides: int, window: Window = START_UP):
+    def __init__(self, config: QuadrupedConfig, n_strides: int, window: Window = START_UP, threads: int = 1):
         t0 = time.perf_counter()
         self.config = config
         self.n_strides = n_strides
@@ -147,7 +148,7 @@ class PushoffProblem:
             WheelLoads(system, board_legs), GentleContact(system, self.schedule, config.contact, opt.dt_s),
             FinalSpeed(opt.final_velocity_tol, term.relative_speed_tol_mps), RidingEnd(system, term.position_tol_m),
         ]
-        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s), (NXA, NU, N_PARAMS), self.costs,
+        self.tr: Transcribed = transcribe(MultipleShooting(N, opt.dt_s, threads), (NXA, NU, N_PARAMS), self.costs,
                                           self.constraints, compile_dir=compile_dir() if opt.compile else None,
                                           native=opt.compile_native)
         x_sym = ca.SX.sym("x", NX)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from skatelib.library.margins import forward_speed
 from skatelib.pipeline.build import interrupt
+from skatelib.pipeline.ocp.threads import stage_threads
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem.problem import START_UP, PushoffProblem, Window, system_for, transition_window
 
@@ -94,14 +95,15 @@ class SolveResult:
         return abs(self.final_velocity_mps - self.target_velocity_mps) / (self.target_velocity_mps or 1.0)
 
 
-_PROBLEMS: dict[tuple[str, int, Window], PushoffProblem] = {}
+_PROBLEMS: dict[tuple[str, int, Window, int], PushoffProblem] = {}
 
 
 def problem_for(config: QuadrupedConfig, n_strides: int, window: Window = START_UP) -> PushoffProblem:
-    """The cached problem of this process for (config, strides, window); built on first use."""
-    key = (config.resolved_json(), n_strides, window)
+    """The cached problem of this process for (config, strides, window), its stage derivatives on
+    :func:`~skatelib.pipeline.ocp.threads.stage_threads` threads; built on first use."""
+    key = (config.resolved_json(), n_strides, window, stage_threads())
     if key not in _PROBLEMS:
-        _PROBLEMS[key] = PushoffProblem(config, n_strides, window)
+        _PROBLEMS[key] = PushoffProblem(config, n_strides, window, threads=key[3])
     return _PROBLEMS[key]
 
 
@@ -124,7 +126,7 @@ def solve(spec: PushoffSpec) -> SolveResult:
     """Solve one push-off problem. Never raises on solver failure: the result says so."""
     t_build = time.perf_counter()
     window = spec.window
-    built_before = (spec.config.resolved_json(), spec.n_strides, window) in _PROBLEMS
+    built_before = (spec.config.resolved_json(), spec.n_strides, window, stage_threads()) in _PROBLEMS
     prob = problem_for(spec.config, spec.n_strides, window)
     build_time = 0.0 if built_before else time.perf_counter() - t_build
     v, v0 = spec.target_velocity_mps, spec.from_velocity_mps
