@@ -161,10 +161,6 @@ class HumanoidPlant:
         norm = math.sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3])  # as the C
         return Readings(float(d.time), q, qd, quat / norm, sd[self._gyro] + noise[16 + 2 * n:], force, torque)
 
-    def _floor_touches(self) -> tuple[str, ...]:
-        """The geoms on the floor other than the soles and the board's wheels, by name."""
-        return self._names(self._stray())
-
     def _names(self, geoms: Any) -> tuple[str, ...]:
         """The geoms' names (their bodies' for unnamed ones), sorted."""
         m = self.m
@@ -185,7 +181,8 @@ class HumanoidPlant:
         keeps of every tick."""
         if self._truth is not None:
             return self._truth(plane_z)
-        return truth_row(self._python_truth(plane_z), sorted(self._stray()))
+        stray = self._stray()
+        return truth_row(self._python_truth(plane_z, stray), sorted(stray))
 
     def floor_touches(self, row: np.ndarray) -> tuple[str, ...]:
         """The geoms on the floor other than the soles and the board's wheels, by name, from a
@@ -194,8 +191,9 @@ class HumanoidPlant:
 
         return self._names(n.stray_geoms(row, n.H_N_STRAY, self._stray)) if row[n.H_N_STRAY] else ()
 
-    def _python_truth(self, plane_z: float) -> Truth:
-        """:meth:`truth` read through MuJoCo's Python bindings."""
+    def _python_truth(self, plane_z: float, stray: set[int] | None = None) -> Truth:
+        """:meth:`truth` read through MuJoCo's Python bindings (``stray``: :meth:`_stray`, when the
+        caller has it)."""
         import mujoco
 
         m, d = self.m, self.d
@@ -223,7 +221,7 @@ class HumanoidPlant:
             deck = (self._xpos[self.deck].copy(), self._xmat[self.deck].reshape(3, 3).copy(), w[3:6].copy())
         return Truth(float(d.time), c.copy(), self._comvel[self.root].copy(), self._xpos[self.root].copy(),
                      self._xmat[self.root].reshape(3, 3).copy(), force, zmp, both, pos, yaw, v, wz,
-                     self._torques[self.act], self._floor_touches(), *deck)
+                     self._torques[self.act], self._names(self._stray() if stray is None else stray), *deck)
 
     def truth_of(self, s: np.ndarray) -> Truth:
         """A :class:`Truth` of views of a :meth:`truth_row` ``s`` taken now."""
