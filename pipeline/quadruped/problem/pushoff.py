@@ -101,10 +101,16 @@ _PROBLEMS: dict[tuple[str, int, Window, int], PushoffProblem] = {}
 def problem_for(config: QuadrupedConfig, n_strides: int, window: Window = START_UP) -> PushoffProblem:
     """The cached problem of this process for (config, strides, window), its stage derivatives on
     :func:`~skatelib.pipeline.ocp.threads.stage_threads` threads; built on first use."""
+    return _cached_problem(config, n_strides, window)[0]
+
+
+def _cached_problem(config: QuadrupedConfig, n_strides: int, window: Window) -> tuple[PushoffProblem, bool]:
+    """:func:`problem_for`'s problem, and whether this call built it."""
     key = (config.resolved_json(), n_strides, window, stage_threads())
-    if key not in _PROBLEMS:
+    built = key not in _PROBLEMS
+    if built:
         _PROBLEMS[key] = PushoffProblem(config, n_strides, window, threads=key[3])
-    return _PROBLEMS[key]
+    return _PROBLEMS[key], built
 
 
 def solver_options(spec: PushoffSpec) -> dict[str, Any]:
@@ -125,10 +131,8 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
 def solve(spec: PushoffSpec) -> SolveResult:
     """Solve one push-off problem. Never raises on solver failure: the result says so."""
     t_build = time.perf_counter()
-    window = spec.window
-    built_before = (spec.config.resolved_json(), spec.n_strides, window, stage_threads()) in _PROBLEMS
-    prob = problem_for(spec.config, spec.n_strides, window)
-    build_time = 0.0 if built_before else time.perf_counter() - t_build
+    prob, built = _cached_problem(spec.config, spec.n_strides, spec.window)
+    build_time = time.perf_counter() - t_build if built else 0.0
     v, v0 = spec.target_velocity_mps, spec.from_velocity_mps
     options = solver_options(spec)
     solver = prob.solver(options)
