@@ -63,6 +63,7 @@ class SkateSystem:
     extra: dict[str, float] = field(default_factory=dict)
     contact: ContactConfig | None = None  # how gently the push foot meets the ground (the checks' limits)
     end_push_foot_height_m: float = 0.0  # the push foot's least height at the end
+    joint_limit_margin_rad: float = 0.0  # how far the plan's joint angles stay inside their limits
 
     @property
     def push_index(self) -> int:
@@ -128,6 +129,7 @@ class SkateSystem:
             foot_radius_m=r, friction_mu=cfg.robot.friction_mu, torque_limit_Nm=cfg.robot.torque_limit_Nm,
             joint_velocity_limit_radps=cfg.robot.joint_velocity_limit_radps, push_leg=cfg.schedule.push_leg,
             contact=cfg.contact, end_push_foot_height_m=cfg.terminal.push_foot_height_m,
+            joint_limit_margin_rad=cfg.optimization.joint_limit_margin_rad,
         )
 
 

@@ -1,12 +1,13 @@
 """Cold initial guesses of the push-off NLP: the static stance riding a board whose speed ramps from
 the start speed to the target (``"ramp"``) or holds the start speed (``"hold"``), with the push leg
-posed by inverse kinematics. Never random: the same problem always starts from the same point."""
+posed by inverse kinematics, and after the last push the trunk and joints moving into the riding
+stance the last knot is bounded to. Never random: the same problem always starts from the same point."""
 
 from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F
+from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F, U_QD
 from skatelib.pipeline.quadruped.model.robot import DampedNewton, foot_position_leg
 from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.model.system import SkateSystem
@@ -17,7 +18,10 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
                   target_velocity_mps: float, kind: str) -> np.ndarray:
     """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp from
     ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] (or at ``from_velocity_mps``), the push
-    leg by IK, and contact forces that carry the ramp's momentum."""
+    leg by IK, contact forces that carry the ramp's momentum, and joint speeds that move the joints
+    from knot to knot. After the last push the trunk moves over the deck and the joints into the
+    riding stance, inside the bounds of the riding end (the end's narrow bands: a guess outside them
+    has IPOPT's first steps cut short by the fraction to the boundary)."""
     sch, v0, v = schedule, from_velocity_mps, target_velocity_mps
     K = len(sch.t)
     guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
@@ -26,24 +30,42 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
     travel = v0 * sch.t + 0.5 * a * sch.t**2
     guess[:, S_POS.start] += travel
     guess[:, I_BOARD_XY.start] = travel
-    guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m,
-                                     system.end_push_foot_height_m + 0.01)
+    ease = _into_riding(sch, system.push_index)
+    guess[:, S_POS.start:S_POS.start + 2] += np.outer(ease, system.riding_com_m[:2] - (x0[S_POS][:2] - x0[I_BOARD_XY]))
+    joints = x0[S_Q] + np.outer(ease, system.stance.q_ride - x0[S_Q])
+    guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m, joints)
     guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v - v0, a, kind)
+    guess[:-1, NXA + U_QD.start:NXA + U_QD.stop] = np.diff(guess[:, S_Q], axis=0) / np.diff(sch.t)[:, None]
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
 
 
-def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, end_lift_m: float) -> np.ndarray:
-    """Joint angles per knot: the board stance, the push foot held where it touched down while the
-    trunk rides on, and between pushes the foot on a swing that leaves and meets the ground gently
-    (:func:`_swing`), by inverse kinematics; after the last push it rises to ``end_lift_m``."""
+def _into_riding(sch: KnotSchedule, push: int) -> np.ndarray:
+    """Per knot, how far the guess has moved from the start's stance into the riding stance: 0 until
+    the last push ends, then a smootherstep to 1 at the last knot but one (the last interval holds
+    still, as the end's joint-speed bound asks)."""
+    K = len(sch.t)
+    runs = sch.stance_intervals(push, GROUND)
+    k1 = runs[-1][1] if runs else 0
+    s = np.clip((np.arange(K) - k1) / max(K - 2 - k1, 1), 0.0, 1.0)
+    return s**3 * (10 - 15 * s + 6 * s**2)
+
+
+def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """Joint angles per knot: ``joints`` (K, 12) for the deck legs, the push foot held where it
+    touched down while the trunk rides on, and between pushes the foot on a swing that leaves and
+    meets the ground gently (:func:`_swing`), by inverse kinematics; after the last push it rises to
+    where the riding stance holds it beside the trunk, arriving there riding along with it a knot
+    before the end."""
     p, K = system.push_index, len(sch.t)
     leg = slice(3 * p, 3 * p + 3)
-    q = np.tile(system.stance.q_board, (K, 1))
+    q = joints.copy()
     runs = sch.stance_intervals(p, GROUND)
-    lo, hi = system.robot.lower_limits[leg], system.robot.upper_limits[leg]
+    margin = system.joint_limit_margin_rad  # the plan's limits, as the NLP's bounds have them
+    lo, hi = system.robot.lower_limits[leg] + margin, system.robot.upper_limits[leg] - margin
     fk, newton = _leg_fk(system), DampedNewton(damping=1e-6, tol=1e-9, max_iter=20)
     push_foot = np.asarray(system.robot.foot_positions_body(system.stance.q_push))[:, p]
+    ride_foot = np.asarray(system.robot.foot_positions_body(system.stance.q_ride))[:, p]
     holds = []
     for k0, k1 in runs:
         foot_world = trunk[k0] + push_foot
@@ -66,10 +88,11 @@ def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, 
         last = j + 1 == len(runs)
         k2 = K - 1 if last else runs[j + 1][0]
         start = holds[j]
-        end = trunk[k2] + push_foot + np.array([0.0, 0.0, end_lift_m]) if last else holds[j + 1]
         q_leg = q[k1, leg].copy()
         for k in range(k1 + 1, k2 + (1 if last else 0)):
-            target = _swing(start, end, (k - k1) / max(k2 - k1, 1), system.extra.get("swing_apex_m", 0.06), last)
+            end = trunk[k] + ride_foot if last else holds[j + 1]  # the last swing ends riding along
+            phase = min((k - k1) / max(k2 - k1 - last, 1), 1.0)  # the last swing arrives a knot early
+            target = _swing(start, end, phase, system.extra.get("swing_apex_m", 0.06), last)
             q_leg, _ = newton.solve(fk, target - trunk[k], q_leg, (lo, hi))
             q[k, leg] = q_leg
     return q
