@@ -1,18 +1,21 @@
 """The cold initial guess of the push-off NLP ends where the NLP's last knot is bounded to be: in the
 riding stance, inside every bound and end row, its joints moved by its own joint speeds. A guess
 outside those narrow end bands has IPOPT's first steps cut to a few per cent by the fraction to the
-boundary (docs/design-notes.md); the doctored guesses below show each check failing."""
+boundary (docs/design-notes.md); the doctored guesses below show each check failing. A warm start
+moves along the guesses to its new target."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import casadi as ca
 import numpy as np
 import pytest
-from skatelib.library.channels import NU, S_Q, U_QD
+from skatelib.library.channels import NU, S_BOARD_V, S_Q, U_QD
 from skatelib.pipeline.ocp.shooting import window_stage
 from skatelib.pipeline.quadruped.problem.knots import N_PARAMS, NXA
 from skatelib.pipeline.quadruped.problem.problem import transition_window
-from skatelib.pipeline.quadruped.problem.pushoff import problem_for
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, problem_for, warm_point
 
 END_ROWS = ("riding_end", "final_speed", "push_foot")
 
@@ -97,3 +100,20 @@ def test_each_check_fails_on_a_doctored_guess(case):
     dt = np.diff(prob.schedule.t)[:, None]
     q, qd = jolted[:, S_Q], jolted[:-1, NXA + U_QD.start:NXA + U_QD.stop]
     assert np.max(np.abs(q[1:] - q[:-1] - dt * qd)) > 0.009
+
+
+def test_a_warm_start_is_moved_along_the_guesses(cfg, pushoff_0p3):
+    """With ``warm_predictor`` the warm start of the 0.3 m/s solution towards 0.4 m/s starts from the
+    solution plus the change of the cold guess: its board ends 0.1 m/s faster, its first knot is
+    still the start state; without, it is the solution itself. The solution records its speeds."""
+    warm = pushoff_0p3.warm
+    assert (warm.from_velocity_mps, warm.target_velocity_mps) == (0.0, 0.3)
+    assert cfg.optimization.warm_predictor
+    prob = problem_for(cfg, 1)
+    K = len(prob.schedule.t)
+    moved = warm_point(prob, PushoffSpec(cfg, 0.4, 1, warm=warm)).reshape(K, -1)
+    before = warm.w.reshape(K, -1)
+    np.testing.assert_allclose(moved[-1, S_BOARD_V.start] - before[-1, S_BOARD_V.start], 0.1, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(moved[0, :NXA], prob.start_state(0.0))
+    off = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, warm_predictor=False))
+    assert warm_point(prob, PushoffSpec(off, 0.4, 1, warm=warm)) is warm.w

@@ -24,7 +24,7 @@ from skatelib.pipeline.build import codec
 
 # Bump when a kind's retry ladder, the solve's post-processing or the cached payload changes: the
 # keys cover the problems themselves (stage functions, bounds, guesses, plans, options), not that code.
-CACHE_VERSION = "3"
+CACHE_VERSION = "4"
 _MAGIC = b"skatelib-entry-cache 3\n"
 
 def cache_key(*parts: Any) -> str:

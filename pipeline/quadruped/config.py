@@ -97,6 +97,8 @@ class OptimizationConfig:
     warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started solve [-].", default=1e-4)
     warm_bound_push: float = _f(1e-12, 0.1, "IPOPT warm_start_(mult_)bound_push of a warm-started solve [-].",
                                 default=1e-6)
+    warm_predictor: bool = _f(doc="Move a warm start's primal point from the speeds it was solved for to the "
+                                  "target's by the change of the cold guess between them.", default=False)
     compile: bool = _f(doc="Compile the stage functions with the C compiler (cached on disk).", default=True)
     compile_native: bool = _f(doc="Compile them for this CPU (-march=native: faster; the CPU is part of the cache "
                                   "key) rather than as portable code for any CPU of its architecture.", default=True)

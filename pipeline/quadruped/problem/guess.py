@@ -5,6 +5,8 @@ stance the last knot is bounded to. Never random: the same problem always starts
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F, U_QD
@@ -38,6 +40,25 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
     guess[:-1, NXA + U_QD.start:NXA + U_QD.stop] = np.diff(guess[:, S_Q], axis=0) / np.diff(sch.t)[:, None]
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
+
+
+class Guesses:
+    """One problem's cold guesses, each made once per (start speed, target speed, kind) by ``make``
+    (their inverse kinematics take some 40 ms), read-only; the last ``keep`` are kept."""
+
+    def __init__(self, make: Callable[[float, float, str], np.ndarray], keep: int = 64):
+        self._make, self._keep = make, keep
+        self._made: dict[tuple[float, float, str], np.ndarray] = {}
+
+    def __call__(self, from_velocity_mps: float, target_velocity_mps: float, kind: str) -> np.ndarray:
+        key = (from_velocity_mps, target_velocity_mps, kind)
+        if key not in self._made:
+            if len(self._made) >= self._keep:
+                del self._made[next(iter(self._made))]
+            guess = self._make(*key)
+            guess.setflags(write=False)
+            self._made[key] = guess
+        return self._made[key]
 
 
 def _into_riding(sch: KnotSchedule, push: int) -> np.ndarray:

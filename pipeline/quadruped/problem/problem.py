@@ -31,7 +31,7 @@ from skatelib.pipeline.quadruped.problem.bounds import bound_terms
 from skatelib.pipeline.quadruped.problem.contact_terms import GentleContact, WheelLoads
 from skatelib.pipeline.quadruped.problem.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
-from skatelib.pipeline.quadruped.problem.guess import initial_guess
+from skatelib.pipeline.quadruped.problem.guess import Guesses, initial_guess
 from skatelib.pipeline.quadruped.problem.knots import (
     I_BOARD_XY,
     N_PARAMS,
@@ -155,6 +155,7 @@ class PushoffProblem:
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
         self.build_time_s = time.perf_counter() - t0
         self._solvers: dict[tuple[Any, ...], ca.Function] = {}
+        self._guesses = Guesses(lambda v0, v, k: initial_guess(system, self.schedule, self.start_state(v0), v0, v, k))
 
     @property
     def n(self) -> int:
@@ -170,10 +171,8 @@ class PushoffProblem:
 
     def _initial_state(self) -> np.ndarray:
         """Static stance on the board at rest, the push foot on the ground (accelerating mode)."""
-        s = self.system
-        x = np.zeros(NXA)
-        trunk = np.array([self.config.stance.base_x_offset_m, 0.0, s.stance.trunk_height_m])
-        x[S_POS] = trunk + s.srb.com_offset_m
+        s, x = self.system, np.zeros(NXA)
+        x[S_POS] = np.array([self.config.stance.base_x_offset_m, 0.0, s.stance.trunk_height_m]) + s.srb.com_offset_m
         x[S_Q] = s.stance.q_push
         return x
 
@@ -212,8 +211,8 @@ class PushoffProblem:
         return lbx, ubx, self.tr.lbg.copy(), self.tr.ubg.copy()
 
     def initial_guess(self, from_velocity_mps: float, target_velocity_mps: float, kind: str) -> np.ndarray:
-        v0, v = from_velocity_mps, target_velocity_mps
-        return initial_guess(self.system, self.schedule, self.start_state(v0), v0, v, kind)
+        """The cold guess (:mod:`.guess`), read-only, made once per speeds and kind."""
+        return self._guesses(from_velocity_mps, target_velocity_mps, kind)
 
     def fingerprint(self, from_velocity_mps: float, target_velocity_mps: float, guess: str) -> str:
         """SHA-256 of everything this problem feeds IPOPT for one target besides its options and warm

@@ -24,11 +24,14 @@ from skatelib.pipeline.quadruped.problem.problem import START_UP, PushoffProblem
 
 @dataclass(frozen=True)
 class WarmStart:
-    """A previous solution to start from: primal w and multipliers of g and of the bounds."""
+    """A previous solution to start from: primal w and multipliers of g and of the bounds, and the
+    start and target speeds it was solved for [m/s]."""
 
     w: np.ndarray
     lam_g: np.ndarray
     lam_x: np.ndarray
+    from_velocity_mps: float = 0.0
+    target_velocity_mps: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -128,6 +131,20 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     return options
 
 
+def warm_point(prob: PushoffProblem, spec: PushoffSpec) -> np.ndarray:
+    """The primal point a warm-started solve of ``spec`` starts from: the warm start's solution, with
+    ``[optimization] warm_predictor`` moved by the difference of the problem's cold guesses at the
+    spec's speeds and at the speeds the warm start was solved for (the same problem: the speed ramp,
+    the push force that carries it, the riding end; a first-order step along the family of targets)."""
+    warm = spec.warm
+    assert warm is not None
+    if not spec.config.optimization.warm_predictor:
+        return warm.w
+    here = prob.initial_guess(spec.from_velocity_mps, spec.target_velocity_mps, "ramp")
+    there = prob.initial_guess(warm.from_velocity_mps, warm.target_velocity_mps, "ramp")
+    return warm.w + (here - there)
+
+
 def solve(spec: PushoffSpec) -> SolveResult:
     """Solve one push-off problem. Never raises on solver failure: the result says so."""
     t_build = time.perf_counter()
@@ -141,7 +158,7 @@ def solve(spec: PushoffSpec) -> SolveResult:
     lbx, ubx, lbg, ubg = bounds
     args: dict[str, Any] = {"p": P, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
     if spec.warm is not None:
-        args.update(x0=spec.warm.w, lam_g0=spec.warm.lam_g, lam_x0=spec.warm.lam_x)
+        args.update(x0=warm_point(prob, spec), lam_g0=spec.warm.lam_g, lam_x0=spec.warm.lam_x)
     else:
         args["x0"] = prob.initial_guess(v0, v, spec.guess)
     t0 = time.perf_counter()
@@ -159,6 +176,7 @@ def solve(spec: PushoffSpec) -> SolveResult:
         status=status, iterations=int(stats.get("iter_count", -1)), build_time_s=build_time,
         solve_time_s=solve_time, objective=float(sol["f"]), max_constraint_violation=viol,
         final_velocity_mps=final_v,
-        warm=WarmStart(w=w, lam_g=np.asarray(sol["lam_g"]).reshape(-1), lam_x=np.asarray(sol["lam_x"]).reshape(-1)),
+        warm=WarmStart(w=w, lam_g=np.asarray(sol["lam_g"]).reshape(-1), lam_x=np.asarray(sol["lam_x"]).reshape(-1),
+                       from_velocity_mps=v0, target_velocity_mps=v),
         ipopt_options=options, from_velocity_mps=v0, **arrays,
     )
