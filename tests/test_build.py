@@ -213,7 +213,7 @@ def test_retry_ladder_goes_cold_then_other_guesses():
     """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run from IPOPT's
     own bound multipliers and barrier ceiling (the config's are for a first try)."""
     cfg = load_config(TINY)
-    spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1)))
+    spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1), 0.0, 0.2))
     ladder = retry_ladder(spec)
     assert [s.warm is not None for s in ladder] == [True, False, False, False]
     assert [s.guess for s in ladder] == ["ramp", "ramp", "hold", "ramp"]

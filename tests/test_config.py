@@ -107,7 +107,8 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
 
     c = load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "adaptive"\nwarm_mu_init = 3e-5\n'
                                      'bound_mult_init = 2e-3\nwarm_bound_push = 3e-5\nmu_max = 0.5\n'))
-    warm = WarmStart(w=np.zeros(3), lam_g=np.zeros(2), lam_x=np.zeros(3))
+    warm = WarmStart(w=np.zeros(3), lam_g=np.zeros(2), lam_x=np.zeros(3), from_velocity_mps=0.0,
+                     target_velocity_mps=0.45)
     w_opts, c_opts = solver_options(PushoffSpec(c, 0.5, 2, warm=warm)), solver_options(PushoffSpec(c, 0.5, 2))
     assert (w_opts["mu_strategy"], w_opts["mu_init"], w_opts["warm_start_init_point"]) == ("adaptive", 3e-5, "yes")
     assert (c_opts["mu_strategy"], c_opts["mu_init"]) == (c.optimization.mu_strategy, c.optimization.mu_init)

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
-from skatelib.library.channels import CONTROL_NAMES, GROUND, LEGS, STATE_NAMES
+from skatelib.library.channels import CONTROL_NAMES, GROUND, LEGS, S_BOARD_V, STATE_NAMES
 from skatelib.pipeline.ocp.terms import Box, variable_bounds
 from skatelib.pipeline.quadruped.checks.verify import Trajectory, check_trajectory
-from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, problem_for, solve
+from skatelib.pipeline.quadruped.problem.knots import NXA
+from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, problem_for, solve, warm_point
 
 from tests import reference_model as ref
 
@@ -71,6 +74,23 @@ def test_warm_start_cuts_iterations(cfg, solved):
     assert cold.success and warm.success
     assert warm.iterations <= (2 * cold.iterations) // 3, (warm.iterations, cold.iterations)
     assert abs(warm.final_velocity_mps - cold.final_velocity_mps) < 0.01
+
+
+def test_a_warm_start_is_moved_along_the_guesses(cfg, solved):
+    """With ``warm_predictor`` the warm start of the 0.3 m/s solution towards 0.4 m/s starts from the
+    solution plus the change of the cold guess: its board ends 0.1 m/s faster, its first knot is
+    still the start state; without, it is the solution itself. The solution records its speeds."""
+    warm = solved.warm
+    assert (warm.from_velocity_mps, warm.target_velocity_mps) == (0.0, 0.3)
+    assert cfg.optimization.warm_predictor
+    prob = problem_for(cfg, 1)
+    K = len(prob.schedule.t)
+    moved = warm_point(prob, PushoffSpec(cfg, 0.4, 1, warm=warm)).reshape(K, -1)
+    before = warm.w.reshape(K, -1)
+    np.testing.assert_allclose(moved[-1, S_BOARD_V.start] - before[-1, S_BOARD_V.start], 0.1, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(moved[0, :NXA], prob.start_state(0.0))
+    off = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, warm_predictor=False))
+    assert warm_point(prob, PushoffSpec(off, 0.4, 1, warm=warm)) is warm.w
 
 
 def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch):

@@ -68,8 +68,8 @@ def bound_terms(config: QuadrupedConfig, system: SkateSystem, schedule: KnotSche
                 x0: np.ndarray) -> list[BoundTerm]:
     """Every bound of the push-off NLP: boxes on the trunk, joints, deck and controls, the initial
     state, and the riding end (Sec. IV-B's last knot, tolerances from ``[terminal]``)."""
-    opt, term = config.optimization, config.terminal
-    margin = opt.joint_limit_margin_rad
+    term = config.terminal
+    margin = system.joint_limit_margin_rad  # the config's, as the guess has it
     fmax = 4.0 * system.srb.mass_kg * system.gravity_mps2
     qd_max, roll_max = system.joint_velocity_limit_radps, system.board.roll_limit_rad
     z0 = float(x0[columns("base_z")][0])

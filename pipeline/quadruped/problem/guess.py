@@ -44,7 +44,7 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
 
 class Guesses:
     """One problem's cold guesses, each made once per (start speed, target speed, kind) by ``make``
-    (their inverse kinematics take some 40 ms), read-only; the last ``keep`` are kept."""
+    (their inverse kinematics take some 40 ms), read-only; the ``keep`` made last are kept."""
 
     def __init__(self, make: Callable[[float, float, str], np.ndarray], keep: int = 64):
         self._make, self._keep = make, keep
@@ -64,7 +64,8 @@ class Guesses:
 def _into_riding(sch: KnotSchedule, push: int) -> np.ndarray:
     """Per knot, how far the guess has moved from the start's stance into the riding stance: 0 until
     the last push ends, then a smootherstep to 1 at the last knot but one (the last interval holds
-    still, as the end's joint-speed bound asks)."""
+    still, as the end's joint-speed bound asks; a schedule whose last push ends at that knot leaves
+    the move to the last interval)."""
     K = len(sch.t)
     runs = sch.stance_intervals(push, GROUND)
     k1 = runs[-1][1] if runs else 0
@@ -112,7 +113,7 @@ def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, 
         q_leg = q[k1, leg].copy()
         for k in range(k1 + 1, k2 + (1 if last else 0)):
             end = trunk[k] + ride_foot if last else holds[j + 1]  # the last swing ends riding along
-            phase = min((k - k1) / max(k2 - k1 - last, 1), 1.0)  # the last swing arrives a knot early
+            phase = min((k - k1) / max(k2 - k1 - int(last), 1), 1.0)  # the last swing arrives a knot early
             target = _swing(start, end, phase, system.extra.get("swing_apex_m", 0.06), last)
             q_leg, _ = newton.solve(fk, target - trunk[k], q_leg, (lo, hi))
             q[k, leg] = q_leg

@@ -30,8 +30,8 @@ class WarmStart:
     w: np.ndarray
     lam_g: np.ndarray
     lam_x: np.ndarray
-    from_velocity_mps: float = 0.0
-    target_velocity_mps: float = 0.0
+    from_velocity_mps: float
+    target_velocity_mps: float
 
 
 @dataclass(frozen=True)
