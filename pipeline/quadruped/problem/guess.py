@@ -27,16 +27,19 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
     sch, v0, v = schedule, from_velocity_mps, target_velocity_mps
     K = len(sch.t)
     guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
-    a = (v - v0) / sch.t[-1] if kind == "ramp" else 0.0
-    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = v0 + a * sch.t
-    travel = v0 * sch.t + 0.5 * a * sch.t**2
+    dt = np.diff(sch.t)
+    pushing = sch.contact[:-1, system.push_index] == GROUND
+    acc = pushing * (v - v0) / max(float(dt @ pushing), 1e-9) if kind == "ramp" else np.zeros(K - 1)
+    speed = v0 + np.concatenate([[0.0], np.cumsum(acc * dt)])
+    guess[:, S_BOARD_V.start] = guess[:, S_VEL.start] = speed
+    travel = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * dt)])
     guess[:, S_POS.start] += travel
     guess[:, I_BOARD_XY.start] = travel
     ease = _into_riding(sch, system.push_index)
     guess[:, S_POS.start:S_POS.start + 2] += np.outer(ease, system.riding_com_m[:2] - (x0[S_POS][:2] - x0[I_BOARD_XY]))
     joints = x0[S_Q] + np.outer(ease, system.stance.q_ride - x0[S_Q])
     guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m, joints)
-    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, v - v0, a, kind)
+    guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, acc)
     guess[:-1, NXA + U_QD.start:NXA + U_QD.stop] = np.diff(guess[:, S_Q], axis=0) / np.diff(sch.t)[:, None]
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
@@ -131,20 +134,18 @@ def _swing(start: np.ndarray, end: np.ndarray, s: float, apex_m: float, rising: 
     return point
 
 
-def _forces(system: SkateSystem, sch: KnotSchedule, dv: float, a: float, kind: str) -> np.ndarray:
+def _forces(system: SkateSystem, sch: KnotSchedule, acc: np.ndarray) -> np.ndarray:
     """Forces (K - 1, 12): weight shared by the feet in contact, the push foot's force along the
-    heading over the push time changing robot and board's speed by ``dv``, the deck feet
+    heading accelerating robot and board together at ``acc`` (K - 1,) [m/s^2], the deck feet
     accelerating the board."""
     p = system.push_index
     m_r, m_b = system.srb.mass_kg, system.board.mass_kg
-    push_time = sum(k1 - k0 for k0, k1 in sch.stance_intervals(p, GROUND)) * (sch.t[1] - sch.t[0])
-    f_push = (m_r + m_b) * dv / push_time if kind == "ramp" and push_time > 0 else 0.0
     f = np.zeros((len(sch.t) - 1, 12))
     for k in range(len(sch.t) - 1):
         on = [i for i in range(4) if sch.contact[k, i] != SWING]
         for i in on:
             f[k, 3 * i + 2] = m_r * system.gravity_mps2 / len(on)
-            f[k, 3 * i] = f_push if i == p else -m_b * a / 3
+            f[k, 3 * i] = (m_r + m_b) * acc[k] if i == p else -m_b * acc[k] / 3
     return f
 
 
