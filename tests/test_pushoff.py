@@ -85,12 +85,12 @@ def test_a_warm_start_is_moved_along_the_guesses(cfg, solved):
     assert cfg.optimization.warm_predictor
     prob = problem_for(cfg, 1)
     K = len(prob.schedule.t)
-    moved = warm_point(prob, PushoffSpec(cfg, 0.4, 1, warm=warm)).reshape(K, -1)
+    moved = warm_point(prob, PushoffSpec(cfg, 0.4, 1, warm=warm), warm).reshape(K, -1)
     before = warm.w.reshape(K, -1)
     np.testing.assert_allclose(moved[-1, S_BOARD_V.start] - before[-1, S_BOARD_V.start], 0.1, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(moved[0, :NXA], prob.start_state(0.0))
     off = dataclasses.replace(cfg, optimization=dataclasses.replace(cfg.optimization, warm_predictor=False))
-    assert warm_point(prob, PushoffSpec(off, 0.4, 1, warm=warm)) is warm.w
+    assert warm_point(prob, PushoffSpec(off, 0.4, 1, warm=warm), warm) is warm.w
 
 
 def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch):

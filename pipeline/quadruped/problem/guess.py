@@ -1,7 +1,8 @@
-"""Cold initial guesses of the push-off NLP: the static stance riding a board whose speed ramps from
-the start speed to the target (``"ramp"``) or holds the start speed (``"hold"``), with the push leg
-posed by inverse kinematics, and after the last push the trunk and joints moving into the riding
-stance the last knot is bounded to. Never random: the same problem always starts from the same point."""
+"""Cold initial guesses of the push-off NLP: the static stance riding a board whose speed rises from
+the start speed to the target while the push foot is on the ground (``"ramp"``) or holds the start
+speed (``"hold"``), with the push leg posed by inverse kinematics, and after the last push the trunk
+and joints moving into the riding stance the last knot is bounded to. Never random: the same problem
+always starts from the same point."""
 
 from __future__ import annotations
 
@@ -18,12 +19,12 @@ from skatelib.pipeline.quadruped.problem.knots import I_BOARD_XY, NXA
 
 def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, from_velocity_mps: float,
                   target_velocity_mps: float, kind: str) -> np.ndarray:
-    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried along the ramp from
-    ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] (or at ``from_velocity_mps``), the push
-    leg by IK, contact forces that carry the ramp's momentum, and joint speeds that move the joints
-    from knot to knot. After the last push the trunk moves over the deck and the joints into the
-    riding stance, inside the bounds of the riding end (the end's narrow bands: a guess outside them
-    has IPOPT's first steps cut short by the fraction to the boundary)."""
+    """The knot vectors (K, NXA + NU), flattened: ``x0`` carried at a speed that the pushes take from
+    ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] and that holds between them (or at
+    ``from_velocity_mps``), the push leg by IK, contact forces that carry that momentum, and joint
+    speeds that move the joints from knot to knot. After the last push the trunk moves over the deck
+    and the joints into the riding stance, inside the bounds of the riding end (the end's narrow
+    bands: a guess outside them has IPOPT's first steps cut short by the fraction to the boundary)."""
     sch, v0, v = schedule, from_velocity_mps, target_velocity_mps
     K = len(sch.t)
     guess = np.tile(np.concatenate([x0, np.zeros(NU)]), (K, 1))
@@ -40,7 +41,7 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
     joints = x0[S_Q] + np.outer(ease, system.stance.q_ride - x0[S_Q])
     guess[:, S_Q] = _push_leg_joints(system, sch, guess[:, S_POS] - system.srb.com_offset_m, joints)
     guess[:-1, NXA + U_F.start:NXA + U_F.stop] = _forces(system, sch, acc)
-    guess[:-1, NXA + U_QD.start:NXA + U_QD.stop] = np.diff(guess[:, S_Q], axis=0) / np.diff(sch.t)[:, None]
+    guess[:-1, NXA + U_QD.start:NXA + U_QD.stop] = np.diff(guess[:, S_Q], axis=0) / dt[:, None]
     guess[-1, NXA:] = 0.0
     return guess.reshape(-1)
 

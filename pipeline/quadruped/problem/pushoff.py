@@ -131,13 +131,11 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     return options
 
 
-def warm_point(prob: PushoffProblem, spec: PushoffSpec) -> np.ndarray:
-    """The primal point a warm-started solve of ``spec`` starts from: the warm start's solution, with
+def warm_point(prob: PushoffProblem, spec: PushoffSpec, warm: WarmStart) -> np.ndarray:
+    """The primal point a solve of ``spec`` warm-started from ``warm`` starts from: its solution, with
     ``[optimization] warm_predictor`` moved by the difference of the problem's cold guesses at the
-    spec's speeds and at the speeds the warm start was solved for (the same problem: the speed ramp,
-    the push force that carries it, the riding end; a first-order step along the family of targets)."""
-    warm = spec.warm
-    assert warm is not None
+    spec's speeds and at the speeds ``warm`` was solved for (the same problem: the speed the pushes
+    give, the push force that gives it, the start state; a first-order step along the targets)."""
     if not spec.config.optimization.warm_predictor:
         return warm.w
     here = prob.initial_guess(spec.from_velocity_mps, spec.target_velocity_mps, "ramp")
@@ -158,7 +156,7 @@ def solve(spec: PushoffSpec) -> SolveResult:
     lbx, ubx, lbg, ubg = bounds
     args: dict[str, Any] = {"p": P, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
     if spec.warm is not None:
-        args.update(x0=warm_point(prob, spec), lam_g0=spec.warm.lam_g, lam_x0=spec.warm.lam_x)
+        args.update(x0=warm_point(prob, spec, spec.warm), lam_g0=spec.warm.lam_g, lam_x0=spec.warm.lam_x)
     else:
         args["x0"] = prob.initial_guess(v0, v, spec.guess)
     t0 = time.perf_counter()
