@@ -11,7 +11,6 @@ distributions never reuses a ride."""
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -108,12 +107,9 @@ def run_unordered(jobs: Sequence[CertifyJob], options: CertifyOptions) -> Iterat
         for job in jobs:
             yield job()
     else:
-        from joblib import Parallel, delayed, parallel_config
-        from skatelib.pipeline.build.sweep import call_in_worker
+        from skatelib.pipeline.build.sweep import in_workers
 
-        with parallel_config(backend="loky", inner_max_num_threads=1):
-            yield from Parallel(n_jobs=min(options.jobs, len(jobs)), return_as="generator_unordered")(
-                delayed(call_in_worker)(job, os.getpid()) for job in jobs)
+        yield from in_workers(jobs, options.jobs)
 
 
 def _dask(jobs: Sequence[CertifyJob], scheduler: Any) -> Iterator[DrawResult]:

@@ -119,11 +119,13 @@ def _threads_here() -> tuple[object, ...]:
 
 
 def test_workers_compute_on_one_thread_whatever_the_caller_sets(monkeypatch):
-    """The pool's workers start with BLAS and OpenMP at one thread, so a solve there evaluates its
-    stage derivatives on one; the caller keeps its own setting."""
+    """The pool's workers (in order and as they finish: the build's, the frontier's and certify's)
+    start with BLAS and OpenMP at one thread, so a solve there evaluates its stage derivatives on
+    one; the caller keeps its own setting."""
     monkeypatch.setenv("OMP_NUM_THREADS", "7")
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "7")
     assert sweep.run_calls([_threads_here, _threads_here], 2) == [("1", "1", "1", 1)] * 2
+    assert list(sweep.in_workers([_threads_here, _threads_here], 2)) == [("1", "1", "1", 1)] * 2
     assert os.environ["OMP_NUM_THREADS"] == "7"
 
 

@@ -17,7 +17,8 @@ from __future__ import annotations
 import os
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from functools import partial
 from typing import Any, TypeVar
 
 from skatelib.library.errors import ConfigError
@@ -117,8 +118,6 @@ def _drain(events: Any, on_entry: ProgressFn | None, stop: threading.Event) -> N
 def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: ProgressFn | None) -> list[Outcome]:
     from multiprocessing.managers import SyncManager
 
-    from joblib import Parallel, delayed, parallel_config
-
     manager = SyncManager()
     manager.start(initializer=exit_with_parent, initargs=(os.getpid(),))  # the queue's server dies with us too
     with manager:
@@ -127,13 +126,9 @@ def _run_loky(tasks: Sequence[BuildTask], jobs: int, use_cache: bool, on_entry: 
         drain = threading.Thread(target=_drain, args=(events, on_entry, stop), daemon=True)
         drain.start()
         try:
-            # BLAS and OpenMP at 1 thread in the workers, from their start; the caller's process untouched
-            # (Parallel takes no backend of its own: one would drop inner_max_num_threads).
-            with parallel_config(backend="loky", inner_max_num_threads=1):
-                results = Parallel(n_jobs=min(jobs, len(tasks)), return_as="generator_unordered")(
-                    delayed(run_task)(task, use_cache, events, os.getpid(), profile_dir=os.environ.get(ENV, ""))
-                    for task in tasks)
-                outcomes = [o for task_out in results for o in task_out]
+            calls = [partial(run_task, task, use_cache, events, os.getpid(), profile_dir=os.environ.get(ENV, ""))
+                     for task in tasks]
+            outcomes = [o for task_out in in_workers(calls, jobs) for o in task_out]
         finally:
             stop.set()
             drain.join(timeout=5)
@@ -199,23 +194,26 @@ def call_in_worker(job: Callable[[], T], parent_pid: int | None, worker: bool = 
     return job()
 
 
-def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int, done: Callable[[int], None] | None = None) -> list[T]:
-    """Each picklable no-argument callable's result, in the order given: in ``n_jobs`` loky
-    workers (BLAS and OpenMP at one thread), or in this process with ``n_jobs`` 1 or one job;
-    ``done(n)`` hears how many results are in as they come (in the order given)."""
-    out: list[T] = []
-    if n_jobs <= 1 or len(jobs) <= 1:
-        for job in jobs:
-            out.append(job())
-            if done is not None:
-                done(len(out))
-        return out
+def in_workers(jobs: Sequence[Callable[[], T]], n_jobs: int, ordered: bool = False) -> Iterator[T]:
+    """Each picklable no-argument callable's result as it finishes (``ordered``: in the order given),
+    in ``min(n_jobs, len(jobs))`` loky workers that end with this process and start with BLAS and
+    OpenMP at one thread (``Parallel`` names no backend of its own: one would drop that setting);
+    the caller's process is left as it is."""
     from joblib import Parallel, delayed, parallel_config
 
     with parallel_config(backend="loky", inner_max_num_threads=1):
-        for r in Parallel(n_jobs=min(n_jobs, len(jobs)), return_as="generator")(
-                delayed(call_in_worker)(job, os.getpid()) for job in jobs):
-            out.append(r)
-            if done is not None:
-                done(len(out))
+        yield from Parallel(n_jobs=min(n_jobs, len(jobs)), return_as="generator" if ordered else "generator_unordered")(
+            delayed(call_in_worker)(job, os.getpid()) for job in jobs)
+
+
+def run_calls(jobs: Sequence[Callable[[], T]], n_jobs: int, done: Callable[[int], None] | None = None) -> list[T]:
+    """Each picklable no-argument callable's result, in the order given: in ``n_jobs`` workers
+    (:func:`in_workers`), or in this process with ``n_jobs`` 1 or one job; ``done(n)`` hears how
+    many results are in as they come (in the order given)."""
+    out: list[T] = []
+    results = (job() for job in jobs) if n_jobs <= 1 or len(jobs) <= 1 else in_workers(jobs, n_jobs, ordered=True)
+    for r in results:
+        out.append(r)
+        if done is not None:
+            done(len(out))
     return out

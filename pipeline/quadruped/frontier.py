@@ -18,7 +18,9 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
+from functools import partial
 
+from skatelib.pipeline.build.sweep import in_workers
 from skatelib.pipeline.quadruped.checks.verify import judge
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
 from skatelib.pipeline.quadruped.problem.attempts import solve_with_retries
@@ -150,16 +152,12 @@ def find_frontier(config: QuadrupedConfig, searches: Sequence[tuple[Lane, int]],
                   done: Callable[[FrontierPoint, int], None] | None = None) -> list[FrontierPoint]:
     """The frontier of every (lane, stride count) of ``searches``, one worker process each;
     ``done(point, finished)`` is called as each finishes."""
-    from joblib import Parallel, delayed, parallel_config
-
     points: list[FrontierPoint] = []
     order = sorted(searches, key=lambda ls: -ls[1])  # most strides first: the longest solves
-    with parallel_config(backend="loky", inner_max_num_threads=1):  # BLAS/OpenMP at 1 thread in the workers only
-        for point in Parallel(n_jobs=min(jobs, len(order)), return_as="generator_unordered")(
-                delayed(frontier_for)(config, s, search, lane) for lane, s in order):
-            points.append(point)
-            if done is not None:
-                done(point, len(points))
+    for point in in_workers([partial(frontier_for, config, s, search, lane) for lane, s in order], jobs):
+        points.append(point)
+        if done is not None:
+            done(point, len(points))
     return sorted(points, key=lambda p: (p.stop, p.from_mps, p.n_strides))
 
 
