@@ -102,7 +102,7 @@ def _push_leg_joints(system: SkateSystem, sch: KnotSchedule, trunk: np.ndarray, 
             q[k, leg] = q_leg
     if runs and runs[0][0] > 0:  # a lead-in: from the riding pose (the first knot's) down to the first hold
         k0 = runs[0][0]
-        start = trunk[0] + np.asarray(system.robot.foot_positions_body(system.stance.q_ride))[:, p]
+        start = trunk[0] + ride_foot
         q_leg = system.stance.q_ride[leg].copy()
         q[0, leg] = q_leg
         for k in range(1, k0):
