@@ -213,7 +213,7 @@ def test_dask_cluster_gives_the_same_library(built, cache, tmp_path):
 
 def test_retry_ladder_goes_cold_then_other_guesses():
     """The ladder after a warm start: warm, cold ramp, cold hold, longer adaptive run from IPOPT's
-    own bound multipliers and barrier ceiling (the config's are for a first try)."""
+    own bound multipliers, barrier ceiling and floor (the config's are for a first try)."""
     cfg = load_config(TINY)
     spec = PushoffSpec(cfg, 0.3, 1, warm=WarmStart(np.zeros(1), np.zeros(1), np.zeros(1), 0.0, 0.2))
     ladder = retry_ladder(spec)
@@ -222,7 +222,9 @@ def test_retry_ladder_goes_cold_then_other_guesses():
     assert ("mu_strategy", "adaptive") in ladder[-1].ipopt
     assert solver_options(ladder[-1])["bound_mult_init_val"] == 1.0
     assert solver_options(ladder[-1])["mu_max"] == 1e5
+    assert solver_options(ladder[-1])["mu_min"] == 1e-11
     assert solver_options(ladder[1])["mu_max"] == cfg.optimization.mu_max
+    assert solver_options(ladder[1])["mu_min"] == cfg.optimization.mu_min == 1e-8
     assert solver_options(ladder[1])["bound_mult_init_val"] == cfg.optimization.bound_mult_init
 
 

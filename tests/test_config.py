@@ -100,13 +100,13 @@ def test_one_loader_for_every_kind_and_the_kind_a_command_needs(tmp_path):
 
 def test_warm_start_barrier_comes_from_the_config(tmp_path):
     """A warm-started solve runs IPOPT with the config's warm barrier and bound push, a cold one with
-    the cold barrier, the config's initial bound multipliers and barrier ceiling; an unknown warm
-    strategy is refused by its key."""
+    the cold barrier, the config's initial bound multipliers and barrier ceiling, and both the
+    config's barrier floor; an unknown warm strategy is refused by its key."""
     import numpy as np
     from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, WarmStart, solver_options
 
     c = load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "adaptive"\nwarm_mu_init = 3e-5\n'
-                                     'bound_mult_init = 2e-3\nwarm_bound_push = 3e-5\nmu_max = 0.5\n'))
+                                     'bound_mult_init = 2e-3\nwarm_bound_push = 3e-5\nmu_max = 0.5\nmu_min = 3e-9\n'))
     warm = WarmStart(w=np.zeros(3), lam_g=np.zeros(2), lam_x=np.zeros(3), from_velocity_mps=0.0,
                      target_velocity_mps=0.45)
     w_opts, c_opts = solver_options(PushoffSpec(c, 0.5, 2, warm=warm)), solver_options(PushoffSpec(c, 0.5, 2))
@@ -115,6 +115,7 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
     assert "warm_start_init_point" not in c_opts
     assert c_opts["bound_mult_init_val"] == 2e-3 and "bound_mult_init_val" not in w_opts
     assert c_opts["mu_max"] == 0.5 and "mu_max" not in w_opts
+    assert c_opts["mu_min"] == w_opts["mu_min"] == 3e-9
     assert w_opts["warm_start_bound_push"] == w_opts["warm_start_mult_bound_push"] == 3e-5
     with pytest.raises(ConfigError, match=r"optimization\.warm_mu_strategy.*'fast'"):
         load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "fast"\n'))

@@ -92,6 +92,7 @@ class OptimizationConfig:
     bound_mult_init: float = _f(1e-9, 1e3, "IPOPT bound_mult_init_val of a cold solve (IPOPT's: 1) [-].", default=1.0)
     mu_max: float = _f(1e-6, 1e5, "IPOPT mu_max, the adaptive barrier's ceiling in a cold solve (IPOPT's: 1e5) [-].",
                        default=1e5)
+    mu_min: float = _f(1e-15, 1e-4, "IPOPT mu_min, the barrier's floor (IPOPT's: 1e-11) [-].", default=1e-11)
     warm_mu_strategy: str = _f(doc="IPOPT barrier strategy of a warm-started solve: 'monotone' or 'adaptive'.",
                                default="adaptive")
     warm_mu_init: float = _f(1e-12, 1.0, "IPOPT initial barrier parameter of a warm-started solve [-].", default=1e-4)

@@ -12,12 +12,12 @@ from skatelib.pipeline.quadruped.problem.pushoff import PushoffSpec, SolveResult
 
 def retry_ladder(spec: PushoffSpec) -> list[PushoffSpec]:
     """The specs tried in order when a solve fails: as given, cold ramp, cold hold, then a longer
-    adaptive-barrier run from IPOPT's own initial bound multipliers and barrier ceiling."""
+    adaptive-barrier run from IPOPT's own initial bound multipliers, barrier ceiling and floor."""
     cold = replace(spec, warm=None)
     ladder = [spec] if spec.warm is None else [spec, cold]
     ladder.append(replace(cold, guess="hold"))
-    ladder.append(replace(cold, ipopt=(*spec.ipopt, ("mu_strategy", "adaptive"), ("bound_mult_init_val", 1.0),
-                                       ("mu_max", 1e5), ("max_iter", 2 * spec.config.optimization.max_iter))))
+    last_rung = (("mu_strategy", "adaptive"), ("bound_mult_init_val", 1.0), ("mu_max", 1e5), ("mu_min", 1e-11))
+    ladder.append(replace(cold, ipopt=(*spec.ipopt, *last_rung, ("max_iter", 2 * spec.config.optimization.max_iter))))
     return ladder
 
 

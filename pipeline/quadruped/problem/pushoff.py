@@ -120,7 +120,7 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     """The IPOPT options a solve of ``spec`` uses: the config's, warm-start settings, then ``spec.ipopt``."""
     opt = spec.config.optimization
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
-                               "mu_init": opt.mu_init}
+                               "mu_init": opt.mu_init, "mu_min": opt.mu_min}
     if spec.warm is None:
         options.update({"bound_mult_init_val": opt.bound_mult_init, "mu_max": opt.mu_max})
     else:
