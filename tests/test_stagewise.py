@@ -163,9 +163,9 @@ def test_the_config_chooses_native_or_portable_code(monkeypatch):
 
     seen: list[stagewise.CompileTarget] = []
 
-    def record(z, p, cost, cons, target, serialized=None):
+    def record(z, p, cost, cons, target, exact=()):
         seen.append(target)
-        return stagewise.stage_functions(z, p, cost, cons)
+        return stagewise.stage_functions(z, p, cost, cons, exact=exact)
 
     monkeypatch.setattr(shooting, "compiled_stage_functions", record)
     cfg = load_config()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import os
+import platform
 import subprocess
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -20,11 +21,11 @@ from skatelib.library.temporaries import remove_stale_temporaries, temporary_fol
 from skatelib.pipeline.ocp.c_split import split_source
 
 SPLIT_STATEMENTS = 200_000  # a function with more statements than this is compiled in parts
-# Where its body is cut (fractions of its statements): the first quarter (the forward sweep, whose
-# values the rest reads) takes gcc about three times as long per statement as the rest, so it is
-# cut in three; the push-off's Hessian compiles in six parts in 42 s of wall time on 2 cores
-# against 66 s whole (docs/design-notes.md).
-CUTS = (1 / 12, 2 / 12, 3 / 12, 1 / 2, 3 / 4)
+# Where its body is cut (fractions of its statements): twenty equal parts. gcc's time on a part
+# grows faster than its length: the push-off's Hessian (formed by the chain rule) takes 1.4-5.4 s a
+# part, 58 s of one core, against 103 s in the six parts of an earlier cut, one of them 72 s
+# (docs/design-notes.md).
+CUTS = tuple(k / 20 for k in range(1, 20))
 MAX_JOBS = 4  # compilers at once (a part takes gcc up to 1 GB)
 LOG = logging.getLogger("skatelib.compile")
 
@@ -90,3 +91,15 @@ def load_private(code: bytes, folder: Path, names: Sequence[str]) -> list[ca.Fun
     whatever happens to the cached file meanwhile."""
     with private_copy(code, folder, "stage.so") as so:
         return [ca.external(name, str(so)) for name in names]
+
+
+def host_cpu() -> str:
+    """The processor a ``-march=native`` library is built for: architecture, model and feature flags
+    (from /proc/cpuinfo on Linux; elsewhere only the platform's machine and processor names)."""
+    try:
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+    except OSError:
+        lines = []
+    wanted = ("model name", "flags", "Features", "CPU implementer", "CPU part")
+    described = sorted({ln.strip() for ln in lines if ln.split(":")[0].strip() in wanted})
+    return "\n".join([platform.machine(), platform.processor(), *described])

@@ -69,23 +69,26 @@ def etdrk4_step(f: Callable[[Any], Any], L: np.ndarray, x: Any, h: float) -> Any
     return E @ x + h * (B1 @ Nx + B2 @ (Na + Nb) + B4 @ Nc)
 
 
-def integrator(kind: str, f: ca.Function, dt: float, substeps: int, L: np.ndarray | None = None) -> ca.Function:
-    """``x_next = F(x, u)`` over ``dt`` in ``substeps`` steps of the named scheme, for the dynamics
-    ``f(x, u)`` (its input sizes are the state's and the control's).
+def steps(kind: str, f: Callable[[Any], Any], x: Any, dt: float, substeps: int, L: np.ndarray | None = None) -> Any:
+    """``x`` advanced over ``dt`` in ``substeps`` steps of the named scheme for ``dx/dt = f(x)``;
+    ``f`` is called once per evaluation of the dynamics, in the order the scheme evaluates them.
 
     Raises:
         ValueError: For an unknown scheme, or ``etdrk4`` without a linear part.
     """
-    x, u = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("u", f.size1_in(1))
-    h = dt / substeps
-    xk = x
     if kind == "rk4":
-        xk = rk4(lambda v: f(v, u), x, dt, substeps)
-    elif kind == "etdrk4":
-        if L is None:
-            raise ValueError("etdrk4 needs the linear part L")
-        for _ in range(substeps):
-            xk = etdrk4_step(lambda v: f(v, u), L, xk, h)
-    else:
+        return rk4(f, x, dt, substeps)
+    if kind != "etdrk4":
         raise ValueError(f"unknown integrator {kind!r}; use 'rk4' or 'etdrk4'")
-    return ca.Function(kind, [x, u], [xk])
+    if L is None:
+        raise ValueError("etdrk4 needs the linear part L")
+    for _ in range(substeps):
+        x = etdrk4_step(f, L, x, dt / substeps)
+    return x
+
+
+def integrator(kind: str, f: ca.Function, dt: float, substeps: int, L: np.ndarray | None = None) -> ca.Function:
+    """``x_next = F(x, u)`` over ``dt`` in ``substeps`` steps of the named scheme (:func:`steps`),
+    for the dynamics ``f(x, u)`` (its input sizes are the state's and the control's)."""
+    x, u = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("u", f.size1_in(1))
+    return ca.Function(kind, [x, u], [steps(kind, lambda v: f(v, u), x, dt, substeps, L)])

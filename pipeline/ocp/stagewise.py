@@ -15,7 +15,6 @@ from __future__ import annotations
 import hashlib
 import logging
 import os
-import platform
 import shutil
 import subprocess
 from collections.abc import Sequence
@@ -27,7 +26,8 @@ import casadi as ca
 import numpy as np
 from skatelib.library import trust
 from skatelib.library.compiled import cached_or_compiled
-from skatelib.pipeline.ocp.codegen import compile_library, load_private
+from skatelib.pipeline.ocp.codegen import compile_library, host_cpu, load_private
+from skatelib.pipeline.ocp.curvature import ExactRows, lagrangian_hessian
 from skatelib.pipeline.ocp.threads import mapped
 
 
@@ -41,14 +41,15 @@ class StageFunctions:
     hess: ca.Function  # (z, p, sigma, lam) -> triu hessian of sigma l + lam' g (sparse)
 
 
-def stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, cse: bool = False) -> StageFunctions:
+def stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, cse: bool = False,
+                    exact: Sequence[ExactRows] = ()) -> StageFunctions:
     """Differentiate one stage's cost and constraints symbolically (SX); ``cse``: each common
     subexpression computed once (the same values: for the C code, where the Hessian then has 7 %
-    fewer operations; CasADi's interpreter runs such functions slower)."""
+    fewer operations; CasADi's interpreter runs such functions slower); ``exact``: rows whose
+    Lagrangian Hessian is given (:func:`~skatelib.pipeline.ocp.curvature.lagrangian_hessian`)."""
     sigma = ca.SX.sym("sigma")
     lam = ca.SX.sym("lam", cons.shape[0])
-    lag = sigma * cost + ca.dot(lam, cons)
-    H, _ = ca.hessian(lag, z)
+    H = lagrangian_hessian(z, p, (sigma * cost, cons), lam, exact)
     opts = {"cse": cse}
     return StageFunctions(
         value=ca.Function("stage_value", [z, p], [cost, cons], opts),
@@ -87,18 +88,6 @@ _OPTIONAL = ("-march=native", *LEAN_FLAGS)  # only optimizations: left out where
 COMPILE_LOG = logging.getLogger("skatelib.compile")  # says when (and only when) code is compiled
 
 
-def host_cpu() -> str:
-    """The processor a ``-march=native`` library is built for: architecture, model and feature flags
-    (from /proc/cpuinfo on Linux; elsewhere only the platform's machine and processor names)."""
-    try:
-        lines = Path("/proc/cpuinfo").read_text().splitlines()
-    except OSError:
-        lines = []
-    wanted = ("model name", "flags", "Features", "CPU implementer", "CPU part")
-    described = sorted({ln.strip() for ln in lines if ln.split(":")[0].strip() in wanted})
-    return "\n".join([platform.machine(), platform.processor(), *described])
-
-
 def _takes(cc: str, flags: Sequence[str]) -> bool:
     """Whether ``cc`` compiles an empty file with ``flags`` without an error or a warning."""
     probe = subprocess.run([cc, *flags, "-Werror", "-x", "c", "-c", "-", "-o", os.devnull], input=b"",
@@ -124,15 +113,16 @@ class CompileTarget:
 
 
 def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, target: CompileTarget,
-                             serialized: str | None = None) -> StageFunctions:
+                             exact: Sequence[ExactRows] = ()) -> StageFunctions:
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
     content hash, with its SHA-256 recorded beside it. A cached library is read once and checked (a
     symlink, a library that changed, or one that others can write, is compiled again with a
     :class:`~skatelib.library.trust.CacheNote`; :mod:`skatelib.library.compiled`), and
     the bytes checked are what is loaded, from a private copy.
 
-    The key is :func:`serialized_stage` (``serialized``, when the caller has it already), the
-    flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a cache hit costs
+    The key is :func:`serialized_stage` (some 6 ms for the push-off's stage), the rows
+    with a given Hessian (``exact``), the flags, CasADi's version and, for ``-march=native``,
+    :func:`host_cpu`; so a cache hit costs
     neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
 
     Raises:
@@ -140,17 +130,18 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     """
     cc = c_compiler()
     if cc is None:
-        return stage_functions(z, p, cost, cons)
+        return stage_functions(z, p, cost, cons, exact=exact)
     flags = target.flags
-    text = serialized if serialized is not None else serialized_stage(z, p, cost, cons)
+    text = serialized_stage(z, p, cost, cons)
     native = host_cpu() if "-march=native" in flags else ""
-    key_src = text + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
+    given = "".join(f"|{e.key()}" for e in exact)
+    key_src = text + given + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
 
     def compile_now() -> bytes:
         COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
                          "kept in %s)", cc, lib.parent)
-        fns = stage_functions(z, p, cost, cons, cse=True)
+        fns = stage_functions(z, p, cost, cons, cse=True, exact=exact)
         return compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
 
     code = cached_or_compiled(lib, trust.compile_advice(), compile_now)

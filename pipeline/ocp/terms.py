@@ -9,7 +9,7 @@ columns of the knot vector ``(x_k, u_k)``; :func:`variable_bounds` intersects th
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -49,6 +49,19 @@ class ConstraintTerm(Protocol):
     def rows(self, s: Stage) -> Any: ...
 
     def bounds(self, n_stages: int) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+@runtime_checkable
+class GivenHessian(Protocol):
+    """A constraint term that gives its rows' Lagrangian Hessian (where it has a cheaper form than
+    CasADi's differentiation of the rows). ``hessian_tag`` says how it is formed (None: it gives
+    none); ``hessian(s, lam)`` returns ``(H, v)``: the Hessian of ``lam' rows(s)`` with respect to
+    ``v``, a column of the stage's symbols (the rows linear in the others), e.g. ``(x_k, u_k)``."""
+
+    @property
+    def hessian_tag(self) -> str | None: ...
+
+    def hessian(self, s: Stage, lam: Any) -> tuple[Any, Any]: ...
 
 
 def fixed(n_stages: int, rows: int, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:

@@ -20,7 +20,6 @@ import casadi as ca
 import numpy as np
 from skatelib.library.channels import NU, NX, S_BOARD_V, S_POS, S_Q, S_RPY, S_VEL
 from skatelib.library.trust import compile_dir
-from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.shooting import MultipleShooting, Transcribed, transcribe
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, variable_bounds
 from skatelib.pipeline.quadruped.config import QuadrupedConfig
@@ -129,7 +128,7 @@ class PushoffProblem:
         xa, ua = ca.SX.sym("x", NXA), ca.SX.sym("u", NU)
         cr = ca.DM(system.stance.cr)
         f_aug = ca.Function("f_aug", [xa, ua], [ca.vertcat(f(xa[:NX], ua, cr), xa[24:26])])
-        step = integrator(opt.integrator, f_aug, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
+        defect = DynamicsDefect.of(opt.integrator, f_aug, opt.dt_s, opt.substeps, system.stiff_linear_part(NXA))
         p = system.push_index
         board_legs = tuple(i for i in range(4) if i != p)
         self.x0 = self._initial_state()
@@ -141,7 +140,7 @@ class PushoffProblem:
         mu_plan = opt.friction_margin * system.friction_mu
         term = config.terminal
         self.constraints: list[ConstraintTerm] = [
-            DynamicsDefect(step), FeetOnBoard(system, board_legs),
+            defect, FeetOnBoard(system, board_legs),
             PushFoot(system, self.schedule, config.stance, term.push_foot_height_m),
             FrictionCones(system, self.schedule, self.mode.board_legs, mu_plan, opt.friction_model),
             Propulsion(system, self.schedule), TorqueLimits(system, self.schedule), Steering(system),

@@ -7,7 +7,9 @@ The knot vector's layout and the stage parameters are in :mod:`skatelib.pipeline
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import casadi as ca
@@ -20,6 +22,8 @@ from skatelib.library.channels import (
     S_RPY,
     SWING,
 )
+from skatelib.pipeline.ocp.curvature import step_curvature
+from skatelib.pipeline.ocp.integrators import integrator
 from skatelib.pipeline.ocp.terms import Stage, fixed
 from skatelib.pipeline.quadruped.config import StanceConfig
 from skatelib.pipeline.quadruped.model.dynamics import board_rotation, foot_centres_world, joint_torques
@@ -39,13 +43,32 @@ INF = np.inf
 
 @dataclass(frozen=True)
 class DynamicsDefect:
-    """Multiple-shooting continuity: x_{k+1} = RK4(x_k, u_k) over dt in ``substeps`` steps."""
+    """Multiple-shooting continuity: x_{k+1} = F(x_k, u_k), F the integrator's step over dt."""
 
     step: ca.Function  # (x, u) -> x_next on the transcription state
+    curvature: Callable[[], ca.Function] | None = None  # builds (x, u, lam) -> Hessian of lam' step: `of`
     name: str = "dynamics"
+
+    @classmethod
+    def of(cls, kind: str, f: ca.Function, dt: float, substeps: int, L: np.ndarray | None) -> DynamicsDefect:
+        """The defect of ``integrator(kind, f, dt, substeps, L)`` with that step's curvature
+        (:func:`~skatelib.pipeline.ocp.curvature.step_curvature`, built when it is differentiated)."""
+        return cls(integrator(kind, f, dt, substeps, L), partial(step_curvature, kind, f, dt, substeps, L))
+
+    @property
+    def hessian_tag(self) -> str | None:
+        """How :meth:`hessian` is formed (None: CasADi differentiates the rows)."""
+        return None if self.curvature is None else "step chain rule"
 
     def rows(self, s: Stage) -> Any:
         return s.x_next - self.step(s.x, s.u)
+
+    def hessian(self, s: Stage, lam: Any) -> tuple[Any, Any]:
+        """The Hessian of ``lam' rows`` with respect to ``(x_k, u_k)``: the step's curvature, negated
+        (``x_{k+1}`` enters linearly)."""
+        if self.curvature is None:
+            raise ValueError("a defect without a curvature has no given Hessian: CasADi differentiates its rows")
+        return -self.curvature()(s.x, s.u, lam), ca.vertcat(s.x, s.u)
 
     def bounds(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         return fixed(n, NXA, 0.0, 0.0)
