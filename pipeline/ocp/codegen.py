@@ -23,7 +23,7 @@ from skatelib.pipeline.ocp.c_split import split_source
 SPLIT_STATEMENTS = 200_000  # a function with more statements than this is compiled in parts
 # Where its body is cut (fractions of its statements): twenty equal parts. gcc's time on a part
 # grows faster than its length: the push-off's Hessian (formed by the chain rule) takes 1.4-5.4 s a
-# part, 58 s of one core, against 103 s in the six parts of an earlier cut, one of them 72 s
+# part, 58 s of one core; cut in six parts as for CasADi's own Hessian, 103 s, one part 72 s
 # (docs/design-notes.md).
 CUTS = tuple(k / 20 for k in range(1, 20))
 MAX_JOBS = 4  # compilers at once (a part takes gcc up to 1 GB)

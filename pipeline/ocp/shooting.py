@@ -82,7 +82,7 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     nlp = build_stagewise_nlp(fns, N, keep=keep, threads=method.threads)
-    given = "".join(f"|{e.key()}" for e in exact)  # rows whose Hessian is formed otherwise: other iterates
+    given = "".join(f"|{e.key()}" for e in exact)  # a Hessian formed otherwise rounds otherwise: other iterates
     return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep],
                        fingerprint=hashlib.sha256((text + given).encode()).hexdigest())
 
