@@ -41,8 +41,9 @@ def test_a_signal_inside_ipopt_stops_solve(tmp_path, sig):
     IPOPT): it exits 130 within seconds, writing no library (without the record of the interrupt
     the next attempt of the ladder ran, and the library was written with exit 0)."""
     out = tmp_path / "one.h5"
-    # interpreted: a solve of seconds, a wide window for the signal (compiled, about a second)
-    cfg = interpreted_tiny(tmp_path / "interpreted.toml")
+    # interpreted, six substeps: a solve of about 4 s, a wide window for the signal (compiled, the
+    # config's two: about a second)
+    cfg = interpreted_tiny(tmp_path / "interpreted.toml", "substeps = 6\n")
     p = _start(["solve", "-V", "0.3", "-s", "1", "--config", str(cfg), "-o", str(out), "-v"], tmp_path / "cache")
     assert p.stdout is not None
     for line in p.stdout:
@@ -63,15 +64,15 @@ def test_a_signal_inside_ipopt_stops_solve(tmp_path, sig):
 def test_a_signal_stops_a_serial_build_keeping_what_is_finished(tmp_path, sig):
     """``skatelib build -j 1`` of two cold entries, signalled during the second solve: exit 130
     saying one entry is cached, that one in the cache, no library written, within seconds."""
-    cfg = interpreted_tiny(tmp_path / "two.toml",  # a second solve of seconds to signal inside
-                           "[sweep]\nvelocities_mps = [0.3, 0.4]\nstrides = [1]\nwarm_start = false\n")
+    cfg = interpreted_tiny(tmp_path / "two.toml",  # a second solve of seconds to signal inside: six substeps
+                           "substeps = 6\n[sweep]\nvelocities_mps = [0.3, 0.4]\nstrides = [1]\nwarm_start = false\n")
     out, cache = tmp_path / "out" / "two.h5", tmp_path / "cache"
     p = _start(["build", str(cfg), "-o", str(out), "-j", "1", "--no-progress"], cache)
     deadline = time.monotonic() + 120
     while not list((cache / "entries").glob("*.entry")) and time.monotonic() < deadline and p.poll() is None:
         time.sleep(0.05)
     assert p.poll() is None, "the build ended before the signal"
-    time.sleep(1.5)  # the second entry's cold solve (about 4 s of IPOPT) is under way
+    time.sleep(0.5)  # the second entry's cold solve (about 4 s of IPOPT) is under way
     took, stderr = _ended(p, sig)
     assert p.returncode == EXIT_INTERRUPTED, stderr
     assert "1 of 2 entries are cached" in stderr and "no library was written" in stderr
