@@ -6,6 +6,7 @@ always starts from the same point."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import casadi as ca
@@ -46,23 +47,20 @@ def initial_guess(system: SkateSystem, schedule: KnotSchedule, x0: np.ndarray, f
     return guess.reshape(-1)
 
 
-class Guesses:
-    """One problem's cold guesses, each made once per (start speed, target speed, kind) by ``make``
-    (their inverse kinematics take some 40 ms), read-only; the ``keep`` made last are kept."""
+MakeGuess = Callable[[float, float, str], np.ndarray]  # (start speed, target speed, kind) -> guess
 
-    def __init__(self, make: Callable[[float, float, str], np.ndarray], keep: int = 64):
-        self._make, self._keep = make, keep
-        self._made: dict[tuple[float, float, str], np.ndarray] = {}
 
-    def __call__(self, from_velocity_mps: float, target_velocity_mps: float, kind: str) -> np.ndarray:
-        key = (from_velocity_mps, target_velocity_mps, kind)
-        if key not in self._made:
-            if len(self._made) >= self._keep:
-                del self._made[next(iter(self._made))]
-            guess = self._make(*key)
-            guess.setflags(write=False)
-            self._made[key] = guess
-        return self._made[key]
+def memoized(make: MakeGuess, keep: int = 64) -> MakeGuess:
+    """``make`` (start speed, target speed, kind) -> guess, each guess made once and read-only
+    (their inverse kinematics take some 40 ms); the ``keep`` used last are kept."""
+
+    @functools.lru_cache(maxsize=keep)
+    def guess(from_velocity_mps: float, target_velocity_mps: float, kind: str) -> np.ndarray:
+        made = make(from_velocity_mps, target_velocity_mps, kind)
+        made.setflags(write=False)
+        return made
+
+    return guess
 
 
 def _into_riding(sch: KnotSchedule, push: int) -> np.ndarray:

@@ -30,7 +30,7 @@ from skatelib.pipeline.quadruped.problem.bounds import bound_terms
 from skatelib.pipeline.quadruped.problem.contact_terms import GentleContact, WheelLoads
 from skatelib.pipeline.quadruped.problem.costs import EffortCost, TerminalSpeedCost, TrackingCost
 from skatelib.pipeline.quadruped.problem.end_terms import FinalSpeed, RidingEnd
-from skatelib.pipeline.quadruped.problem.guess import Guesses, initial_guess
+from skatelib.pipeline.quadruped.problem.guess import initial_guess, memoized
 from skatelib.pipeline.quadruped.problem.knots import (
     I_BOARD_XY,
     N_PARAMS,
@@ -154,7 +154,7 @@ class PushoffProblem:
         self._contacts = ca.Function("contacts", [x_sym], [contact_points_world(system, x_sym, self.mode.board_legs)])
         self.build_time_s = time.perf_counter() - t0
         self._solvers: dict[tuple[Any, ...], ca.Function] = {}
-        self._guesses = Guesses(lambda v0, v, k: initial_guess(system, self.schedule, self.start_state(v0), v0, v, k))
+        self._guesses = memoized(lambda v0, v, k: initial_guess(system, self.schedule, self.start_state(v0), v0, v, k))
 
     @property
     def n(self) -> int:
