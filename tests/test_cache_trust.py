@@ -21,6 +21,7 @@ from skatelib.pipeline.build import cache as entry_cache
 from skatelib.pipeline.build import codec, sweep
 from skatelib.pipeline.build.preflight import check_cache_dir
 from skatelib.pipeline.config import load_config
+from skatelib.pipeline.ocp.expressions import StageExpressions
 from skatelib.pipeline.ocp.stagewise import CompileTarget, c_compiler, compiled_stage_functions
 from skatelib.pipeline.quadruped import tasks
 from skatelib.pipeline.quadruped.problem import pushoff
@@ -157,9 +158,9 @@ def test_a_read_only_shared_cache_serves_entries(cache, tmp_path, monkeypatch):
     assert again[0].cached
 
 
-def _tiny_stage() -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+def _tiny_stage() -> StageExpressions:
     z, p = ca.SX.sym("z", 2), ca.SX.sym("p", 1)
-    return z, p, (z[0] - p[0]) ** 2 + z[1] ** 2, ca.vertcat(z[0] * z[1])
+    return StageExpressions(z, p, (z[0] - p[0]) ** 2 + z[1] ** 2, ca.vertcat(z[0] * z[1]))
 
 
 @pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
@@ -168,7 +169,7 @@ def test_a_compiled_library_changed_after_it_was_built_is_compiled_again(tmp_pat
     not loaded: a note names it and it is compiled again (and then matches its record)."""
     folder = tmp_path / "cc"
     folder.mkdir(mode=0o700)
-    fns = compiled_stage_functions(*_tiny_stage(), CompileTarget(folder, ("-O0",)))
+    fns = compiled_stage_functions(_tiny_stage(), CompileTarget(folder, ("-O0",)))
     (lib,) = folder.glob("stage_*.so")
     record = trust.digest_record(lib)
     assert record.read_text().strip() == trust.sha256_of(lib)
@@ -176,15 +177,15 @@ def test_a_compiled_library_changed_after_it_was_built_is_compiled_again(tmp_pat
     with open(lib, "ab") as f:
         f.write(b"\0")  # another library's bytes, as far as the record can tell
     with pytest.warns(trust.CacheNote, match="changed after it was built"):
-        again = compiled_stage_functions(*_tiny_stage(), CompileTarget(folder, ("-O0",)))
+        again = compiled_stage_functions(_tiny_stage(), CompileTarget(folder, ("-O0",)))
     assert record.read_text().strip() == trust.sha256_of(lib)
     assert float(again.value(ca.DM([1.0, 2.0]), ca.DM([0.5]))[0]) == pytest.approx(4.25)
     lib.chmod(0o666)  # a library others could replace is not loaded either
     with pytest.warns(trust.CacheNote, match="can be written by others"):
-        compiled_stage_functions(*_tiny_stage(), CompileTarget(folder, ("-O0",)))
+        compiled_stage_functions(_tiny_stage(), CompileTarget(folder, ("-O0",)))
     with warnings.catch_warnings():
         warnings.simplefilter("error", trust.CacheNote)  # as built and private: loaded without a note
-        compiled_stage_functions(*_tiny_stage(), CompileTarget(folder, ("-O0",)))
+        compiled_stage_functions(_tiny_stage(), CompileTarget(folder, ("-O0",)))
 
 
 def test_a_tls_scheduler_needs_dask_tls_settings():

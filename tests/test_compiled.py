@@ -14,6 +14,7 @@ import casadi as ca
 import pytest
 from skatelib.library import compiled, trust
 from skatelib.library.errors import OutputError
+from skatelib.pipeline.ocp.expressions import StageExpressions
 from skatelib.pipeline.ocp.stagewise import CompileTarget, c_compiler, compiled_stage_functions
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
@@ -25,9 +26,9 @@ def _no_shared_cache(monkeypatch):
     monkeypatch.delenv(trust.TRUSTED_ENV, raising=False)
 
 
-def _stage(weight: float = 1.0) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+def _stage(weight: float = 1.0) -> StageExpressions:
     z, p = ca.SX.sym("z", 2), ca.SX.sym("p", 1)
-    return z, p, (z[0] - p[0]) ** 2 + weight * z[1] ** 2, ca.vertcat(z[0] * z[1])
+    return StageExpressions(z, p, (z[0] - p[0]) ** 2 + weight * z[1] ** 2, ca.vertcat(z[0] * z[1]))
 
 
 def _value(fns) -> float:
@@ -37,7 +38,8 @@ def _value(fns) -> float:
 def _planted(folder: Path, marker: Path) -> Path:
     """Another library with the same functions (weight 3: value 12.25) and a constructor that
     writes ``marker`` when the library is loaded: what someone swapping the file would plant."""
-    z, p, cost, cons = _stage(3.0)
+    stage = _stage(3.0)
+    z, p, cost, cons = stage.z, stage.p, stage.cost, stage.cons
     gen = ca.CodeGenerator("planted.c", {"with_header": False})
     for name, out in (("stage_value", [cost, cons]), ("stage_grad", [ca.gradient(cost, z)]),
                       ("stage_jac", [ca.jacobian(cons, z)]), ("stage_hess", [ca.SX.zeros(2, 2)])):
@@ -62,7 +64,7 @@ def test_a_library_swapped_after_the_check_is_not_what_runs(tmp_path, monkeypatc
     planted 12.25) and the planted constructor never runs; the next build sees the changed file
     and compiles again. (Loading by path, the planted library ran.)"""
     folder = _private(tmp_path)
-    assert _value(compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))) == pytest.approx(4.25)
+    assert _value(compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))) == pytest.approx(4.25)
     (lib,) = folder.glob("stage_*.so")
     marker = tmp_path / "planted-code-ran"
     planted = _planted(tmp_path, marker)
@@ -77,14 +79,14 @@ def test_a_library_swapped_after_the_check_is_not_what_runs(tmp_path, monkeypatc
         return real_external(name, path)
 
     monkeypatch.setattr(ca, "external", swap_then_load)
-    fns = compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+    fns = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     assert swaps, "the library was not loaded"
     assert not marker.exists(), "the planted library's constructor ran"
     assert _value(fns) == pytest.approx(4.25)
     assert lib.read_bytes() == planted.read_bytes()  # the swap did happen
     monkeypatch.setattr(ca, "external", real_external)
     with pytest.warns(trust.CacheNote, match="changed after it was built"):
-        again = compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+        again = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     assert _value(again) == pytest.approx(4.25) and not marker.exists()
     assert not list(folder.glob(".skatelib-tmp.*"))  # the private copies are gone
 
@@ -93,7 +95,7 @@ def test_a_symlinked_library_is_refused(tmp_path):
     """``stage_<key>.so`` a symlink to a file with the very bytes recorded, in a folder anyone can
     write: not loaded (a note says it is a symbolic link), compiled again into a file of its own."""
     folder = _private(tmp_path)
-    compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+    compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     (lib,) = folder.glob("stage_*.so")
     public = tmp_path / "public"
     public.mkdir()
@@ -103,12 +105,12 @@ def test_a_symlinked_library_is_refused(tmp_path):
     code, why = compiled.checked_code(lib)
     assert code is None and "is a symbolic link" in why
     with pytest.warns(trust.CacheNote, match="is a symbolic link"):
-        fns = compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+        fns = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     assert _value(fns) == pytest.approx(4.25)
     assert not lib.is_symlink() and lib.is_file()
     with warnings.catch_warnings():
         warnings.simplefilter("error", trust.CacheNote)  # a file of its own, as built: loaded without a note
-        compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+        compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
 
 
 def test_a_cache_inside_a_folder_others_can_write_is_refused(tmp_path):
@@ -121,7 +123,7 @@ def test_a_cache_inside_a_folder_others_can_write_is_refused(tmp_path):
     folder = public / "cache"
     folder.mkdir(mode=0o700)
     with pytest.raises(OutputError, match=r"is inside .*public, which can be written by others") as e:
-        compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))
+        compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     assert "compile = false" in str(e.value) and "--no-cache" not in str(e.value)
     public.chmod(0o1777)
-    assert _value(compiled_stage_functions(*_stage(), CompileTarget(folder, FLAGS))) == pytest.approx(4.25)
+    assert _value(compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))) == pytest.approx(4.25)

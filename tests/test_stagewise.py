@@ -6,6 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+from skatelib.pipeline.ocp.expressions import StageExpressions
 from skatelib.pipeline.ocp.stagewise import build_stagewise_nlp, stage_functions
 
 N_V, N_STAGES = 3, 12  # window v = [position, velocity, acceleration]
@@ -17,7 +18,8 @@ def _toy(keep=None, threads=1):
     dt = 0.1
     cost = u0**2 + p[0] * (x1[0] - 1) ** 2 + 0.1 * (z[5] - u0) ** 2 + ca.sin(x0[0]) * x0[1] ** 2
     cons = ca.vertcat(x1[0] - (x0[0] + dt * x0[1]), x1[1] - (x0[1] + dt * u0), x1[0] ** 3 - x1[1], ca.cos(u0))
-    return build_stagewise_nlp(stage_functions(z, p, cost, cons), N_STAGES, keep=keep, threads=threads)
+    return build_stagewise_nlp(stage_functions(StageExpressions(z, p, cost, cons)), N_STAGES, keep=keep,
+                               threads=threads)
 
 
 @pytest.mark.parametrize("drop", [False, True])
@@ -105,9 +107,10 @@ def test_solution_equals_plain_nlpsol():
     assert np.allclose(np.asarray(r1["x"]), np.asarray(r2["x"]), atol=1e-6)
 
 
-def _toy_stage():
+def _toy_stage() -> StageExpressions:
     z, p = ca.SX.sym("z", 4), ca.SX.sym("p", 1)
-    return z, p, p[0] * ca.sumsqr(z) + ca.sin(z[0]) * z[3], ca.vertcat(z[0] * z[1] - z[2], ca.exp(z[3]) - z[1] ** 2)
+    return StageExpressions(z, p, p[0] * ca.sumsqr(z) + ca.sin(z[0]) * z[3],
+                            ca.vertcat(z[0] * z[1] - z[2], ca.exp(z[3]) - z[1] ** 2))
 
 
 def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
@@ -119,9 +122,9 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
 
     if shutil.which("gcc") is None and shutil.which("cc") is None:
         pytest.skip("no C compiler")
-    z, p, cost, cons = _toy_stage()
-    sym = stagewise.stage_functions(z, p, cost, cons)
-    comp = stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path))
+    stage = _toy_stage()
+    sym = stagewise.stage_functions(stage)
+    comp = stagewise.compiled_stage_functions(stage, stagewise.CompileTarget(tmp_path))
     libs = list(tmp_path.glob("stage_*.so"))
     assert len(libs) == 1
     zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
@@ -131,7 +134,7 @@ def test_compiled_stage_functions_equal_symbolic(tmp_path, monkeypatch):
                         strict=True):
             assert np.allclose(np.asarray(ca.densify(x)), np.asarray(ca.densify(y)), atol=1e-12)
     mtime = libs[0].stat().st_mtime_ns
-    stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path))
+    stagewise.compiled_stage_functions(stage, stagewise.CompileTarget(tmp_path))
     assert libs[0].stat().st_mtime_ns == mtime
 
 
@@ -141,14 +144,14 @@ def test_native_code_is_keyed_on_the_host_cpu(tmp_path, monkeypatch):
 
     if stagewise.c_compiler() is None:
         pytest.skip("no C compiler")
-    stagewise.compiled_stage_functions(*_toy_stage(), stagewise.CompileTarget(tmp_path))
+    stagewise.compiled_stage_functions(_toy_stage(), stagewise.CompileTarget(tmp_path))
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "another processor")
-    stagewise.compiled_stage_functions(*_toy_stage(), stagewise.CompileTarget(tmp_path))
+    stagewise.compiled_stage_functions(_toy_stage(), stagewise.CompileTarget(tmp_path))
     assert len(list(tmp_path.glob("stage_*.so"))) == 2
     portable = stagewise.CompileTarget(tmp_path, stagewise.PORTABLE_FLAGS)  # no CPU in its key
-    stagewise.compiled_stage_functions(*_toy_stage(), portable)
+    stagewise.compiled_stage_functions(_toy_stage(), portable)
     monkeypatch.setattr(stagewise, "host_cpu", lambda: "a third processor")
-    stagewise.compiled_stage_functions(*_toy_stage(), portable)
+    stagewise.compiled_stage_functions(_toy_stage(), portable)
     assert len(list(tmp_path.glob("stage_*.so"))) == 3
 
 
@@ -163,9 +166,9 @@ def test_the_config_chooses_native_or_portable_code(monkeypatch):
 
     seen: list[stagewise.CompileTarget] = []
 
-    def record(z, p, cost, cons, target, exact=()):
+    def record(stage, target):
         seen.append(target)
-        return stagewise.stage_functions(z, p, cost, cons, exact=exact)
+        return stagewise.stage_functions(stage)
 
     monkeypatch.setattr(shooting, "compiled_stage_functions", record)
     cfg = load_config()
@@ -190,9 +193,9 @@ def test_compiler_without_an_optional_flag_still_compiles(tmp_path, monkeypatch,
                     f'exec {real} "$@"\n')
     fake.chmod(0o755)
     monkeypatch.setenv("CC", str(fake))
-    z, p, cost, cons = _toy_stage()
-    comp = stagewise.compiled_stage_functions(z, p, cost, cons, stagewise.CompileTarget(tmp_path / "cache"))
-    sym = stagewise.stage_functions(z, p, cost, cons)
+    stage = _toy_stage()
+    comp = stagewise.compiled_stage_functions(stage, stagewise.CompileTarget(tmp_path / "cache"))
+    sym = stagewise.stage_functions(stage)
     zv, pv, lam = np.array([0.3, -1.2, 0.5, 0.9]), np.array([1.7]), np.array([0.4, -2.0])
     assert np.allclose(np.asarray(ca.densify(comp.hess(zv, pv, 0.8, lam))),
                        np.asarray(ca.densify(sym.hess(zv, pv, 0.8, lam))), atol=1e-12)
@@ -224,7 +227,7 @@ def test_builds_started_together_compile_once(tmp_path):
         "from tests.test_stagewise import _toy_stage\n"
         "from skatelib.pipeline.ocp import stagewise as s\n"
         "logging.basicConfig(level=logging.INFO, format='%(name)s %(message)s', stream=sys.stdout)\n"
-        f"f = s.compiled_stage_functions(*_toy_stage(), s.CompileTarget(Path({str(tmp_path / 'cache')!r}), ('-O0',)))\n"
+        f"f = s.compiled_stage_functions(_toy_stage(), s.CompileTarget(Path({str(tmp_path / 'cache')!r}), ('-O0',)))\n"
         "print('value', f.value([0.3, -1.2, 0.5, 0.9], [1.7]))\n")
     env = {**__import__("os").environ, "CC": str(slow)}
     procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True, env=env)

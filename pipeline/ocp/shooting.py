@@ -16,13 +16,13 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 from skatelib.pipeline.ocp.curvature import ExactRows
+from skatelib.pipeline.ocp.expressions import StageExpressions
 from skatelib.pipeline.ocp.stagewise import (
     PORTABLE_FLAGS,
     CompileTarget,
     StagewiseNLP,
     build_stagewise_nlp,
     compiled_stage_functions,
-    serialized_stage,
     stage_functions,
 )
 from skatelib.pipeline.ocp.terms import ConstraintTerm, CostTerm, GivenHessian, Stage
@@ -69,22 +69,21 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     cost = sum((c.cost(stage) for c in costs), ca.SX(0))
     rows = [term.rows(stage) for term in constraints]
     cons = ca.vertcat(*rows)
-    exact = exact_rows(z, p, stage, constraints, rows)
-    text = serialized_stage(z, p, cost, cons)  # the fingerprint
+    expressions = StageExpressions(z, p, cost, cons, exact_rows(z, p, stage, constraints, rows))
     if compile_dir is not None:
         target = CompileTarget(compile_dir) if native else CompileTarget(compile_dir, PORTABLE_FLAGS)
-        fns = compiled_stage_functions(z, p, cost, cons, target, exact=exact)
+        fns = compiled_stage_functions(expressions, target)
     else:
-        fns = stage_functions(z, p, cost, cons, exact=exact)
+        fns = stage_functions(expressions)
     N = method.n_intervals
     lbs, ubs = zip(*(t.bounds(N) for t in constraints), strict=True)
     lbg = np.concatenate(lbs, axis=1).reshape(-1)
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     nlp = build_stagewise_nlp(fns, N, keep=keep, threads=method.threads)
-    given = "".join(f"|{e.key()}" for e in exact)  # a Hessian formed otherwise rounds otherwise: other iterates
-    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep],
-                       fingerprint=hashlib.sha256((text + given).encode()).hexdigest())
+    # The given rows are in it too: a Hessian formed otherwise rounds otherwise, and gives other iterates.
+    fingerprint = hashlib.sha256((expressions.serialized + expressions.given_key).encode()).hexdigest()
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=fingerprint)
 
 
 def exact_rows(z: ca.SX, p: ca.SX, stage: Stage, constraints: Sequence[ConstraintTerm], rows: Sequence[ca.SX]

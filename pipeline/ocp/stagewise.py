@@ -27,7 +27,8 @@ import numpy as np
 from skatelib.library import trust
 from skatelib.library.compiled import cached_or_compiled
 from skatelib.pipeline.ocp.codegen import compile_library, host_cpu, load_private
-from skatelib.pipeline.ocp.curvature import ExactRows, lagrangian_hessian
+from skatelib.pipeline.ocp.curvature import lagrangian_hessian
+from skatelib.pipeline.ocp.expressions import StageExpressions
 from skatelib.pipeline.ocp.threads import mapped
 
 
@@ -41,15 +42,15 @@ class StageFunctions:
     hess: ca.Function  # (z, p, sigma, lam) -> triu hessian of sigma l + lam' g (sparse)
 
 
-def stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, cse: bool = False,
-                    exact: Sequence[ExactRows] = ()) -> StageFunctions:
+def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunctions:
     """Differentiate one stage's cost and constraints symbolically (SX); ``cse``: each common
     subexpression computed once (the same values: for the C code, where the Hessian then has 7 %
-    fewer operations; CasADi's interpreter runs such functions slower); ``exact``: rows whose
-    Lagrangian Hessian is given (:func:`~skatelib.pipeline.ocp.curvature.lagrangian_hessian`)."""
+    fewer operations; CasADi's interpreter runs such functions slower). The rows in ``stage.exact``
+    have their Lagrangian Hessian given (:func:`~skatelib.pipeline.ocp.curvature.lagrangian_hessian`)."""
+    z, p, cost, cons = stage.z, stage.p, stage.cost, stage.cons
     sigma = ca.SX.sym("sigma")
     lam = ca.SX.sym("lam", cons.shape[0])
-    H = lagrangian_hessian(z, p, (sigma * cost, cons), lam, exact)
+    H = lagrangian_hessian(z, p, (sigma * cost, cons), lam, stage.exact)
     opts = {"cse": cse}
     return StageFunctions(
         value=ca.Function("stage_value", [z, p], [cost, cons], opts),
@@ -67,12 +68,6 @@ _NAMES = ("stage_value", "stage_grad", "stage_jac", "stage_hess")
 def c_compiler() -> str | None:
     """The C compiler the stage functions are built with ($CC, gcc or cc), or None."""
     return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
-
-
-def serialized_stage(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX) -> str:
-    """The stage value function ``(z, p) -> (cost, cons)`` serialized: what determines every
-    stage function (derivatives follow from it)."""
-    return ca.Function("stage_value", [z, p], [cost, cons]).serialize()
 
 
 # -O2 and above take many minutes on the push-off stage code; -march=native (where the compiler
@@ -112,17 +107,16 @@ class CompileTarget:
     flags: tuple[str, ...] = _FLAGS
 
 
-def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, target: CompileTarget,
-                             exact: Sequence[ExactRows] = ()) -> StageFunctions:
+def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> StageFunctions:
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
     content hash, with its SHA-256 recorded beside it. A cached library is read once and checked (a
     symlink, a library that changed, or one that others can write, is compiled again with a
     :class:`~skatelib.library.trust.CacheNote`; :mod:`skatelib.library.compiled`), and
     the bytes checked are what is loaded, from a private copy.
 
-    The key is :func:`serialized_stage` (some 6 ms for the push-off's stage), the rows
-    with a given Hessian (``exact``), the flags, CasADi's version and, for ``-march=native``,
-    :func:`host_cpu`; so a cache hit costs
+    The key is the stage's :attr:`~StageExpressions.serialized` text, the rows with a given
+    Hessian (:attr:`~StageExpressions.given_key`), the flags, CasADi's version and, for
+    ``-march=native``, :func:`host_cpu`; so a cache hit costs
     neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
 
     Raises:
@@ -130,18 +124,17 @@ def compiled_stage_functions(z: ca.SX, p: ca.SX, cost: ca.SX, cons: ca.SX, targe
     """
     cc = c_compiler()
     if cc is None:
-        return stage_functions(z, p, cost, cons, exact=exact)
+        return stage_functions(stage)
     flags = target.flags
-    text = serialized_stage(z, p, cost, cons)
     native = host_cpu() if "-march=native" in flags else ""
-    given = "".join(f"|{e.key()}" for e in exact)
-    key_src = text + given + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
+    key_src = (stage.serialized + stage.given_key + " ".join(flags) + native + ca.CasadiMeta.version()
+               + _DERIVATIVES_VERSION)
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
 
     def compile_now() -> bytes:
         COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
                          "kept in %s)", cc, lib.parent)
-        fns = stage_functions(z, p, cost, cons, cse=True, exact=exact)
+        fns = stage_functions(stage, cse=True)
         return compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
 
     code = cached_or_compiled(lib, trust.compile_advice(), compile_now)
