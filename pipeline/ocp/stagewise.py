@@ -70,7 +70,7 @@ def c_compiler() -> str | None:
     return shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
 
 
-# -O2 and above take many minutes on the push-off stage code; -march=native (where the compiler
+# -O2 doubles the push-off stage code's compile for a Hessian a tenth faster; -march=native (where the compiler
 # takes it) evaluates faster with results identical to the last bit (docs/design-notes.md). The
 # library then runs only on this kind of CPU, so the host CPU is part of the cache key.
 # gcc spends most of a long stage function's compile allocating its registers: LEAN_FLAGS make
