@@ -29,6 +29,9 @@ class StageExpressions:
         return ca.Function("stage_value", [self.z, self.p], [self.cost, self.cons]).serialize()
 
     @property
-    def given_key(self) -> str:
-        """Which rows have a given Hessian, and how it is formed (:meth:`ExactRows.key`)."""
-        return "".join(f"|{e.key()}" for e in self.exact)
+    def key(self) -> str:
+        """What the stage's functions and their values depend on: :attr:`serialized`, then which rows
+        have a given Hessian and how it is formed (:meth:`ExactRows.key`; formed otherwise, it rounds
+        otherwise and gives other iterates). A problem's fingerprint hashes it, and the compiled
+        code's cache key starts with it."""
+        return self.serialized + "".join(f"|{e.key()}" for e in self.exact)

@@ -81,9 +81,8 @@ def transcribe(method: MultipleShooting, sizes: tuple[int, int, int], costs: Seq
     ubg = np.concatenate(ubs, axis=1).reshape(-1)
     keep = np.isfinite(lbg) | np.isfinite(ubg)  # rows free on both sides never reach the solver
     nlp = build_stagewise_nlp(fns, N, keep=keep, threads=method.threads)
-    # The given rows are in it too: a Hessian formed otherwise rounds otherwise, and gives other iterates.
-    fingerprint = hashlib.sha256((expressions.serialized + expressions.given_key).encode()).hexdigest()
-    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep], fingerprint=fingerprint)
+    return Transcribed(nlp=nlp, lbg=lbg[keep], ubg=ubg[keep],
+                       fingerprint=hashlib.sha256(expressions.key.encode()).hexdigest())
 
 
 def exact_rows(z: ca.SX, p: ca.SX, stage: Stage, constraints: Sequence[ConstraintTerm], rows: Sequence[ca.SX]

@@ -114,9 +114,9 @@ def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> 
     :class:`~skatelib.library.trust.CacheNote`; :mod:`skatelib.library.compiled`), and
     the bytes checked are what is loaded, from a private copy.
 
-    The key is the stage's :attr:`~StageExpressions.serialized` text, the rows with a given
-    Hessian (:attr:`~StageExpressions.given_key`), the flags, CasADi's version and, for
-    ``-march=native``, :func:`host_cpu`; so a cache hit costs
+    The key is the stage's :attr:`~StageExpressions.key` (its serialized text and the rows with a
+    given Hessian), the flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a
+    cache hit costs
     neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
 
     Raises:
@@ -127,8 +127,7 @@ def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> 
         return stage_functions(stage)
     flags = target.flags
     native = host_cpu() if "-march=native" in flags else ""
-    key_src = (stage.serialized + stage.given_key + " ".join(flags) + native + ca.CasadiMeta.version()
-               + _DERIVATIVES_VERSION)
+    key_src = stage.key + " ".join(flags) + native + ca.CasadiMeta.version() + _DERIVATIVES_VERSION
     lib = target.folder / f"stage_{hashlib.sha256(key_src.encode()).hexdigest()[:20]}.so"
 
     def compile_now() -> bytes:
