@@ -13,7 +13,7 @@ OUT    ?=
 # build --check's tolerance against the reference (docs/ci.md: what holds across machines)
 CHECK_TOLERANCE ?= --atol 1e-4 --rtol 1e-6
 
-.PHONY: all venv venv-build relink library certify test test-fast lint bench clean help cpp figures reference check-library check-default docs
+.PHONY: venv venv-build relink library certify test test-fast lint bench clean help cpp figures reference check-library check-default docs
 
 help:
 	@echo "make library   build the default CyberDog2 motion library (out/cyberdog2-default.h5); installs the [build], [control] and [sim] extras (the twin judges the transitions)"

@@ -7,7 +7,8 @@ new subpackage whose ``kind`` module defines ``KIND``, an object with the operat
 not change. Both kinds name their modules alike:
 ``config`` (the config class, ``from_toml``, ``from_json``), ``kind`` (``KIND``), ``builder``
 (its part of the build), ``tasks`` (``BuildTask``, ``EntryOutcome``), ``verify`` (the independent
-checks and ``judge``), ``entries`` (the library it writes), ``rerun`` and ``plots`` (its views).
+checks and ``judge``; the quadruped's in ``checks.verify``), ``entries`` (the library it writes),
+``rerun`` and ``plots`` (its views).
 
 A kind's modules are imported when a command needs them: ``skatelib --help`` imports no solver.
 """

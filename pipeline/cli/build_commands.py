@@ -41,7 +41,8 @@ YesOpt = Annotated[bool, typer.Option(
 
 def model(
     config: Annotated[Path | None, typer.Argument(
-        help="Build config (TOML) or a quadruped library (.h5); the shipped default config when omitted.")] = None,
+        help="Build config (TOML) or a library (.h5, quadruped or humanoid); the shipped default config when "
+             "omitted.")] = None,
     twin: Annotated[Path | None, typer.Option(
         help="Write the physical twin (MuJoCo MJCF: robot and jointed skateboard) to this file.")] = None,
 ) -> None:
