@@ -106,3 +106,20 @@ def test_a_profile_of_a_cluster_build_is_refused(tmp_path):
                  "--backend", "dask", "--scheduler", "tcp://127.0.0.1:1"])
     assert r.returncode == 2 and "--profile" in r.stderr and "dask" in r.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("case", ["the library", "the config", "a foreign file", "a folder", "under a file"])
+def test_a_profile_file_that_cannot_be_written_is_refused_before_the_build(tmp_path, case):
+    """Every file the build would write is checked before any solve: the profile may not replace the
+    library it profiles, the config, or a file of another type, nor go where nothing can be written."""
+    lib, foreign = tmp_path / "x.h5", tmp_path / "notes.txt"
+    foreign.write_text("mine")
+    config = tmp_path / "tiny.toml"
+    config.write_text(TINY.read_text().replace('extends = "../../', f'extends = "{TINY.parents[2]}/'))
+    profile = {"the library": lib, "the config": config, "a foreign file": foreign, "a folder": tmp_path,
+               "under a file": foreign / "p.json"}[case]
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    r = run_cli(["build", str(config), "-o", str(lib), "--profile", str(profile), "--no-progress"])
+    assert r.returncode == 2, r.stderr
+    assert str(profile.name) in r.stderr and "Traceback" not in r.stderr
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # nothing built, nothing replaced

@@ -50,8 +50,9 @@ def check_output(out: Path, inputs: Sequence[Path] = (), force: bool | None = No
     Args:
         force: The command's ``--force`` (overwrite a file of another type); None for a command
             without that option, whose advice then does not name it.
-        what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``) or
-            ``"twin"`` (a MuJoCo MJCF file), ``"video"`` (an MP4 or a GIF) or ``"frontier"`` (JSON).
+        what: ``"library"`` (an HDF5 motion library), ``"recording"`` (a Rerun ``.rrd``),
+            ``"twin"`` (a MuJoCo MJCF file), ``"video"`` (an MP4 or a GIF), ``"frontier"`` or
+            ``"profile"`` (JSON), ``"mcap"`` or ``"report"`` (HTML).
 
     Raises:
         OutputError: Saying what to do.
@@ -212,6 +213,7 @@ _OUTPUTS = {
     "twin": ("twin.xml", is_mjcf, "MuJoCo model"),
     "video": ("run.mp4", is_video, "video"),
     "frontier": ("frontier.json", is_json, "JSON file"),
+    "profile": ("profile.json", is_json, "JSON file"),
     "mcap": ("library.mcap", is_mcap, "MCAP file"),
     "report": ("report.html", is_html, "HTML file"),
 }

@@ -119,13 +119,27 @@ def build(
         if backend == Backend.dask or check is not None:
             raise typer.BadParameter("a profile is of a build on this machine: leave out --backend dask and --check",
                                      param_hint="--profile")
-        run = profiled_build(cfg, out or default_output(cfg), opts, force, profile)
+        target = out or default_output(cfg)
+        _check_profile_output(profile, target, cfg)
+        run = profiled_build(cfg, target, opts, force, profile)
     else:
         run = run_build(cfg, out or default_output(cfg), opts, force)
     if run.failed and not allow_failures:
         console.print(f"[bold red]{count(run.failed, 'entry')} failed[/] (kept in the file with success=false); "
                       "rerun with --allow-failures to accept")
         raise typer.Exit(1)
+
+
+def _check_profile_output(profile: Path, library: Path, cfg: Any) -> None:
+    """``--profile``'s file, refused before the build as every output is: not the library the build
+    writes, not an input, not a file of another type, in a folder that can be written."""
+    from skatelib.library.errors import OutputError
+    from skatelib.pipeline.build.preflight import check_output
+
+    if profile.resolve() == library.resolve():
+        raise OutputError(profile, "is the library this build writes; name another file for the profile, e.g. "
+                                   f"{library.with_suffix('.profile.json')}")
+    check_output(profile, [p for p in (cfg.path,) if p is not None], what="profile")
 
 
 def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[float, float],
