@@ -98,9 +98,11 @@ def atomic_folder(out: Path) -> Iterator[Path]:
                 os.chmod(staging, 0o777 & ~umask)  # mkdtemp makes 0700; out is an ordinary folder
                 os.rename(staging, out)
             else:
-                for f in sorted(staging.iterdir()):
-                    if f.name != MARKER:
-                        os.replace(f, out / f.name)
+                staged = sorted(f for f in staging.iterdir() if f.name != MARKER)
+                for f in staged:
+                    _refuse_foreign(out / f.name, f)
+                for f in staged:
+                    os.replace(f, out / f.name)
     except BaseException as e:
         for d in missing:
             with contextlib.suppress(OSError):
@@ -108,6 +110,25 @@ def atomic_folder(out: Path) -> Iterator[Path]:
         if isinstance(e, OSError) and e.errno in NO_ROOM:
             raise no_room(out, None, e) from e
         raise
+
+
+def _head(path: Path) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(4)
+
+
+def _refuse_foreign(old: Path, new: Path) -> None:
+    """Refuse to replace a file that is not of the kind of its replacement (their first four bytes,
+    a format's signature, differ): a file of the user's own that happens to bear an output's name.
+
+    Raises:
+        OutputError: Naming the file; nothing has been moved yet.
+    """
+    if not old.exists():
+        return
+    if old.is_dir() or not old.is_file() or _head(old) != _head(new):
+        raise OutputError(old, f"exists and is not a {new.suffix or 'plain'} file this command writes; refusing to "
+                               "overwrite it (move it away, or choose another folder)")
 
 
 def _flush(path: Path) -> None:

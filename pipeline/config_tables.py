@@ -24,6 +24,7 @@ CONFIG_DIR = Path(__file__).resolve().parent.parent / "configs"
 DEFAULT_CONFIG = "cyberdog2.toml"
 # ``extends = "skatelib:cyberdog2.toml"`` names a shipped config, wherever skatelib is installed.
 SHIPPED = "skatelib:"
+MAX_CONFIG_BYTES = 2**20  # a config is a short text; a longer file is something else
 
 
 def setting(lo: float | None = None, hi: float | None = None, doc: str = "", **kw: Any) -> Any:
@@ -56,11 +57,15 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
         names = " -> ".join(p.name for p in (*chain, path.resolve()))
         raise ConfigError(chain[0], "extends", f"the extends chain is a cycle: {names}; break it")
     try:
-        raw = path.read_bytes()
+        with open(path, "rb") as f:
+            raw = f.read(MAX_CONFIG_BYTES + 1)  # a device such as /dev/zero has no end
     except OSError as e:
         what = "is a folder, not a config file" if path.is_dir() else f"cannot be read ({e.strerror})"
         raise ConfigError(path, "-", f"{what}; "
                           f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
+    if len(raw) > MAX_CONFIG_BYTES:
+        raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a short "
+                                     "TOML text file (configs/cyberdog2.toml)")
     if raw.startswith(HDF5_SIGNATURE):
         raise ConfigError(path, "-", "is an HDF5 file (a motion library?), not a TOML config; "
                           "'skatelib info' and 'skatelib validate' read libraries")

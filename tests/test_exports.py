@@ -181,3 +181,20 @@ def test_a_complete_export_makes_an_ordinary_folder(tmp_path):
     (out / "mine.txt").write_text("the user's")
     assert _cli(["export", str(REFERENCE), "-f", "npz", "-o", str(out)]).returncode == 0
     assert sorted(p.name for p in out.iterdir()) == ["mine.txt", "v0.30_s1.npz", "v0.40_s1.npz"]
+
+
+@pytest.mark.parametrize("fmt", ["npz", "csv"])
+def test_a_file_of_the_users_with_an_entrys_name_is_not_overwritten(tmp_path, fmt):
+    """A folder that holds a file of another kind under an entry's file name: exit 2 naming it, and
+    nothing of the export arrives (the other entry's file neither). A file the export wrote before
+    is replaced."""
+    out = tmp_path / "x"
+    out.mkdir()
+    theirs = out / f"v0.30_s1.{fmt}"
+    theirs.write_text("the user's notes")
+    r = _cli(["export", str(REFERENCE), "-f", fmt, "-o", str(out)])
+    assert r.returncode == 2 and theirs.name in r.stderr and "refusing to overwrite" in r.stderr, r.stderr
+    assert sorted(p.name for p in out.iterdir()) == [theirs.name] and theirs.read_text() == "the user's notes"
+    theirs.unlink()
+    assert _cli(["export", str(REFERENCE), "-f", fmt, "-o", str(out)]).returncode == 0
+    assert _cli(["export", str(REFERENCE), "-f", fmt, "-o", str(out)]).returncode == 0  # its own files: replaced

@@ -22,6 +22,8 @@ SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?
 def is_skatelib_library(path: Path) -> bool:
     """True when ``path`` is an HDF5 file that names itself a skatelib motion library, even a
     damaged one. Reads the raw bytes only: a damaged file can hang HDF5's parser."""
+    if not path.is_file():  # a device such as /dev/zero would be read without end
+        return False
     try:
         raw = path.read_bytes()
     except OSError:
@@ -36,6 +38,11 @@ def _head(path: Path, n: int) -> bytes:
             return f.read(n)
     except OSError:
         return b""
+
+
+def is_hdf5(path: Path) -> bool:
+    """True when ``path`` starts with the HDF5 signature (a library, perhaps a damaged or foreign one)."""
+    return _head(path, len(HDF5_SIGNATURE)) == HDF5_SIGNATURE
 
 
 def is_rerun_recording(path: Path) -> bool:

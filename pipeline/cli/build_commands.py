@@ -50,10 +50,10 @@ def model(
     figures; for a humanoid config, its point-mass model and the LIP/DCM time constant. With
     --twin, write the MuJoCo model of robot and board built from the same figures (open it with
     python -m mujoco.viewer --mjcf OUT.xml)."""
-    from skatelib.pipeline.build.preflight import is_skatelib_library
+    from skatelib.pipeline.build.preflight import is_hdf5
     from skatelib.pipeline.twin import write_twin
 
-    if config is not None and is_skatelib_library(config):
+    if config is not None and is_hdf5(config):  # a library, or a damaged one that the library reader names
         if twin is None:
             raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
                                      param_hint="CONFIG")
