@@ -51,7 +51,8 @@ def check_version(path: Path, version: str) -> None:
     try:
         major, minor = (int(p) for p in version.split("."))
     except ValueError:
-        raise LibraryFormatError(path, field, f"{version!r} is not 'major.minor'") from None
+        raise LibraryFormatError(path, field, f"{version!r} is not 'major.minor': the file is damaged or not written "
+                                              "by skatelib; rebuild it with 'skatelib build'") from None
     ours = schema.FORMAT_VERSION
     if major > ours[0]:
         raise LibraryFormatError(
@@ -98,7 +99,7 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
             arrays = _read_groups(path, f, (schema.G_MODEL, schema.G_PACKED) if full else (schema.G_PACKED,))
             index_key = f"{schema.G_PACKED}/{schema.D_INDEX}"
             if index_key not in arrays:
-                raise LibraryFormatError(path, f"/{index_key}", "required dataset missing")
+                raise LibraryFormatError(path, f"/{index_key}", "required dataset missing; rebuild it with 'skatelib build'")
             if verify_checksum:
                 check_checksum_attribute(path, f.attrs.get(schema.A_CHECKSUM), digest)
             index = _parse_index(path, arrays[index_key])
@@ -144,7 +145,8 @@ def _check_format(path: Path, f: h5py.File) -> None:
         raise LibraryFormatError(path, f"/@{schema.A_FORMAT}", f"not a skatelib motion library (format={fmt!r})")
     version = f.attrs.get(schema.A_FORMAT_VERSION)
     if version is None:
-        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing")
+        raise LibraryFormatError(path, f"/@{schema.A_FORMAT_VERSION}", "missing: the file is damaged or not written by "
+                                                                        "skatelib; rebuild it with 'skatelib build'")
     check_version(path, text(version))
 
 
@@ -153,7 +155,7 @@ def _read_groups(path: Path, f: h5py.File, groups: tuple[str, ...]) -> dict[str,
     arrays: dict[str, np.ndarray] = {}
     for gname in groups:
         if gname not in f:
-            raise LibraryFormatError(path, f"/{gname}", "required group missing")
+            raise LibraryFormatError(path, f"/{gname}", "required group missing; rebuild it with 'skatelib build'")
         for name, obj in f[gname].items():
             if not isinstance(obj, h5py.Dataset):
                 raise LibraryFormatError(path, f"/{gname}/{name}", "damaged or unexpected object; rebuild it")
@@ -211,8 +213,12 @@ def _entry_arrays(path: Path, base: str, kind: str, meta: dict[str, Any],
                   arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """An entry's rows of the packed datasets (every dataset its kind requires)."""
     for d in schema.ENTRY_DATASETS[kind]:
-        if d not in meta["rows"] or f"{schema.G_PACKED}/{d}" not in arrays:
-            raise LibraryFormatError(path, f"{base}/{d}", "required dataset missing")
+        if d not in meta["rows"]:
+            raise LibraryFormatError(path, f"{base}/{d}", "required dataset missing from the index; rebuild it with "
+                                                           "'skatelib build'")
+        if f"{schema.G_PACKED}/{d}" not in arrays:
+            raise LibraryFormatError(path, f"/{schema.G_PACKED}/{d}", "required dataset missing; rebuild it with "
+                                                                      "'skatelib build'")
     data = {}
     for d, (a, b) in meta["rows"].items():
         src = arrays.get(f"{schema.G_PACKED}/{d}")

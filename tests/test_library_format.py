@@ -75,6 +75,30 @@ def test_edited_attribute_is_refused(tmp_path):
         read_library(p, verify_checksum=False, full=True)
 
 
+@pytest.mark.parametrize(("removed", "field"), [
+    (("entries/e", "attr", "success"), "/entries/e@success"),
+    (("model", "attr", "gravity_mps2"), "/model@gravity_mps2"),
+    (("", "attr", schema.A_KIND), f"/@{schema.A_KIND}"),
+    (("entries/e/state", "node", None), "/entries/e/state"),
+    (("entries", "node", None), "/entries/e"),
+    (("packed/state", "node", None), "/packed/state"),
+])
+def test_a_part_removed_behind_the_index_is_named(tmp_path, removed, field):
+    """An attribute, a view or a packed dataset that the checksummed index has but the file lost
+    (deleted behind the checksum): the full read names it and says to rebuild, where the default
+    read (from the index alone) has what it needs."""
+    p = _write(tmp_path / "r.h5")
+    where, what, name = removed
+    with h5py.File(p, "r+") as f:
+        if what == "attr":
+            del (f[where] if where else f).attrs[name]
+        else:
+            del f[where]
+    with pytest.raises(LibraryFormatError, match="rebuild") as e:
+        read_library(p, verify_checksum=False, full=True)
+    assert e.value.field == field, str(e.value)
+
+
 def test_entry_views_show_the_packed_data(tmp_path):
     """/entries/<key>/<name> are readable datasets with columns, equal to the packed rows."""
     p = _write(tmp_path / "c3.h5")
@@ -138,12 +162,14 @@ def test_newer_minor_version_only_warns(tmp_path, monkeypatch):
 
 
 def test_missing_dataset_is_named(tmp_path):
-    """A required dataset that is absent is named in the error (checksum off to reach that check)."""
+    """A required dataset that is absent is named in the error, the packed one that is gone, not the
+    entry's view of it (checksum off to reach that check)."""
     p = _write(tmp_path / "h.h5")
     with h5py.File(p, "r+") as f:
         del f["packed/control"]
-    with pytest.raises(LibraryFormatError, match="/entries/e/control"):
+    with pytest.raises(LibraryFormatError, match="rebuild") as e:
         read_library(p, verify_checksum=False)
+    assert e.value.field == "/packed/control"
 
 
 def test_not_a_library(tmp_path):
