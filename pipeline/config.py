@@ -11,6 +11,7 @@ extending file winning.
 from __future__ import annotations
 
 import json
+import re
 import typing
 from pathlib import Path
 from typing import Any
@@ -39,8 +40,12 @@ if typing.TYPE_CHECKING:
 
 AnyConfig = typing.Union["QuadrupedConfig", "HumanoidConfig"]
 C = typing.TypeVar("C", "QuadrupedConfig", "HumanoidConfig")
+NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]{0,63}")
 def _kind(path: Path, name: Any, expect: type | None) -> RobotKind:
     """The kind of a config's ``meta.kind`` (from the kind table), checked against ``expect``."""
+    if name is None:
+        raise ConfigError(path, "meta.kind", f"missing: a config starts with [meta] kind = one of "
+                                             f"{', '.join(map(repr, KINDS))} (configs/cyberdog2.toml)")
     if name not in KINDS:
         raise ConfigError(path, "meta.kind", f"{name!r}: use one of {', '.join(map(repr, KINDS))}")
     kind = KINDS[name].load()
@@ -81,4 +86,9 @@ def _meta(path: Path, data: dict[str, Any]) -> dict[str, Any]:
     meta = data.get("meta", {})
     if not isinstance(meta, dict):
         raise ConfigError(path, "meta", f"must be a table ([meta] with kind and name), got {meta!r}")
+    name = meta.get("name")
+    if isinstance(name, str) and not NAME_RE.fullmatch(name):
+        raise ConfigError(path, "meta.name", f"{name!r}: the default library file is out/<name>.h5, so a name is one "
+                                             "plain file name of letters, digits, '.', '_' and '-' (at most 64, not "
+                                             "starting with '.' or '-'), e.g. 'cyberdog2-default'")
     return meta

@@ -119,3 +119,23 @@ def test_warm_start_barrier_comes_from_the_config(tmp_path):
     assert w_opts["warm_start_bound_push"] == w_opts["warm_start_mult_bound_push"] == 3e-5
     with pytest.raises(ConfigError, match=r"optimization\.warm_mu_strategy.*'fast'"):
         load_config(_write(tmp_path, '[optimization]\nwarm_mu_strategy = "fast"\n'))
+
+
+@pytest.mark.parametrize("name", ["", "../evil", "a/b", ".hidden", "with space", "x" * 65])
+def test_a_name_that_is_no_plain_file_name_is_refused(tmp_path, name):
+    """``[meta] name`` makes the default output out/<name>.h5: a name that would put it elsewhere
+    (a path, a hidden file, no name) is refused naming the key; the shipped names pass."""
+    cfg = tmp_path / "n.toml"
+    cfg.write_text(f'extends = "skatelib:cyberdog2.toml"\n\n[meta]\nkind = "quadruped"\nname = {name!r}\n'.replace("'", '"'))
+    with pytest.raises(ConfigError, match=r"meta\.name.*plain file name") as e:
+        load_config(cfg)
+    assert e.value.path == cfg
+    for shipped in CONFIG_DIR.glob("*.toml"):
+        load_config(shipped)
+
+
+def test_a_config_without_its_kind_says_what_to_write(tmp_path):
+    empty = tmp_path / "empty.toml"
+    empty.write_text("")
+    with pytest.raises(ConfigError, match=r"meta\.kind.*missing.*kind = one of 'quadruped'"):
+        load_config(empty)
