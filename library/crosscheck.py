@@ -60,7 +60,8 @@ def check_against_index(path: Path, f: h5py.File, index: dict[str, Any], arrays:
                 if (got is None) != (expected is None) or (
                     got is not None and [text(x) for x in got] != list(expected or [])
                 ):
-                    raise LibraryFormatError(path, f"/{base}/{d}@{attr}", f"differs from the checksummed index: {CHANGED}")
+                    raise LibraryFormatError(path, f"/{base}/{d}@{attr}",
+                                             f"differs from the checksummed index: {CHANGED}")
 
 
 def _check_model_datasets(path: Path, index: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:

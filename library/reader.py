@@ -99,7 +99,8 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
             arrays = _read_groups(path, f, (schema.G_MODEL, schema.G_PACKED) if full else (schema.G_PACKED,))
             index_key = f"{schema.G_PACKED}/{schema.D_INDEX}"
             if index_key not in arrays:
-                raise LibraryFormatError(path, f"/{index_key}", "required dataset missing; rebuild it with 'skatelib build'")
+                raise LibraryFormatError(path, f"/{index_key}",
+                                         "required dataset missing; rebuild it with 'skatelib build'")
             if verify_checksum:
                 check_checksum_attribute(path, f.attrs.get(schema.A_CHECKSUM), digest)
             index = _parse_index(path, arrays[index_key])

@@ -64,8 +64,8 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
         raise ConfigError(path, "-", f"{what}; "
                           f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
     if len(raw) > MAX_CONFIG_BYTES:
-        raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a short "
-                                     "TOML text file (configs/cyberdog2.toml)")
+        raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a "
+                                     "short TOML text file (configs/cyberdog2.toml)")
     if raw.startswith(HDF5_SIGNATURE):
         raise ConfigError(path, "-", "is an HDF5 file (a motion library?), not a TOML config; "
                           "'skatelib info' and 'skatelib validate' read libraries")

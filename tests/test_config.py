@@ -126,7 +126,8 @@ def test_a_name_that_is_no_plain_file_name_is_refused(tmp_path, name):
     """``[meta] name`` makes the default output out/<name>.h5: a name that would put it elsewhere
     (a path, a hidden file, no name) is refused naming the key; the shipped names pass."""
     cfg = tmp_path / "n.toml"
-    cfg.write_text(f'extends = "skatelib:cyberdog2.toml"\n\n[meta]\nkind = "quadruped"\nname = {name!r}\n'.replace("'", '"'))
+    cfg.write_text('extends = "skatelib:cyberdog2.toml"\n\n[meta]\nkind = "quadruped"\n'
+                   f'name = "{name}"\n')
     with pytest.raises(ConfigError, match=r"meta\.name.*plain file name") as e:
         load_config(cfg)
     assert e.value.path == cfg
