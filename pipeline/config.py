@@ -23,6 +23,7 @@ from skatelib.pipeline.config_tables import (
     MetaConfig,
     build_section,
     check_unique_keys,
+    defining_file,
     field_range,
     read_toml,
     sections,
@@ -68,7 +69,13 @@ def load_config(path: Path | str | None = None, expect: type | None = None) -> A
     """
     path = Path(path) if path is not None else CONFIG_DIR / DEFAULT_CONFIG
     data, text = read_toml(path)
-    return _kind(path, _meta(path, data).get("kind"), expect).from_toml(path, data, text)
+    try:
+        return _kind(path, _meta(path, data).get("kind"), expect).from_toml(path, data, text)
+    except ConfigError as e:
+        origin = defining_file(path, e.key) if e.path == path else None
+        if origin is None or origin == path.resolve():
+            raise
+        raise ConfigError(origin, e.key, f"{e.message} (in the config that {path.name} extends)") from e
 
 
 @typing.overload

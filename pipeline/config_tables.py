@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import tomllib
 import types
 import typing
@@ -63,12 +64,12 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
         what = "is a folder, not a config file" if path.is_dir() else f"cannot be read ({e.strerror})"
         raise ConfigError(path, "-", f"{what}; "
                           f"shipped configs: {', '.join(sorted(p.name for p in CONFIG_DIR.glob('*.toml')))}") from e
-    if len(raw) > MAX_CONFIG_BYTES:
-        raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a "
-                                     "short TOML text file (configs/cyberdog2.toml)")
     if raw.startswith(HDF5_SIGNATURE):
         raise ConfigError(path, "-", "is an HDF5 file (a motion library?), not a TOML config; "
                           "'skatelib info' and 'skatelib validate' read libraries")
+    if len(raw) > MAX_CONFIG_BYTES:
+        raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a "
+                                     "short TOML text file (configs/cyberdog2.toml)")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
@@ -87,9 +88,39 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
             raise ConfigError(path, "extends", "must be a file name (string)")
         shipped = parent.startswith(SHIPPED)
         base_path = CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent
-        base, _ = read_toml(base_path.resolve(), (*chain, path.resolve()))
+        try:
+            base, _ = read_toml(base_path.resolve(), (*chain, path.resolve()))
+        except ConfigError as e:
+            if e.key != "-" or e.path != base_path.resolve():
+                raise
+            raise ConfigError(path, "extends", f"{parent!r} ({e.path}) {e.message}") from e
         data = _merge(base, data)
     return data, text
+
+
+def defining_file(path: Path, key: str) -> Path | None:
+    """The file of ``path``'s ``extends`` chain that writes the dotted ``key`` (``"board.mass_kg"``,
+    ``"sweep.strides[1]"``): ``path`` itself when it does, else the nearest base that does; None
+    when no file of the chain does (a key that is missing) or a file cannot be read."""
+    parts = re.sub(r"\[\d+\]", "", key).split(".")
+    seen: set[Path] = set()
+    at: Path | None = Path(path).resolve()
+    while at is not None and at not in seen:
+        seen.add(at)
+        try:
+            data = tomllib.loads(at.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            return None
+        table: Any = data
+        for part in parts:
+            table = table.get(part) if isinstance(table, dict) else None
+        if table is not None:
+            return at
+        parent = data.get("extends")
+        if not isinstance(parent, str):
+            return None
+        at = (CONFIG_DIR / parent.removeprefix(SHIPPED) if parent.startswith(SHIPPED) else at.parent / parent).resolve()
+    return None
 
 
 # Scalar types of config fields: what a TOML value must be, and the words for a wrong one.

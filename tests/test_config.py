@@ -140,3 +140,33 @@ def test_a_config_without_its_kind_says_what_to_write(tmp_path):
     empty.write_text("")
     with pytest.raises(ConfigError, match=r"meta\.kind.*missing.*kind = one of 'quadruped'"):
         load_config(empty)
+
+
+def test_an_error_in_a_base_config_names_the_base(tmp_path):
+    """A bad key that a file of the ``extends`` chain writes is blamed on that file, not on the
+    config that extends it; one the extending config writes stays its own."""
+    base, child = tmp_path / "base.toml", tmp_path / "child.toml"
+    base.write_text('extends = "skatelib:cyberdog2.toml"\n\n[optimization]\ndt_s = -0.03\n')
+    child.write_text('extends = "base.toml"\n\n[meta]\nkind = "quadruped"\nname = "c"\n')
+    with pytest.raises(ConfigError, match=r"optimization\.dt_s.*child\.toml extends") as e:
+        load_config(child)
+    assert e.value.path == base.resolve()
+    child.write_text(child.read_text() + "\n[board]\nmass_kgg = 2.0\n")
+    base.write_text('extends = "skatelib:cyberdog2.toml"\n')
+    with pytest.raises(ConfigError, match=r"board\.mass_kgg") as e:
+        load_config(child)
+    assert e.value.path == child
+
+
+def test_a_base_that_cannot_be_read_is_named_by_the_extends_key(tmp_path):
+    child = tmp_path / "child.toml"
+    child.write_text('extends = "nope.toml"\n\n[meta]\nkind = "quadruped"\nname = "c"\n')
+    with pytest.raises(ConfigError, match=r"'nope\.toml'.*cannot be read") as e:
+        load_config(child)
+    assert (e.value.path, e.value.key) == (child, "extends")
+
+
+def test_a_device_is_not_read_without_end():
+    """/dev/zero as a config: refused after a megabyte, not read until memory runs out."""
+    with pytest.raises(ConfigError, match="larger than 1 MB"):
+        load_config("/dev/zero")
