@@ -57,9 +57,26 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
     if path.resolve() in chain:
         names = " -> ".join(p.name for p in (*chain, path.resolve()))
         raise ConfigError(chain[0], "extends", f"the extends chain is a cycle: {names}; break it")
+    text = _read_text(path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(path, "-", f"not valid TOML: {e}") from e
+    robot = data.get("robot")
+    if isinstance(robot, dict) and isinstance(robot.get("urdf"), str):
+        # Paths are relative to the file that names them, also through ``extends``.
+        robot["urdf"] = str((path.parent / robot["urdf"]).resolve())
+    parent = data.pop("extends", None)
+    if parent is not None:
+        data = _merge(_read_base(path, parent, chain), data)
+    return data, text
+
+
+def _read_text(path: Path) -> str:
+    """A config file's text: at most a megabyte of UTF-8 (a device such as /dev/zero has no end)."""
     try:
         with open(path, "rb") as f:
-            raw = f.read(MAX_CONFIG_BYTES + 1)  # a device such as /dev/zero has no end
+            raw = f.read(MAX_CONFIG_BYTES + 1)
     except OSError as e:
         what = "is a folder, not a config file" if path.is_dir() else f"cannot be read ({e.strerror})"
         raise ConfigError(path, "-", f"{what}; "
@@ -71,31 +88,24 @@ def read_toml(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict[str, Any],
         raise ConfigError(path, "-", f"is larger than {MAX_CONFIG_BYTES // 2**20} MB, not a config; a config is a "
                                      "short TOML text file (configs/cyberdog2.toml)")
     try:
-        text = raw.decode("utf-8")
+        return raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise ConfigError(path, "-", f"is not UTF-8 text (byte {e.start}); a config is a TOML text file") from e
+
+
+def _read_base(path: Path, parent: Any, chain: tuple[Path, ...]) -> dict[str, Any]:
+    """The merged table of the config ``path`` extends (``parent``: its ``extends`` value); a base
+    that cannot be read is named by the ``extends`` key of ``path``."""
+    if not isinstance(parent, str):
+        raise ConfigError(path, "extends", "must be a file name (string)")
+    shipped = parent.startswith(SHIPPED)
+    base_path = (CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent).resolve()
     try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise ConfigError(path, "-", f"not valid TOML: {e}") from e
-    robot = data.get("robot")
-    if isinstance(robot, dict) and isinstance(robot.get("urdf"), str):
-        # Paths are relative to the file that names them, also through ``extends``.
-        robot["urdf"] = str((path.parent / robot["urdf"]).resolve())
-    parent = data.pop("extends", None)
-    if parent is not None:
-        if not isinstance(parent, str):
-            raise ConfigError(path, "extends", "must be a file name (string)")
-        shipped = parent.startswith(SHIPPED)
-        base_path = CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent
-        try:
-            base, _ = read_toml(base_path.resolve(), (*chain, path.resolve()))
-        except ConfigError as e:
-            if e.key != "-" or e.path != base_path.resolve():
-                raise
-            raise ConfigError(path, "extends", f"{parent!r} ({e.path}) {e.message}") from e
-        data = _merge(base, data)
-    return data, text
+        return read_toml(base_path, (*chain, path.resolve()))[0]
+    except ConfigError as e:
+        if e.key != "-" or e.path != base_path:
+            raise
+        raise ConfigError(path, "extends", f"{parent!r} ({e.path}) {e.message}") from e
 
 
 def defining_file(path: Path, key: str) -> Path | None:
