@@ -88,6 +88,7 @@ CASES = {
     "NaN speed": ("[sweep]\nvelocities_mps = [nan]\nstrides = [1]\n", "sweep.velocities_mps"),
     "meta not a table": ("meta = 5\n", "meta"),
     "URDF is a folder": ('[robot]\nurdf = "."\n', "robot.urdf"),
+    "URDF is no XML": ('[robot]\nurdf = "bad.toml"\n', "robot.urdf"),  # the parser's words go into the message
 }
 
 
@@ -101,6 +102,7 @@ def test_bad_configs_are_refused_before_any_solve(tmp_path, case):
     r = _run(["build", str(cfg), "-o", str(out), "--no-progress"], env={"SKATELIB_CACHE_DIR": str(tmp_path / "c")})
     assert r.returncode == 2, r.stdout + r.stderr
     assert "bad.toml" in r.stderr and key in r.stderr and "Traceback" not in r.stderr + r.stdout
+    assert r.stderr.startswith("error:"), r.stderr  # nothing above the message
     assert list(tmp_path.iterdir()) == [cfg]
 
 

@@ -82,6 +82,6 @@ def check_options(cfg: Any, opts: BuildOptions) -> None:
         if opts.scheduler is None:
             raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
         check_scheduler(opts.scheduler)
+    kind_of(cfg).check(cfg, opts)
     if opts.cache:
         check_cache_dir()
-    kind_of(cfg).check(cfg, opts)

@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 from skatelib.library.channels import LEGS
 from skatelib.library.errors import ModelError
+from skatelib.pipeline.quadruped.model.urdf import free_flyer_model
 
 Sym = Any  # a CasADi SX or MX expression (CasADi's stubs do not type mixed arithmetic)
 
@@ -68,10 +69,7 @@ class Quadruped:
     def __init__(self, urdf_path: Path, joint_names: tuple[str, ...], foot_frames: tuple[str, ...]):
         self.urdf_path = Path(urdf_path)
         self.urdf_text = self.urdf_path.read_text()
-        try:
-            self.model = pin.buildModelFromUrdf(str(self.urdf_path), pin.JointModelFreeFlyer())
-        except (RuntimeError, ValueError) as e:
-            raise ModelError(f"{self.urdf_path}: pinocchio cannot load it: {e}") from e
+        self.model = free_flyer_model(self.urdf_path)
         self.joint_names = tuple(joint_names)
         self.foot_frames = tuple(foot_frames)
         self.chains = tuple(self._chain(i, leg) for i, leg in enumerate(LEGS))

@@ -9,7 +9,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import LEGS
-from skatelib.library.errors import ModelError
+from skatelib.library.errors import ConfigError, ModelError
 from skatelib.pipeline.ocp.rotations import rpy_to_matrix
 from skatelib.pipeline.quadruped.config import ContactConfig, QuadrupedConfig
 from skatelib.pipeline.quadruped.model.board import BoardModel
@@ -99,7 +99,10 @@ class SkateSystem:
     @staticmethod
     def from_config(cfg: QuadrupedConfig) -> SkateSystem:
         """Load the URDF, solve the nominal stance, compute the SRB and the board model."""
-        robot = Quadruped(cfg.urdf_path, cfg.robot.joint_names, cfg.robot.foot_frames)
+        try:
+            robot = Quadruped(cfg.urdf_path, cfg.robot.joint_names, cfg.robot.foot_frames)
+        except ModelError as e:
+            raise ConfigError(cfg.path, "robot.urdf", str(e)) from e
         st = cfg.stance
         r = cfg.robot.foot_radius_m
         xs = (st.foot_x_front_m, st.foot_x_front_m, st.foot_x_rear_m, st.foot_x_rear_m)
