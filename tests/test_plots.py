@@ -66,11 +66,19 @@ def test_push_forces_are_the_ground_foot_forces(lib_path):
     assert ft2[k] > limit2[k]
 
 
-def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path):
+@pytest.mark.parametrize(("text", "says"), [
+    ("{}", "its 'points' are missing"), ("[1, 2]", "its 'points' are missing"),
+    ('{"points": 3}', "its 'points' are missing"), ("not json", "not JSON"), (None, "cannot be read"),
+])
+def test_plot_refuses_a_bad_frontier_file(lib_path, tmp_path, text, says):
+    """A file that is not a frontier: the option and the file named, what is wrong with it in words
+    (not Python's), what to give instead; no figure written."""
     bad = tmp_path / "nope.json"
-    bad.write_text("{}")
-    with pytest.raises(SkatelibError, match=r"nope\.json"):
+    if text is not None:
+        bad.write_text(text)
+    with pytest.raises(SkatelibError, match=rf"--frontier .*nope\.json: {says}.*skatelib frontier -o"):
         write_figures(lib_path, tmp_path / "figs", bad)
+    assert not (tmp_path / "figs").exists()
 
 
 def test_humanoid_figures_draw_the_library(hrp2_walk_path, tmp_path):

@@ -150,13 +150,26 @@ def plot_frontier(frontier: dict[str, Any], name: str, plt: Any) -> Any:
     return fig
 
 
+def _frontier_file(path: Path) -> dict[str, Any]:
+    """A file of ``skatelib frontier -o``, or the error that names what is wrong with it."""
+    advice = "give a file written by `skatelib frontier -o`"
+    if path.is_dir():
+        raise SkatelibError(f"--frontier {path}: is a folder; {advice}")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise SkatelibError(f"--frontier {path}: cannot be read ({e.strerror}); {advice}") from e
+    except ValueError as e:  # not UTF-8, or not JSON
+        raise SkatelibError(f"--frontier {path}: not JSON ({e}); {advice}") from e
+    points = data.get("points") if isinstance(data, dict) else None
+    if not isinstance(points, list) or not points or not all(isinstance(p, dict) and "probes" in p for p in points):
+        raise SkatelibError(f"--frontier {path}: its 'points' are missing or are not the frontier's (a list of "
+                            f"points with their 'probes'); {advice}")
+    return dict(data)
+
+
 def _frontier(lib: MotionLibrary, frontier_file: Path | None) -> dict[str, Any] | None:
     if frontier_file is not None:
-        try:
-            data = json.loads(frontier_file.read_text())
-            _ = data["points"][0]["probes"]  # the shape of a frontier file
-        except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
-            raise SkatelibError(f"{frontier_file}: not a frontier file of `skatelib frontier -o` ({e})") from e
-        return dict(data)
+        return _frontier_file(frontier_file)
     stored = lib.attrs.get(schema.A_FRONTIER)
     return json.loads(str(stored)) if stored else None
