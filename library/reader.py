@@ -90,6 +90,8 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
     if path.is_dir():
         raise LibraryFormatError(path, "/", "is a folder, not a library file; give the .h5 file in it")
     if not path.is_file():
+        if path.exists():
+            raise LibraryFormatError(path, "/", "is not a regular file (a device or a pipe); give the .h5 file")
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
     raw = path.read_bytes()
     digest = refuse_damaged(path, raw) if verify_checksum else None

@@ -180,3 +180,9 @@ def test_not_a_library(tmp_path):
     with pytest.raises(LibraryFormatError, match="not a skatelib motion library"):
         read_library(p)
     shutil.rmtree(tmp_path)
+
+
+def test_a_device_is_named_as_no_file():
+    """/dev/null exists but is no library file: said so, not 'no such file'."""
+    with pytest.raises(LibraryFormatError, match="not a regular file"):
+        read_library(Path("/dev/null"))

@@ -110,7 +110,9 @@ def _writable(folder: Path, named: Path, message: str, mode: int = 0o777) -> Non
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".skatelib-probe-"):
             pass
     except OSError as e:
-        raise OutputError(named, message.format(folder=folder, why=e.strerror)) from e
+        blocking = next((p for p in (folder, *folder.parents) if p.exists() and not p.is_dir()), None)
+        why = f"{blocking} is a file" if blocking is not None else e.strerror
+        raise OutputError(named, message.format(folder=folder, why=why)) from e
 
 
 def check_cache_dir(entries_too: bool = True) -> Path:
