@@ -228,3 +228,11 @@ def test_help_reads_as_a_terminal_help():
     assert "diff [OPTIONS] A B\n" in usage["diff"], usage["diff"]
     for name, text in usage.items():
         assert "{" not in text.splitlines()[0] and "``" not in text, (name, text)
+
+
+def test_a_frontier_search_that_would_try_nothing_is_refused(tmp_path: Path):
+    """--start above --max-speed: exit 2 naming --start, before any config is read or solve made."""
+    r = subprocess.run([*SKATELIB, "frontier", "--start", "2.0", "--max-speed", "1.0", "-o", str(tmp_path / "f.json")],
+                       capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"}, timeout=60)
+    assert r.returncode == 2 and "--start" in r.stderr and "max-speed" in r.stderr, r.stderr
+    assert list(tmp_path.iterdir()) == []

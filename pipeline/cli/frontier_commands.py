@@ -45,6 +45,9 @@ def frontier(
     from skatelib.pipeline.quadruped.frontier import FrontierSearch, Lane, find_frontier, frontier_json
     from skatelib.pipeline.quadruped.size import frontier_size, probes
 
+    if start > max_speed:
+        raise typer.BadParameter(f"{start:g} m/s is above --max-speed {max_speed:g} m/s: nothing would be tried",
+                                 param_hint="--start")
     cfg = load_config(config, QuadrupedConfig)
     if out is not None:
         check_output(out, [cfg.path], what="frontier")
