@@ -119,7 +119,9 @@ class Entry:
     def array_at(self, name: str, t: float) -> np.ndarray:
         """The row of a per-knot array (``joints``, ``joint_velocities``, ``base_pose``, ``feet``...)
         at time ``t`` [s], linear between knots and clamped to the entry (a quaternion in it is
-        interpolated by its components: renormalize it). Allocates one row.
+        interpolated by its components: renormalize it); an array of integers (``contact`` codes,
+        ``step_index``) holds each knot's value until the next knot, as :meth:`sample`'s contacts do,
+        never half a code. Allocates one row.
 
         Raises:
             KeyError: Naming the arrays with a row per knot.
@@ -131,7 +133,10 @@ class Entry:
         if not isfinite(t):
             raise ValueError(f"array_at(name, t): t must be a finite time in seconds, got {t!r}")
         i, f = self._locate(t)
-        row = a[i] + f * (a[min(i + 1, self._n - 1)] - a[i])
+        if a.dtype.kind in "biu":  # codes and indices hold
+            row = np.array(a[i + 1 if f >= 1.0 else i])
+        else:
+            row = np.array(a[i] + f * (a[min(i + 1, self._n - 1)] - a[i]))
         row.flags.writeable = False
         return row
 
@@ -142,6 +147,10 @@ class Entry:
         self.window(t0, n, dt)  # the same argument checks and bound
         a = self.arrays[name]
         tc = np.clip(t0 + dt * np.arange(n), self._t0, self._tend)
+        if a.dtype.kind in "biu":  # codes and indices hold: the knot at or before each time
+            held = a[np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._n - 1)]
+            held.flags.writeable = False
+            return held
         j = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self._last)
         span = self.t[j + 1] - self.t[j] if self._n >= 2 else np.ones(n)
         f = ((tc - self.t[j]) / span).reshape(-1, *([1] * (a.ndim - 1)))

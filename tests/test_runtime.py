@@ -262,3 +262,22 @@ def test_window_takes_an_integer_count_and_has_a_bound(lib):
     assert peak < 1e6
     w = e.window(0.0, WINDOW_MAX_N, 1e-3)
     assert w.state.shape[0] == WINDOW_MAX_N and e.window(0.0, np.int64(3), 0.1).state.shape[0] == 3
+
+
+def test_codes_hold_and_one_dimensional_arrays_interpolate(tmp_path):
+    """``array_at`` / ``array_window`` of the contact codes are :meth:`sample`'s and :meth:`window`'s
+    codes (held, never half a code: a leg from ground to swing is not 'on the board' between), and a
+    per-knot array of one dimension (``t``) is interpolated like the others."""
+    e = _entry(0.4, seed=4)
+    e.arrays["contact"] = np.random.default_rng(5).integers(0, 3, (K, 4)).astype(np.int8)
+    p = tmp_path / "codes.h5"
+    write_library(p, _ROOT, _MODEL, _LIMITS, {}, [e])
+    entry = MotionLibrary.open(p)[e.key]
+    times = np.concatenate([np.linspace(-0.1, 1.3, 701), entry.t])
+    for t in times:
+        got = entry.array_at("contact", float(t))
+        assert got.dtype == np.int8 and np.array_equal(got, entry.sample(float(t)).contact), t
+        assert float(entry.array_at("t", float(t))) == pytest.approx(min(max(t, 0.0), entry.t[-1]))
+    held = entry.array_window("contact", -0.05, 200, 0.007)
+    assert np.array_equal(held, entry.window(-0.05, 200, 0.007).contact)
+    assert set(np.unique(held)) <= {0, 1, 2}
