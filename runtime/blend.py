@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from skatelib.library import schema
 from skatelib.library.channels import S_Q
+from skatelib.library.errors import SkatelibError
 from skatelib.library.margins import friction_margins, friction_use
 
 
@@ -23,6 +25,18 @@ class BlendMargin:
 
     friction_fraction: float = 0.01
     joint_rad: float = 0.01
+
+    def __post_init__(self) -> None:
+        """Raises:
+            ValueError: A margin that is no margin: ``friction_fraction`` outside [0, 1) or
+                ``joint_rad`` negative or not finite (a negative one would pass a force outside the
+                cone or a joint beyond its limit).
+        """
+        f, j = self.friction_fraction, self.joint_rad
+        if not (isinstance(f, (int, float)) and 0.0 <= f < 1.0):
+            raise ValueError(f"BlendMargin(friction_fraction={f!r}): a fraction of mu from 0 up to (not) 1")
+        if not (isinstance(j, (int, float)) and 0.0 <= j < float("inf")):
+            raise ValueError(f"BlendMargin(joint_rad={j!r}): a finite distance from the joint limits >= 0 rad")
 
 
 DEFAULT_MARGIN = BlendMargin()
@@ -70,3 +84,17 @@ class MarginCheck:
         slack = np.inf if lo is None or hi is None else float(min(np.min(q - lo), np.min(hi - q)))
         return BlendCheck(min_friction_margin_N=fric, max_friction_use=use, min_joint_limit_slack_rad=slack,
                           required=self.required)
+
+
+def check_blend(path: Path, kind: str, margin: object) -> None:
+    """A blend can be made and checked: of a quadruped's library, with a :class:`BlendMargin`.
+
+    Raises:
+        TypeError: ``margin`` is not a :class:`BlendMargin`.
+        SkatelibError: The library is not a quadruped's (nothing of a humanoid's to check it by).
+    """
+    if not isinstance(margin, BlendMargin):
+        raise TypeError(f"blend(margin=...): a BlendMargin(friction_fraction, joint_rad), got {margin!r}")
+    if kind != "quadruped":
+        raise SkatelibError(f"{path}: blend mixes a quadruped's start-ups, whose feet and joints it checks; this is a "
+                            f"{kind} library: select() its entries")

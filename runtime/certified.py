@@ -38,7 +38,7 @@ def usable(entries: Iterable[Entry], certificate: Certificate | None,
             why = "no certificate" if certificate is None or e.key not in certificate.entries else \
                 "its certificate was made on other data (certify the library again)"
             skipped.append(f"{e.key} ({why})")
-        elif figures.rate < min_success:
+        elif not figures.rate >= min_success:  # a rate of no rides (NaN) is no rate
             skipped.append(f"{e.key} (success rate {figures.rate:.2f} < min_success {min_success:g})")
         else:
             kept.append(e)

@@ -17,7 +17,7 @@ from skatelib.library.errors import LibraryFormatError, SkatelibError
 from skatelib.library.model import HumanoidModel, QuadrupedModel
 from skatelib.library.model_io import read_humanoid_model, read_quadruped_model
 from skatelib.library.reader import EntryRecord, LibraryData, read_library
-from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck
+from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck, check_blend
 from skatelib.runtime.blended import blend_pair
 from skatelib.runtime.certified import usable
 from skatelib.runtime.entry import Entry, EntryNotFound
@@ -137,7 +137,7 @@ class MotionLibrary:
         """The successful entries (certified at ``min_success``) from ``from_velocity_mps`` with
         ``strides``, and a note on those ``min_success`` left out."""
         v0 = from_velocity_mps
-        entries, note = usable(self, self.certificate, min_success)
+        entries, note = usable(self, self.certificate if min_success is not None else None, min_success)
         start = [e for e in entries if speed_key(e.from_velocity_mps) == speed_key(v0)]
         if not start:
             raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v0} m/s; entries start at "
@@ -157,7 +157,8 @@ class MotionLibrary:
         certified at that success rate or better (:mod:`skatelib.runtime.certified`).
 
         Raises:
-            ValueError: When a speed is NaN or infinite, or ``min_success`` is not from 0 to 1.
+            ValueError: When a speed is NaN or infinite, a transition's target is its start speed, or
+                ``min_success`` is not from 0 to 1.
             EntryNotFound: When no (certified) successful entry starts at ``from_velocity_mps`` or has ``strides``
                 strides, or ``target_velocity_mps`` lies outside the stored speeds and ``clamp`` is
                 false (the message lists the speeds; :meth:`route` chains entries where no single one
@@ -166,8 +167,13 @@ class MotionLibrary:
         v, v0 = target_velocity_mps, from_velocity_mps
         if not (isfinite(v) and isfinite(v0)):
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
+        if v0 and speed_key(v) == speed_key(v0):
+            raise ValueError(f"select({v!r}, from_velocity_mps={v0!r}): a transition changes the speed; riding on at "
+                             f"{v0} m/s needs no entry (the controller's riding reference)")
         c, note = self._candidates(strides, v0, min_success)
         speeds = sorted({e.target_velocity_mps for e in c})
+        if clamp:  # the nearest stored speed, also for a target so far out that differences round alike
+            v = min(max(v, speeds[0]), speeds[-1])
         if not clamp and not speeds[0] - 1e-9 <= v <= speeds[-1] + 1e-9:
             which = "" if strides is None else f" for {strides} strides"
             start = "" if not v0 else f" from {v0} m/s"
@@ -187,7 +193,7 @@ class MotionLibrary:
             EntryNotFound: When no chain gets there (the message lists what can be reached and the
                 entries skipped below ``min_success``).
         """
-        entries, note = usable(self, self.certificate, min_success)
+        entries, note = usable(self, self.certificate if min_success is not None else None, min_success)
         try:
             return [e.ready() for e in route(entries, from_velocity_mps, target_velocity_mps, f"{self.path}: ")]
         except EntryNotFound as e:
@@ -206,12 +212,15 @@ class MotionLibrary:
 
         Raises:
             ValueError: When ``target_velocity_mps`` is NaN or infinite.
+            TypeError: When ``margin`` is not a :class:`BlendMargin`.
             EntryNotFound: When no stride count's entries bracket ``target_velocity_mps``.
-            SkatelibError: When ``strict`` and the blend misses the margins.
+            SkatelibError: When ``strict`` and the blend misses the margins, or the library is not a
+                quadruped's (a humanoid's entries are not blended).
         """
         v = target_velocity_mps
         if not isfinite(v):
             raise ValueError(f"blend(target_velocity_mps): a finite speed in m/s, got {v!r}")
+        check_blend(self.path, self.kind, margin)
         a, b = self._bracket(v, strides)
         e = blend_pair(a, b, v, self._margin_check(margin))
         if strict and e.check is not None and not e.check.ok:

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from skatelib.library.certificate import Certificate, entry_digest
-from skatelib.library.errors import ConfigError
+from skatelib.library.errors import ConfigError, SkatelibError
 from skatelib.pipeline.certify_run import store_certificate
 from skatelib.pipeline.certify_spec import stale_reasons
 from skatelib.pipeline.config import load_config
@@ -216,3 +216,20 @@ def test_certify_refuses_a_bad_table_and_track_draw_off_the_twin(tmp_path):
     assert lib.read_bytes() == REFERENCE.read_bytes()
     t = run_cli(["track", str(lib), "--draw", "5", "-e", "v0.30_s1"])
     assert t.returncode == 2 and "give --plant mujoco and one --entry" in t.stderr, t.stderr
+
+
+def test_an_entry_of_no_rides_is_not_certified_and_a_bad_certificate_only_matters_when_asked(certified):
+    """An entry whose figures hold no ride (rate NaN) is skipped under any min_success, not passed;
+    a certificate that cannot be read refuses min_success but leaves select and route without it."""
+    path, cert = certified
+    lib = MotionLibrary.open(path)
+    empty = dataclasses.replace(cert.entries["v0.40_s1"], successes=0, samples=0)
+    store_certificate(path, dataclasses.replace(cert, entries={**cert.entries, "v0.40_s1": empty}))
+    lib = MotionLibrary.open(path)
+    with pytest.raises(EntryNotFound, match=r"v0.40_s1 \(success rate nan < min_success 0\)"):
+        lib.select(0.4, min_success=0.0)
+    broken = MotionLibrary.open(path)
+    broken.attrs = {**broken.attrs, "certificate_json": "{not json"}  # as a damaged certificate reads
+    assert broken.select(0.4).key == "v0.40_s1" and [e.key for e in broken.route(0.0, 0.4)] == ["v0.40_s1"]
+    with pytest.raises(SkatelibError):
+        broken.select(0.4, min_success=0.5)

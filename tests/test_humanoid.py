@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from skatelib.library.errors import ConfigError
+from skatelib.library.errors import ConfigError, SkatelibError
 from skatelib.pipeline.build.contract import BuildOptions
 from skatelib.pipeline.build.orchestrate import build_library
 from skatelib.pipeline.config import CONFIG_DIR, load_config
@@ -159,6 +159,8 @@ def test_build_report_marks_all_entries(hrp2_walk_path):
     e = lib.select(0.375)
     assert lib.keys() == ["walk_v0.375_n6"] and e.success
     assert e.key == "walk_v0.375_n6" and e.n_strides == 6 and e.attrs["n_phases"] == 8
+    with pytest.raises(SkatelibError, match="humanoid library: select"):  # nothing of its to check a blend by
+        lib.blend(0.375)
 
 
 def test_unknown_motion_is_a_config_error(tmp_path):

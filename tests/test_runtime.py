@@ -281,3 +281,23 @@ def test_codes_hold_and_one_dimensional_arrays_interpolate(tmp_path):
     held = entry.array_window("contact", -0.05, 200, 0.007)
     assert np.array_equal(held, entry.window(-0.05, 200, 0.007).contact)
     assert set(np.unique(held)) <= {0, 1, 2}
+
+
+def test_select_clamps_far_targets_to_the_nearest_end_and_refuses_a_transition_to_its_start(lib):
+    """A target so far out that every entry's distance rounds alike still gets the nearest end; a
+    transition whose target is its start speed is no entry's."""
+    assert lib.select(1e16, clamp=True).target_velocity_mps == 0.5
+    assert lib.select(-1e16, clamp=True).target_velocity_mps == 0.3
+    with pytest.raises(ValueError, match="a transition changes the speed"):
+        lib.select(0.3, from_velocity_mps=0.3)
+
+
+@pytest.mark.parametrize("kw", [{"friction_fraction": -0.5}, {"friction_fraction": 1.0},
+                                {"friction_fraction": float("nan")}, {"joint_rad": -0.01},
+                                {"joint_rad": float("inf")}])
+def test_a_margin_that_is_no_margin_is_refused(lib, kw):
+    """A negative margin would pass forces outside the cone or joints beyond their limits."""
+    with pytest.raises(ValueError, match="BlendMargin"):
+        BlendMargin(**kw)
+    with pytest.raises(TypeError, match="BlendMargin"):
+        lib.blend(0.4, margin=0.1)  # type: ignore[arg-type]
