@@ -222,7 +222,8 @@ class MotionLibrary:
             raise ValueError(f"blend(target_velocity_mps): a finite speed in m/s, got {v!r}")
         check_blend(self.path, self.kind, margin)
         a, b = self._bracket(v, strides)
-        e = blend_pair(a, b, v, self._margin_check(margin))
+        lower, upper = (self.model_arrays.get(k) for k in (schema.D_JOINT_LOWER, schema.D_JOINT_UPPER))
+        e = blend_pair(a, b, v, MarginCheck(float(self.model[schema.A_FRICTION_MU]), lower, upper, margin))
         if strict and e.check is not None and not e.check.ok:
             raise SkatelibError(f"blend at {v} m/s misses its margins: {e.check}")
         return e.ready()
@@ -240,10 +241,6 @@ class MotionLibrary:
         ranges = {s: self.speeds(s) for s in counts}
         raise EntryNotFound(f"{self.path}: {target_velocity_mps} m/s is outside the stored speeds {ranges} "
                             "(per stride count)")
-
-    def _margin_check(self, margin: BlendMargin) -> MarginCheck:
-        return MarginCheck(float(self.model[schema.A_FRICTION_MU]), self.model_arrays.get(schema.D_JOINT_LOWER),
-                           self.model_arrays.get(schema.D_JOINT_UPPER), margin)
 
 
 def _entry(r: EntryRecord) -> Entry:
