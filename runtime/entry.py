@@ -16,12 +16,9 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.errors import SkatelibError
 from skatelib.runtime.blend import BlendCheck
-from skatelib.runtime.references import Channels, Sample, Window
-
-WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the entry's own knots)
-# The longest step of a window [s]: a minute, beyond any entry (seconds long; past its end the reference
-# holds its last state). Far larger steps overflow the index arithmetic (dt = 1e308: NaN indices).
-WINDOW_MAX_DT_S = 60.0
+from skatelib.runtime.references import WINDOW_MAX_DT_S as WINDOW_MAX_DT_S  # the window's bounds, named here too
+from skatelib.runtime.references import WINDOW_MAX_N as WINDOW_MAX_N
+from skatelib.runtime.references import Channels, Sample, Window, check_window
 
 
 class EntryNotFound(SkatelibError):
@@ -144,7 +141,7 @@ class Entry:
         """The rows of a per-knot array at ``t0 + k dt``, k = 0..n-1, as :meth:`array_at` (n, ...);
         ``n`` bounded as in :meth:`window`."""
         self.array_at(name, t0)  # KeyError naming the per-knot arrays
-        self.window(t0, n, dt)  # the same argument checks and bound
+        check_window(t0, n, dt, len(self.t))  # the same argument checks and bound as window()
         a = self.arrays[name]
         tc = np.clip(t0 + dt * np.arange(n), self._t0, self._tend)
         if a.dtype.kind in "biu":  # codes and indices hold: the knot at or before each time
@@ -207,18 +204,7 @@ class Entry:
             ValueError: When ``t0`` or ``dt`` is not finite, ``dt`` is not in (0, 60] s, ``n < 1`` or
                 ``n`` is beyond the bound (naming the argument and its range).
         """
-        if not isinstance(n, (int, np.integer)) or isinstance(n, bool):
-            raise TypeError(f"window(t0, n, dt): n must be an integer count of steps, got {n!r}")
-        if n > WINDOW_MAX_N and n > len(self.t):
-            raise ValueError(f"window(t0, n, dt): n = {n} steps is beyond the bound of {WINDOW_MAX_N} "
-                             "(skatelib.runtime.entry.WINDOW_MAX_N); sample a longer span in several windows")
-        if not isfinite(t0):
-            raise ValueError(f"window(t0, n, dt): t0 must be a finite time in seconds, got {t0!r}")
-        if not (isfinite(dt) and 0.0 < dt <= WINDOW_MAX_DT_S):
-            raise ValueError(f"window(t0, n, dt): dt must be a step in seconds in (0, {WINDOW_MAX_DT_S:g}] "
-                             f"(skatelib.runtime.entry.WINDOW_MAX_DT_S), got {dt!r}")
-        if n < 1:
-            raise ValueError(f"window(t0, n, dt): n must be at least 1, got {n!r}")
+        check_window(t0, n, dt, len(self.t))
         if not self._ready:
             self.ready()
         if self._uniform and self._n >= 2:

@@ -4,10 +4,38 @@ MPC horizon, and the :class:`Channels` that name their columns."""
 # No postponed annotations here: pdoc (make docs) resolves a NamedTuple's field types only when
 # they are evaluated at class creation.
 
+from math import isfinite
 from typing import Any, NamedTuple
 
 import numpy as np
 from skatelib.library import schema
+
+WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the entry's own knots)
+# The longest step of a window [s]: a minute, beyond any entry (seconds long; past its end the reference
+# holds its last state). Far larger steps overflow the index arithmetic (dt = 1e308: NaN indices).
+WINDOW_MAX_DT_S = 60.0
+
+
+def check_window(t0: float, n: int, dt: float, knots: int) -> None:
+    """The arguments of ``Entry.window`` (and ``array_window``) for an entry of ``knots`` knots.
+
+    Raises:
+        TypeError: When ``n`` is not an integer.
+        ValueError: When ``t0`` or ``dt`` is not finite, ``dt`` is not in (0, 60] s, ``n < 1`` or
+            ``n`` is beyond the bound (naming the argument and its range).
+    """
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool):
+        raise TypeError(f"window(t0, n, dt): n must be an integer count of steps, got {n!r}")
+    if n > WINDOW_MAX_N and n > knots:
+        raise ValueError(f"window(t0, n, dt): n = {n} steps is beyond the bound of {WINDOW_MAX_N} "
+                         "(skatelib.runtime.entry.WINDOW_MAX_N); sample a longer span in several windows")
+    if not isfinite(t0):
+        raise ValueError(f"window(t0, n, dt): t0 must be a finite time in seconds, got {t0!r}")
+    if not (isfinite(dt) and 0.0 < dt <= WINDOW_MAX_DT_S):
+        raise ValueError(f"window(t0, n, dt): dt must be a step in seconds in (0, {WINDOW_MAX_DT_S:g}] "
+                         f"(skatelib.runtime.entry.WINDOW_MAX_DT_S), got {dt!r}")
+    if n < 1:
+        raise ValueError(f"window(t0, n, dt): n must be at least 1, got {n!r}")
 
 
 class Channels:
