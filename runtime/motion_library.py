@@ -186,7 +186,7 @@ class MotionLibrary:
               min_success: float | None = None) -> list[Entry]:
         """The chain of successful entries (certified at ``min_success`` or better, when given) that
         rides from ``from_velocity_mps`` to ``target_velocity_mps`` [m/s] in the least time (0: at
-        rest), one entry when one gets there (:func:`skatelib.runtime.routes.route`).
+        rest; a single entry when no chain is quicker; :func:`skatelib.runtime.routes.route`).
 
         Raises:
             ValueError: When the speeds are equal or negative, or ``min_success`` is not from 0 to 1.
