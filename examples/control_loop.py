@@ -32,6 +32,8 @@ def main() -> None:
     args = ap.parse_args()
 
     lib = MotionLibrary.open(args.library)
+    if lib.kind != "quadruped":
+        raise SystemExit(f"{args.library}: a {lib.kind} library; this loop reads a quadruped's board and feet")
     entry = lib.select(args.target_velocity_mps, strides=args.strides, clamp=True)
     print(f"{args.library}: riding {entry.key} ({entry.duration_s:.2f} s, then its end state)")
     ticks = int((entry.duration_s + 0.5) / WBC_DT_S)

@@ -93,7 +93,12 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
         if path.exists():
             raise LibraryFormatError(path, "/", "is not a regular file (a device or a pipe); give the .h5 file")
         raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
-    raw = path.read_bytes()
+    try:
+        with open(path, "rb") as f:
+            head = f.read(1 << 16)  # where HDF5 looks for its signature (after a user block)
+            raw = head + f.read() if schema.HDF5_SIGNATURE in head else head  # another file: read no further
+    except OSError as e:
+        raise LibraryFormatError(path, "/", f"cannot be read ({e.strerror}); give a file this user can read") from e
     digest = refuse_damaged(path, raw) if verify_checksum else None
     try:
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``

@@ -15,10 +15,13 @@ def blend_pair(a: Entry, b: Entry, target_velocity_mps: float, check: MarginChec
     carries its check and its own attributes (``success`` only when both succeeded and it passes).
 
     Raises:
-        SkatelibError: When the two entries' contact schedules differ.
+        SkatelibError: When the two entries' knot times or contact schedules differ.
     """
     v = target_velocity_mps
     w = 0.0 if b is a else (v - a.target_velocity_mps) / (b.target_velocity_mps - a.target_velocity_mps)
+    if a.t.shape != b.t.shape or not np.array_equal(a.t, b.t):
+        raise SkatelibError(f"entries {a.key} and {b.key} have different knot times ({len(a.t)} and {len(b.t)} "
+                            "knots); cannot blend")
     if a.contact is not None and b.contact is not None and not np.array_equal(a.contact, b.contact):
         raise SkatelibError(f"entries {a.key} and {b.key} have different contact schedules; cannot blend")
     arrays = {schema.D_T: a.t}

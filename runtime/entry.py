@@ -196,7 +196,7 @@ class Entry:
         (n, 24), contact codes (n, 4) and times (n,). Clamped to the entry like :meth:`sample`.
 
         ``n`` is at most :data:`WINDOW_MAX_N` (10 000: any controller's horizon, and a bound on what
-        one call allocates, about 5 MB), or the entry's own knot count if that is larger; ``dt`` is
+        one call allocates, about 7 MB), or the entry's own knot count if that is larger; ``dt`` is
         at most :data:`WINDOW_MAX_DT_S` (60 s).
 
         Raises:

@@ -34,6 +34,9 @@ class MotionLibrary:
     """
 
     def __init__(self, data: LibraryData):
+        if not isinstance(data, LibraryData):
+            raise TypeError(f"MotionLibrary(data) takes what read_library returns; open a file with "
+                            f"MotionLibrary.open(path), got {data!r}")
         self.path, self.attrs = data.path, data.attrs
         self.model, self.model_arrays = data.model_attrs, data.model_arrays
         self.urdf = data.model_text.get(schema.D_ROBOT_URDF, "")
@@ -168,8 +171,7 @@ class MotionLibrary:
         if not (isfinite(v) and isfinite(v0)):
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
         if v0 and speed_key(v) == speed_key(v0):
-            raise ValueError(f"select({v!r}, from_velocity_mps={v0!r}): a transition changes the speed; riding on at "
-                             f"{v0} m/s needs no entry (the controller's riding reference)")
+            raise ValueError(f"select({v!r}, from_velocity_mps={v0!r}): a transition changes the speed")
         c, note = self._candidates(strides, v0, min_success)
         speeds = sorted({e.target_velocity_mps for e in c})
         if clamp:  # the nearest stored speed, also for a target so far out that differences round alike

@@ -133,6 +133,8 @@ class Window:
         which, j = self.channels.locate(name)
         return (self.control if which else self.state)[:, j]
 
+    __iter__ = None  # not a sequence of rows: index a channel by name, or take .state, .control, .contact
+
     def __getitem__(self, name: str) -> np.ndarray:
         return self.get(name)
 

@@ -301,3 +301,23 @@ def test_a_margin_that_is_no_margin_is_refused(lib, kw):
         BlendMargin(**kw)
     with pytest.raises(TypeError, match="BlendMargin"):
         lib.blend(0.4, margin=0.1)  # type: ignore[arg-type]
+
+
+def test_misuses_name_what_to_do(lib):
+    """The constructor given a path says to open() it; a window is not iterated row by row."""
+    with pytest.raises(TypeError, match=r"MotionLibrary\.open\(path\)"):
+        MotionLibrary("lib.h5")  # type: ignore[arg-type]
+    w = lib["v0.30_s1"].window(0.0, 3, 0.1)
+    with pytest.raises(TypeError):
+        list(w)  # type: ignore[call-overload]
+    assert w["board_vx"].shape == (3,)
+
+
+def test_entries_of_other_knot_times_are_not_blended():
+    from skatelib.runtime.blended import blend_pair
+    from skatelib.runtime.motion_library import _entry as as_entry
+
+    a, b = _entry(0.3, seed=1), _entry(0.5, seed=2)
+    b.arrays.update({k: v[:-1] for k, v in b.arrays.items() if k != "control"}, control=b.arrays["control"][:-1])
+    with pytest.raises(SkatelibError, match="different knot times"):
+        blend_pair(as_entry(a), as_entry(b), 0.4, lambda arrays: None)  # type: ignore[arg-type,return-value]
