@@ -9,7 +9,6 @@ array handed out is read-only.
 from __future__ import annotations
 
 import bisect
-from math import isfinite
 from typing import Any
 
 import numpy as np
@@ -18,7 +17,7 @@ from skatelib.library.errors import SkatelibError
 from skatelib.runtime.blend import BlendCheck
 from skatelib.runtime.references import WINDOW_MAX_DT_S as WINDOW_MAX_DT_S  # the window's bounds, named here too
 from skatelib.runtime.references import WINDOW_MAX_N as WINDOW_MAX_N
-from skatelib.runtime.references import Channels, Sample, Window, check_window
+from skatelib.runtime.references import Channels, Sample, Window, check_window, real
 
 
 class EntryNotFound(SkatelibError):
@@ -127,7 +126,7 @@ class Entry:
         if a is None or a.ndim < 1 or len(a) != self._n:
             names = [k for k, v in self.arrays.items() if v.ndim >= 1 and len(v) == self._n and k != schema.D_T]
             raise KeyError(f"no per-knot array {name!r}; arrays: {', '.join(names)}")
-        if not isfinite(t):
+        if not real(t):
             raise ValueError(f"array_at(name, t): t must be a finite time in seconds, got {t!r}")
         i, f = self._locate(t)
         if a.dtype.kind in "biu":  # codes and indices hold
@@ -182,7 +181,7 @@ class Entry:
         Raises:
             ValueError: When ``t`` is NaN or infinite.
         """
-        if not isfinite(t):
+        if not real(t):
             raise ValueError(f"sample(t): t must be a finite time in seconds, got {t!r}")
         i, a = self._locate(t)
         x = self._rows[i] + a * self._drows[i]

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterator
-from math import isfinite
 from pathlib import Path
 
 from skatelib.library import schema
@@ -21,6 +20,7 @@ from skatelib.runtime.blend import DEFAULT_MARGIN, BlendMargin, MarginCheck, che
 from skatelib.runtime.blended import blend_pair
 from skatelib.runtime.certified import usable
 from skatelib.runtime.entry import Entry, EntryNotFound
+from skatelib.runtime.references import real
 from skatelib.runtime.renamed import renamed
 from skatelib.runtime.routes import route, speed_key
 
@@ -168,7 +168,7 @@ class MotionLibrary:
                 gets there).
         """
         v, v0 = target_velocity_mps, from_velocity_mps
-        if not (isfinite(v) and isfinite(v0)):
+        if not (real(v) and real(v0)):
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
         if v0 and speed_key(v) == speed_key(v0):
             raise ValueError(f"select({v!r}, from_velocity_mps={v0!r}): a transition changes the speed")
@@ -220,7 +220,7 @@ class MotionLibrary:
                 quadruped's (a humanoid's entries are not blended).
         """
         v = target_velocity_mps
-        if not isfinite(v):
+        if not real(v):
             raise ValueError(f"blend(target_velocity_mps): a finite speed in m/s, got {v!r}")
         check_blend(self.path, self.kind, margin)
         a, b = self._bracket(v, strides)

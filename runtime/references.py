@@ -16,6 +16,11 @@ WINDOW_MAX_N = 10_000  # the most steps one window() call returns (beyond the en
 WINDOW_MAX_DT_S = 60.0
 
 
+def real(value: Any) -> bool:
+    """True for one finite real number: not a bool, a string or an array of several values."""
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating)) and isfinite(value)
+
+
 def check_window(t0: float, n: int, dt: float, knots: int) -> None:
     """The arguments of ``Entry.window`` (and ``array_window``) for an entry of ``knots`` knots.
 
@@ -29,9 +34,9 @@ def check_window(t0: float, n: int, dt: float, knots: int) -> None:
     if n > WINDOW_MAX_N and n > knots:
         raise ValueError(f"window(t0, n, dt): n = {n} steps is beyond the bound of {WINDOW_MAX_N} "
                          "(skatelib.runtime.entry.WINDOW_MAX_N); sample a longer span in several windows")
-    if not isfinite(t0):
+    if not real(t0):
         raise ValueError(f"window(t0, n, dt): t0 must be a finite time in seconds, got {t0!r}")
-    if not (isfinite(dt) and 0.0 < dt <= WINDOW_MAX_DT_S):
+    if not (real(dt) and 0.0 < dt <= WINDOW_MAX_DT_S):
         raise ValueError(f"window(t0, n, dt): dt must be a step in seconds in (0, {WINDOW_MAX_DT_S:g}] "
                          f"(skatelib.runtime.entry.WINDOW_MAX_DT_S), got {dt!r}")
     if n < 1:

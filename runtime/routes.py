@@ -10,11 +10,22 @@ import heapq
 from collections.abc import Iterable
 
 from skatelib.runtime.entry import Entry, EntryNotFound
+from skatelib.runtime.references import real
 
 
 def speed_key(v: float) -> float:
     """A speed as entry keys name it (two decimals) [m/s]."""
     return round(float(v), 2)
+
+
+def _ends(from_velocity_mps: float, target_velocity_mps: float) -> tuple[float, float]:
+    """The two speeds as keys, or the ValueError that says what two speeds a route takes."""
+    ok = real(from_velocity_mps) and real(target_velocity_mps)
+    a, b = (speed_key(from_velocity_mps), speed_key(target_velocity_mps)) if ok else (-1.0, -1.0)
+    if not (a >= 0 and b >= 0) or a == b:
+        raise ValueError(f"route({from_velocity_mps!r}, {target_velocity_mps!r}): two different finite speeds of at "
+                         "least 0 m/s")
+    return a, b
 
 
 def route(entries: Iterable[Entry], from_velocity_mps: float, target_velocity_mps: float,
@@ -27,10 +38,7 @@ def route(entries: Iterable[Entry], from_velocity_mps: float, target_velocity_mp
         EntryNotFound: When no chain of successful entries leads there (the message lists the speeds
             that can be reached from ``from_velocity_mps``).
     """
-    a, b = speed_key(from_velocity_mps), speed_key(target_velocity_mps)
-    if not (a >= 0 and b >= 0) or a == b:
-        raise ValueError(f"route({from_velocity_mps!r}, {target_velocity_mps!r}): two different speeds of at least "
-                         "0 m/s")
+    a, b = _ends(from_velocity_mps, target_velocity_mps)
     edges: dict[float, list[Entry]] = {}
     for e in entries:
         if e.success:

@@ -321,3 +321,15 @@ def test_entries_of_other_knot_times_are_not_blended():
     b.arrays.update({k: v[:-1] for k, v in b.arrays.items() if k != "control"}, control=b.arrays["control"][:-1])
     with pytest.raises(SkatelibError, match="different knot times"):
         blend_pair(as_entry(a), as_entry(b), 0.4, lambda arrays: None)  # type: ignore[arg-type,return-value]
+
+
+@pytest.mark.parametrize("bad", [True, "0.4", np.array([0.1, 0.2]), None])
+def test_speeds_and_times_are_one_finite_number(lib, bad):
+    """A bool, a string, several values or None as a speed or a time: a ValueError that shows it,
+    not a bool taken for 1 m/s or numpy's words."""
+    e = lib["v0.30_s1"]
+    for call in (lambda: lib.select(bad), lambda: lib.route(0.0, bad), lambda: e.sample(bad),
+                 lambda: e.array_at("foot_pos", bad), lambda: e.window(bad, 3, 0.1), lambda: e.window(0.0, 3, bad)):
+        with pytest.raises(ValueError, match="finite|a step in seconds"):
+            call()
+    assert e.sample(np.float32(0.3)).t == pytest.approx(0.3) and lib.select(np.float64(0.5)).target_velocity_mps == 0.5
