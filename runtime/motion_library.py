@@ -23,6 +23,7 @@ from skatelib.runtime.entry import Entry, EntryNotFound
 from skatelib.runtime.references import real
 from skatelib.runtime.renamed import renamed
 from skatelib.runtime.routes import route, speed_key
+from skatelib.runtime.selection import bracket, candidates
 
 
 class MotionLibrary:
@@ -135,23 +136,6 @@ class MotionLibrary:
         text = self.attrs.get(schema.A_CERTIFICATE)
         return None if text is None else Certificate.from_json(str(text), f"{self.path}: /@{schema.A_CERTIFICATE}")
 
-    def _candidates(self, strides: int | None, from_velocity_mps: float = 0.0,
-                    min_success: float | None = None) -> tuple[list[Entry], str]:
-        """The successful entries (certified at ``min_success``) from ``from_velocity_mps`` with
-        ``strides``, and a note on those ``min_success`` left out."""
-        v0 = from_velocity_mps
-        entries, note = usable(self, self.certificate if min_success is not None else None, min_success)
-        start = [e for e in entries if speed_key(e.from_velocity_mps) == speed_key(v0)]
-        if not start:
-            raise EntryNotFound(f"{self.path}: no successful entry starts riding at {v0} m/s; entries start at "
-                                f"{self.start_speeds()} m/s (0: from rest){note}")
-        c = [e for e in start if strides is None or e.n_strides == strides]
-        if not c:
-            have = sorted({e.n_strides for e in start})
-            raise EntryNotFound(f"{self.path}: no successful entry from {v0} m/s with strides={strides}; "
-                                f"strides available: {have}{note}")
-        return c, note
-
     @renamed(velocity="target_velocity_mps", v_from="from_velocity_mps", v_to="target_velocity_mps")
     def select(self, target_velocity_mps: float, strides: int | None = None, clamp: bool = False,
                from_velocity_mps: float = 0.0, min_success: float | None = None) -> Entry:
@@ -172,7 +156,7 @@ class MotionLibrary:
             raise ValueError(f"select(target_velocity_mps, from_velocity_mps): finite speeds in m/s, got {v!r}, {v0!r}")
         if v0 and speed_key(v) == speed_key(v0):
             raise ValueError(f"select({v!r}, from_velocity_mps={v0!r}): a transition changes the speed")
-        c, note = self._candidates(strides, v0, min_success)
+        c, note = candidates(self, strides, v0, min_success)
         speeds = sorted({e.target_velocity_mps for e in c})
         if clamp:  # the nearest stored speed, also for a target so far out that differences round alike
             v = min(max(v, speeds[0]), speeds[-1])
@@ -223,26 +207,12 @@ class MotionLibrary:
         if not real(v):
             raise ValueError(f"blend(target_velocity_mps): a finite speed in m/s, got {v!r}")
         check_blend(self.path, self.kind, margin)
-        a, b = self._bracket(v, strides)
+        a, b = bracket(self, v, strides)
         lower, upper = (self.model_arrays.get(k) for k in (schema.D_JOINT_LOWER, schema.D_JOINT_UPPER))
         e = blend_pair(a, b, v, MarginCheck(float(self.model[schema.A_FRICTION_MU]), lower, upper, margin))
         if strict and e.check is not None and not e.check.ok:
             raise SkatelibError(f"blend at {v} m/s misses its margins: {e.check}")
         return e.ready()
-
-    def _bracket(self, target_velocity_mps: float, strides: int | None) -> tuple[Entry, Entry]:
-        # The start-ups' stride counts only: a transition's count may be one no start-up has.
-        counts = [strides] if strides is not None else sorted(
-            {e.n_strides for e in self if e.success and speed_key(e.from_velocity_mps) == speed_key(0.0)})
-        for s in counts:
-            c = sorted(self._candidates(s)[0], key=lambda e: e.target_velocity_mps)
-            lo = [e for e in c if e.target_velocity_mps <= target_velocity_mps]
-            hi = [e for e in c if e.target_velocity_mps >= target_velocity_mps]
-            if lo and hi:
-                return lo[-1], hi[0]
-        ranges = {s: self.speeds(s) for s in counts}
-        raise EntryNotFound(f"{self.path}: {target_velocity_mps} m/s is outside the stored speeds {ranges} "
-                            "(per stride count)")
 
 
 def _entry(r: EntryRecord) -> Entry:
