@@ -130,3 +130,27 @@ def check_checksum_attribute(path: Path, stored_sum: Any, digest: str | None) ->
         raise LibraryFormatError(
             path, f"/@{schema.A_CHECKSUM}", "the file does not match its checksum: it is corrupt; rebuild it"
         )
+
+
+def read_raw(path: Path) -> bytes:
+    """The file's bytes; of a file that is not HDF5, no more than where HDF5 looks for its signature.
+
+    Raises:
+        LibraryFormatError: A folder, a device, a missing or unreadable file.
+    """
+    if path.is_dir():
+        raise LibraryFormatError(path, "/", "is a folder, not a library file; give the .h5 file in it")
+    if not path.is_file():
+        if path.exists():
+            raise LibraryFormatError(path, "/", "is not a regular file (a device or a pipe); give the .h5 file")
+        raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(_USERBLOCK_MAX)  # where HDF5 looks for its signature (after a user block)
+            if schema.HDF5_SIGNATURE in raw:  # another file is read no further
+                f.seek(0)
+                raw = f.read()
+    except OSError as e:
+        raise LibraryFormatError(path, "/", f"cannot be read ({e.strerror}); give a file this user can read") from e
+    return raw
+

@@ -20,7 +20,7 @@ import h5py
 import numpy as np
 from skatelib.library import schema
 from skatelib.library.crosscheck import check_against_index
-from skatelib.library.digest import check_checksum_attribute, refuse_damaged
+from skatelib.library.digest import check_checksum_attribute, read_raw, refuse_damaged
 from skatelib.library.errors import LibraryFormatError
 from skatelib.library.index import check_index
 from skatelib.library.records import EntryRecord, text
@@ -87,18 +87,7 @@ def read_library(path: Path | str, verify_checksum: bool = True, full: bool = Fa
             mismatch, or a required field missing.
     """
     path = Path(path)
-    if path.is_dir():
-        raise LibraryFormatError(path, "/", "is a folder, not a library file; give the .h5 file in it")
-    if not path.is_file():
-        if path.exists():
-            raise LibraryFormatError(path, "/", "is not a regular file (a device or a pipe); give the .h5 file")
-        raise LibraryFormatError(path, "/", "no such file; build one with 'skatelib build'")
-    try:
-        with open(path, "rb") as f:
-            head = f.read(1 << 16)  # where HDF5 looks for its signature (after a user block)
-            raw = head + f.read() if schema.HDF5_SIGNATURE in head else head  # another file: read no further
-    except OSError as e:
-        raise LibraryFormatError(path, "/", f"cannot be read ({e.strerror}); give a file this user can read") from e
+    raw = read_raw(path)
     digest = refuse_damaged(path, raw) if verify_checksum else None
     try:
         with h5py.File(path, "r") as f:  # the native driver reads faster than one over ``raw``
