@@ -41,7 +41,9 @@ if typing.TYPE_CHECKING:
 
 AnyConfig = typing.Union["QuadrupedConfig", "HumanoidConfig"]
 C = typing.TypeVar("C", "QuadrupedConfig", "HumanoidConfig")
-NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]{0,63}")
+NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]{0,63}")  # [meta] name: out/<name>.h5 stays in out/
+
+
 def _kind(path: Path, name: Any, expect: type | None) -> RobotKind:
     """The kind of a config's ``meta.kind`` (from the kind table), checked against ``expect``."""
     if name is None:
