@@ -13,7 +13,7 @@ import functools
 import importlib
 from dataclasses import dataclass
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,7 +28,14 @@ SOLVERS: dict[str, str] = {
 
 
 class QpSolveFailed(RuntimeError):
-    """The QP solver did not return a solution."""
+    """The QP solver did not return a solution, or the problem had none to give: data that are not
+    finite, bounds that cross, or an answer outside its own rows (a solver that reports success on
+    an infeasible problem)."""
+
+
+# How far a solution may lie outside a row's bounds: solvers stop at about 1e-6 (DAQP's primal
+# tolerance); a force or torque off by more than a tenth of a millinewton is no solution.
+ROW_TOLERANCE = 1e-4
 
 
 @dataclass
@@ -79,8 +86,46 @@ def solve_qp(problem: QpProblem, solver: str = "daqp", warm_start: np.ndarray | 
     """Solve ``problem`` with the backend ``solver`` (from ``warm_start`` where the backend uses one).
 
     Raises:
-        QpSolveFailed: The backend returned no solution (its status in the message).
+        QpSolveFailed: The data are not finite or bounds cross (before any solve), the backend
+            returned no solution (its status in the message), or its answer leaves its rows by more
+            than :data:`ROW_TOLERANCE` (relative beyond 1).
         ValueError: An unknown solver name.
     """
+    _check_data(problem, solver)
     solution: QpSolution = backend(solver).solve(problem, warm_start)
+    _check_solution(problem, solution.x, solver)
     return solution
+
+
+def _values(M: Any) -> np.ndarray:
+    """A dense matrix's entries, or a sparse one's stored ones."""
+    return M if isinstance(M, np.ndarray) else np.asarray(M.data)
+
+
+def _check_data(p: QpProblem, solver: str) -> None:
+    """Refuse a problem no solver should be given: it would hang (ProxQP on NaN), drop a row (a NaN
+    bound reads as none) or report a solution of nothing."""
+    if not (np.isfinite(_values(p.H)).all() and np.isfinite(p.g).all() and np.isfinite(_values(p.A)).all()):
+        raise QpSolveFailed(f"{solver}: the QP's cost or rows are not finite (a NaN or inf in the state, the "
+                            "targets or the model); nothing was solved")
+    for name, lo, up in (("rows", p.lower, p.upper), ("variables", p.lb, p.ub)):
+        if lo is not None and up is not None and not np.all(lo <= up):  # NaN compares False
+            bad = int(np.flatnonzero(~(lo <= up))[0])
+            raise QpSolveFailed(f"{solver}: the bounds of the QP's {name} cross or are NaN (index {bad}: "
+                                f"{lo[bad]} > {up[bad]}): check the limits in the settings and the model")
+
+
+def _check_solution(p: QpProblem, x: np.ndarray, solver: str) -> None:
+    """Refuse an answer that is not finite or lies outside its own rows."""
+    if not np.isfinite(x).all():
+        raise QpSolveFailed(f"{solver}: the solution is not finite")
+    Ax = p.A @ x
+    for name, v, lo, up in (("row", Ax, p.lower, p.upper), ("variable", x, p.lb, p.ub)):
+        if lo is None or up is None:
+            continue
+        tol = ROW_TOLERANCE * (1.0 + np.abs(v))
+        out = (v < lo - tol) | (v > up + tol)
+        if out.any():
+            i = int(np.flatnonzero(out)[0])
+            raise QpSolveFailed(f"{solver}: the answer leaves its {name} {i} ({v[i]:.6g} outside [{lo[i]:.6g}, "
+                                f"{up[i]:.6g}]): the QP has no solution (limits that cannot all be met)")

@@ -21,8 +21,12 @@ def solve(problem: QpProblem, warm_start: np.ndarray | None = None) -> QpSolutio
         lower = np.concatenate([lower, np.full(n, -np.inf) if problem.lb is None else problem.lb])
         upper = np.concatenate([upper, np.full(n, np.inf) if problem.ub is None else problem.ub])
     solver = osqp.OSQP()
-    solver.setup(sp.csc_matrix(problem.H), problem.g, A, lower, upper, verbose=False, eps_abs=1e-9, eps_rel=1e-9,
-                 max_iter=20000, polishing=True)
+    try:
+        solver.setup(sp.csc_matrix(problem.H), problem.g, A, lower, upper, verbose=False, eps_abs=1e-9, eps_rel=1e-9,
+                     max_iter=20000, polishing=True)
+    except Exception as e:  # OSQP's own exception type carries only a code
+        raise QpSolveFailed(f"OSQP: setup refused the problem ({type(e).__name__} {e}): a cost that is not "
+                            "convex, or data it cannot factor") from e
     if warm_start is not None and len(warm_start) == len(problem.g):
         solver.warm_start(x=warm_start)
     res = solver.solve(raise_error=False)  # the status is checked below
