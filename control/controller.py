@@ -11,12 +11,13 @@ loop that calls it at its rates, the plant and the verdicts belong to the provin
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control.body_plan import Plan
-from skatelib.control.feedback import ON_FLOOR, MultibodyState, mpc_state
+from skatelib.control.feedback import ON_FLOOR, MultibodyState, StateError, check_state, mpc_state
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Feedback
 from skatelib.control.mpc import MpcConfig
@@ -124,9 +125,15 @@ class SkateController:
         torques (not yet clipped at the motors' limit) and the contact forces.
 
         Raises:
+            StateError: The state breaks a field's shape, holds a NaN or an inf, or a touch code is
+                unknown (:func:`~skatelib.control.feedback.check_state`), or ``t`` is not finite:
+                nothing of the controller's own state has changed. A ``ValueError``.
             QpSolveFailed: The MPC's or the whole-body QP has no solution.
         """
         t0 = time.perf_counter()
+        if not math.isfinite(t):
+            raise StateError(f"tick(t): t must be a finite time in seconds, got {t!r}")
+        check_state(st)
         qp, vp = self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
         T = self.dyn.terms(qp, vp)
         t_terms = time.perf_counter() - t0

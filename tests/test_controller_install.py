@@ -83,3 +83,40 @@ def test_the_controller_extra_alone_runs_a_tick(tmp_path):
     assert out.returncode == 0, out.stdout + out.stderr
     assert "torques [N m]" in out.stdout
     assert "not available" not in out.stderr, out.stderr  # the whole-body tick's C code came with the wheel
+
+
+@pytest.mark.parametrize("field", ["trunk_v", "q", "deck_R", "foot_touch", "contact_points"])
+def test_a_bad_reading_is_refused_and_leaves_the_controller_as_it_was(field):
+    """A NaN in any field of the state (an unknown touch code for the feet): the tick raises naming
+    the field instead of commanding NaN torques, and the next good tick commands what it would
+    have commanded had the bad one never come (the controller's state untouched)."""
+    import dataclasses
+
+    from skatelib.control.body_plan import BodyPlan
+    from skatelib.control.controller import Rates, SkateController
+    from skatelib.control.feedback import planned_state
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.mpc import MpcConfig
+    from skatelib.control.params import SkateParams
+    from skatelib.control.reference import EntryReference
+    from skatelib.control.settings import TrackSettings
+    from skatelib.control.wbc_settings import WbcSettings
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(LIBRARY)
+    entry = lib["v0.30_s1"]
+    p = SkateParams.from_library(lib)
+    ref = EntryReference(lib, entry, p, TrackSettings())
+    plan = BodyPlan(ref, LegKinematics.from_library(lib).foot_radius_m)
+    good = planned_state(entry, 0, p.com_offset_m)
+    ticks = []
+    for bad_first in (False, True):
+        ctrl = SkateController(lib, ref, plan, p, MpcConfig(), WbcSettings(), Rates())
+        if bad_first:
+            value = np.array(getattr(good, field), dtype=float)
+            value.flat[0] = 7.0 if field == "foot_touch" else np.nan
+            with pytest.raises(ValueError, match=f"state.{field}"):
+                ctrl.tick(ref.t0, dataclasses.replace(good, **{field: value}), update=True)
+        ticks.append(ctrl.tick(ref.t0, good, update=True))
+    assert np.isfinite(ticks[1].out.tau).all()
+    np.testing.assert_array_equal(ticks[1].out.tau, ticks[0].out.tau)

@@ -50,5 +50,5 @@ def test_data_that_are_not_finite_or_cross_are_refused_before_the_solve(solver, 
         arr = getattr(p, where).astype(float)
         arr.flat[0] = np.nan
         setattr(p, where, arr)
-    with pytest.raises(QpSolveFailed, match="not finite|cross"):
+    with pytest.raises(QpSolveFailed, match=r"not finite|cross"):
         solve_qp(p, solver)

@@ -22,7 +22,7 @@ import numpy as np
 from skatelib.control.body_plan import BodyPlan, Plan
 from skatelib.control.controller import Rates, SkateController
 from skatelib.control.estimator.estimator import EstimatorSettings
-from skatelib.control.feedback import mpc_state, quat_wxyz
+from skatelib.control.feedback import StateError, mpc_state, quat_wxyz
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.multibody import RobotDynamics
 from skatelib.control.qp import QpSolveFailed
@@ -180,6 +180,8 @@ class TwinLoop:
                         break
             except QpSolveFailed as e:
                 self.run.fall = f"a QP failed at t = {self.t:.2f} s ({e})"
+            except StateError as e:  # the estimate (or the plant) is no state: the robot would stop
+                self.run.fall = f"the controller refused its state at t = {self.t:.2f} s ({e})"
             if self.run.fall:
                 break
         self.meter.finish()
