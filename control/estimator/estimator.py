@@ -23,7 +23,7 @@ from skatelib.control.estimator.legs import LegTermsBuffer, leg_terms
 from skatelib.control.estimator.loads import BodyFigures, compressions
 from skatelib.control.estimator.native import CompiledTick, leg_chains, tick_library
 from skatelib.control.estimator.odometry import LegOdometry
-from skatelib.control.estimator.reading import Reading
+from skatelib.control.estimator.reading import Reading, check_reading, check_still
 from skatelib.control.estimator.settings import BoardGeometry, EstimatorSettings
 from skatelib.control.estimator.vec3 import cross
 from skatelib.control.feedback import ON_DECK, ON_FLOOR, RobotState
@@ -83,7 +83,9 @@ class StateEstimator:
 
     def calibrate(self, still: Sequence[Reading]) -> None:
         """The gyroscope's bias and the trunk's tilt from readings taken standing still; with
-        ``mount_from_legs`` the IMU's mounting from the deck feet (the deck level at the start)."""
+        ``mount_from_legs`` the IMU's mounting from the deck feet (the deck level at the start).
+        A ``ReadingError`` when there is no reading, or one not finite or of another shape."""
+        check_still(still)
         self.attitude.calibrate([r.gyro for r in still], [r.accel for r in still])
         if self.s.mount_from_legs and still and int(self.stance.sum()) >= 3:
             r, _, _ = self.legs(still[-1].q)
@@ -91,7 +93,9 @@ class StateEstimator:
             self.odometry.horizontal_bias_known(self.s.mounted_bias_mps2)
 
     def __call__(self, reading: Reading) -> RobotState:
-        """The state after one tick's readings."""
+        """The state after one tick's readings. A ``ReadingError`` for a reading of another shape,
+        not finite or earlier than the last (:func:`.reading.check_reading`): the estimate is unchanged."""
+        check_reading(reading, self.last_t if self.native is None else self.native.last_t)
         if not self._native_tried:
             self._native_tried = True
             self.native = self._compiled()
@@ -184,7 +188,7 @@ class StateEstimator:
                                  footholds=n.view("footholds").reshape(3, 4), yaw_rate=float(n.s.yaw_rate),
                                  roll_rate=float(n.s.roll_rate))
         self.stance, self.used = n.view("stance") != 0, n.view("used") != 0
-        self.last_t, self.now = (float(n.s.last_t) if n.s.has_last else None), float(n.s.now)
+        self.last_t, self.now = n.last_t, float(n.s.now)
         self.down_since, self.give, self.accel_world = n.view("down_since"), n.view("give"), n.view("accel_world")
 
     def _correct(self, plan: np.ndarray, centres: np.ndarray, rel: np.ndarray, r: np.ndarray,

@@ -126,6 +126,11 @@ class CompiledTick:
         for name, arr in arrays.items():
             native_code.set_field(self.s, name, arr)
 
+    @property
+    def last_t(self) -> float | None:
+        """The time of the last reading it took [s] (None before the first)."""
+        return float(self.s.last_t) if self.s.has_last else None
+
     def __call__(self, reading: Reading, plan: np.ndarray, ahead: np.ndarray) -> np.ndarray:
         """One tick's readings and the contact codes planned now and ``liftoff_s`` ahead: the
         output vector (tick.c's OUT_ layout)."""

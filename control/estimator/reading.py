@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
@@ -24,3 +26,42 @@ class Reading(Protocol):
 
     @property
     def qd(self) -> np.ndarray: ...
+
+
+class ReadingError(ValueError):
+    """A reading the estimator cannot take: a field of another shape, a NaN or an inf, a time that
+    is not finite or goes back. The estimator's state is unchanged; the caller skips the reading
+    (a dropped sample) or stops."""
+
+
+SHAPES = {"gyro": (3,), "accel": (3,), "q": (12,), "qd": (12,)}
+
+
+def check_reading(reading: Reading, last_t: float | None) -> None:
+    """Refuse a reading that would make the estimate NaN for good (its filters integrate it).
+
+    Raises:
+        ReadingError: Naming the field and what is wrong.
+    """
+    t = reading.t
+    if not (isinstance(t, (int, float)) and math.isfinite(t)) or (last_t is not None and t < last_t):
+        raise ReadingError(f"reading.t = {t!r}: a finite time in seconds, not before the last reading's ({last_t})")
+    for name, shape in SHAPES.items():
+        a = getattr(reading, name)
+        if getattr(a, "shape", None) != shape:
+            raise ReadingError(f"reading.{name}: shape {np.shape(a)}, the estimator reads {shape}")
+        if not np.isfinite(a).all():
+            raise ReadingError(f"reading.{name} is not finite ({a!r}): skip this reading (a dropped sample) or stop; "
+                               "the estimate is unchanged")
+
+
+def check_still(still: Sequence[Reading]) -> None:
+    """Readings to calibrate on: at least one, each one the estimator can take.
+
+    Raises:
+        ReadingError: Naming what is wrong.
+    """
+    if not still:
+        raise ReadingError("calibrate(still): no reading; give the readings of some ticks standing still")
+    for reading in still:
+        check_reading(reading, None)

@@ -180,7 +180,7 @@ class TwinLoop:
                         break
             except QpSolveFailed as e:
                 self.run.fall = f"a QP failed at t = {self.t:.2f} s ({e})"
-            except StateError as e:  # the estimate (or the plant) is no state: the robot would stop
+            except (StateError, ReadingError) as e:  # no state to act on (the plant's diverged): the robot stops
                 self.run.fall = f"the controller refused its state at t = {self.t:.2f} s ({e})"
             if self.run.fall:
                 break
