@@ -22,6 +22,7 @@ import numpy as np
 from skatelib.control.body_plan import BodyPlan, Plan
 from skatelib.control.controller import Rates, SkateController
 from skatelib.control.estimator.estimator import EstimatorSettings
+from skatelib.control.estimator.reading import ReadingError
 from skatelib.control.feedback import StateError, mpc_state, quat_wxyz
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.multibody import RobotDynamics
