@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q
@@ -61,18 +61,29 @@ def check_state(st: MultibodyState) -> None:
     Raises:
         StateError: Naming the field and what is wrong; the caller holds its last command or stops.
     """
-    fields = [getattr(st, name) for name in SHAPES]
-    for name, a in zip(SHAPES, fields, strict=True):
-        if getattr(a, "shape", None) != SHAPES[name]:
-            raise StateError(f"state.{name}: shape {np.shape(a)}, the controller reads {SHAPES[name]}")
-    if not np.isfinite(np.concatenate(fields, axis=None)).all():
-        name = next(n for n, a in zip(SHAPES, fields, strict=True) if not np.isfinite(a).all())
-        raise StateError(f"state.{name} is not finite ({getattr(st, name)!r}): a sensor or the estimator failed; "
-                         "hold the last command or stop (the controller's own state is unchanged)")
-    touch = fields[10]
+    check_arrays("state", {name: (getattr(st, name), shape) for name, shape in SHAPES.items()})
+    touch = st.foot_touch
     if not set(touch.tolist()) <= {0, ON_DECK, ON_FLOOR}:
         raise StateError(f"state.foot_touch {touch!r}: each foot's code is 0 (touching nothing), {ON_DECK} (the "
                          f"deck) or {ON_FLOOR} (the floor)")
+
+
+def check_arrays(what: str, arrays: dict[str, tuple[Any, tuple[int, ...]]],
+                 error: type[ValueError] = StateError) -> None:
+    """Each of ``arrays`` (name: (array, shape)) of its shape, and every number finite (one test of
+    them all on the good path).
+
+    Raises:
+        StateError: (or ``error``) Naming ``what.name`` and what is wrong; nothing has used it yet:
+            the caller skips it, holds its last command or stops.
+    """
+    for name, (a, shape) in arrays.items():
+        if getattr(a, "shape", None) != shape:
+            raise error(f"{what}.{name}: shape {np.shape(a)}, {shape} expected")
+    if not np.isfinite(np.concatenate([a for a, _ in arrays.values()], axis=None)).all():
+        name, a = next((n, a) for n, (a, _) in arrays.items() if not np.isfinite(a).all())
+        raise error(f"{what}.{name} is not finite ({a!r}): a sensor or the estimator failed; skip it, hold the "
+                    "last command or stop (nothing has used it)")
 
 
 def rpy_of(R: np.ndarray) -> np.ndarray:

@@ -202,7 +202,10 @@ class HumanoidReference:
 
     def sample(self, t: float) -> ReferenceSample:
         """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
-        the ZMP under the COM (a plan's last knots may still have it elsewhere)."""
+        the ZMP under the COM (a plan's last knots may still have it elsewhere). A ValueError for
+        a ``t`` that is not finite."""
+        if not math.isfinite(t):
+            raise ValueError(f"sample(t): t must be a finite time in seconds, got {t!r}")
         k, w, last = self._knot(t)
         x = (1 - w) * self._knots[k] + w * self._knots[k + 1]
         q, base, feet, com, com_vel, com_acc, zmp, sole_vel = map(x.__getitem__, self._slices)

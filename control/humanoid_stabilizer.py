@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control import humanoid_native
+from skatelib.control.feedback import check_arrays
 from skatelib.control.humanoid_kinematics import HumanoidKinematics, solve_rows
 from skatelib.control.humanoid_reference import ReferenceSample
 
@@ -156,7 +157,10 @@ class LipStabilizer:
     def tick(self, r: ReferenceSample, q: np.ndarray, quat_xyzw: np.ndarray, force: np.ndarray,
              torque: np.ndarray) -> StabilizerOutput:
         """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
-        each foot at its ankle sensor, foot frame) and the reference at this instant."""
+        each foot at its ankle sensor, foot frame) and the reference at this instant; a
+        ``StateError`` naming a sensor of another shape or not finite (nothing of it used)."""
+        check_arrays("sensors", {"q": (q, (self.kin.model.nq - 7,)), "quat_xyzw": (quat_xyzw, (4,)),
+                                 "force": (force, (2, 3)), "torque": (torque, (2, 3))})
         if self.native is not None:
             return self._tick_native(self.native, r, q, quat_xyzw, force, torque)
         g, dt = self.g, self.dt

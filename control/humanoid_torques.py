@@ -12,6 +12,8 @@ ends the robot holds its last posture: the gravity torques of that posture, no m
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 from skatelib.control.humanoid_kinematics import HumanoidKinematics
@@ -98,7 +100,10 @@ class PlannedTorques:
         return np.asarray(tau)
 
     def sample(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """The joints' planned speeds [rad/s] and feed-forward torques [N m] at ``t`` (linear between knots)."""
+        """The joints' planned speeds [rad/s] and feed-forward torques [N m] at ``t`` (linear between knots);
+        a ValueError for a ``t`` that is not finite."""
+        if not math.isfinite(t):
+            raise ValueError(f"sample(t): t must be a finite time in seconds, got {t!r}")
         if t >= self.t[-1]:
             return np.zeros(self.qd.shape[1]), self.hold.copy()
         k = min(max(int(np.searchsorted(self.t, t, side="right")) - 1, 0), len(self.t) - 2)

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+from skatelib.control.feedback import check_arrays
 
 
 class Reading(Protocol):
@@ -46,14 +47,7 @@ def check_reading(reading: Reading, last_t: float | None) -> None:
     t = reading.t
     if not (isinstance(t, (int, float)) and math.isfinite(t)) or (last_t is not None and t < last_t):
         raise ReadingError(f"reading.t = {t!r}: a finite time in seconds, not before the last reading's ({last_t})")
-    for name, shape in SHAPES.items():
-        a = getattr(reading, name)
-        if getattr(a, "shape", None) != shape:
-            raise ReadingError(f"reading.{name}: shape {np.shape(a)}, the estimator reads {shape}")
-        if not np.isfinite(a).all():
-            raise ReadingError(f"reading.{name} is not finite ({a!r}): skip this reading (a dropped sample) or stop; "
-                               "the estimate is unchanged")
-
+    check_arrays("reading", {name: (getattr(reading, name), shape) for name, shape in SHAPES.items()}, ReadingError)
 
 def check_still(still: Sequence[Reading]) -> None:
     """Readings to calibrate on: at least one, each one the estimator can take.
