@@ -128,12 +128,16 @@ class SkateController:
             StateError: The state breaks a field's shape, holds a NaN or an inf, or a touch code is
                 unknown (:func:`~skatelib.control.feedback.check_state`), or ``t`` is not finite:
                 nothing of the controller's own state has changed. A ``ValueError``.
+            ValueError: A tick without ``update`` before the first update.
             QpSolveFailed: The MPC's or the whole-body QP has no solution.
         """
         t0 = time.perf_counter()
         if not math.isfinite(t):
             raise StateError(f"tick(t): t must be a finite time in seconds, got {t!r}")
         check_state(st)
+        if not update and self.mpc_update.qp is None:
+            raise ValueError("tick(update=False) before the MPC's first update: its forces are not there yet (the "
+                             "whole-body QP would aim at none); pass update=True on the first tick")
         qp, vp = self.dyn.configuration(st.trunk_pos, st.trunk_R, st.q, st.trunk_v, st.trunk_omega, st.qd)
         T = self.dyn.terms(qp, vp)
         t_terms = time.perf_counter() - t0

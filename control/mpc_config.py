@@ -3,6 +3,7 @@ the QP backend and the observers' gains."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 
@@ -11,7 +12,8 @@ class MpcConfig:
     """MPC settings.
 
     Attributes:
-        rate_hz: Update rate (the paper: 30 Hz).
+        rate_hz: Update rate (the paper: 30 Hz) of the model plant's loop (:mod:`skatelib.proving.loop`);
+            :class:`~skatelib.control.controller.SkateController` updates at its ``Rates``.
         horizon: Steps N (the paper's MIT-Cheetah lineage: 10).
         mu: Friction coefficient the MPC assumes (its pyramid is inside this cone); None: the
             one the library was planned with (``friction_mu_plan``, a margin inside ``friction_mu``).
@@ -46,6 +48,36 @@ class MpcConfig:
         + (2e3, 2e3) + (2e3, 5.0)))
     r_weights: tuple[float, ...] = field(default_factory=lambda: (1e-2,) * 12 + (1e-2,) * 12)
 
+    def __post_init__(self) -> None:
+        """Raises:
+            ValueError: A setting out of its range, naming it (a friction coefficient of 0 or below,
+                a pyramid of fewer than 4 sides, force bounds that cross, weights of another
+                length or not finite and at least 0, ...).
+        """
+        from skatelib.control.qp import SOLVERS
+
+        checks = (
+            ("rate_hz", math.isfinite(self.rate_hz) and self.rate_hz > 0, "a rate above 0 Hz"),
+            ("horizon", self.horizon >= 1, "at least 1 step"),
+            ("mu", self.mu is None or (math.isfinite(self.mu) and self.mu > 0), "None or a coefficient above 0"),
+            ("facets", self.facets >= 4, "4 sides or more"),
+            ("f_min_N", math.isfinite(self.f_min_N) and 0 <= self.f_min_N <= self.f_max_N, "0 up to f_max_N"),
+            ("f_max_N", math.isfinite(self.f_max_N) and self.f_max_N > 0, "a force above 0 N"),
+            ("solver", self.solver in SOLVERS, f"one of {', '.join(SOLVERS)}"),
+            ("disturbance_gain", 0 <= self.disturbance_gain <= 1, "a gain from 0 to 1"),
+            ("coast_gain", 0 <= self.coast_gain <= 1, "a gain from 0 to 1"),
+            ("torque_steps", 1 <= self.torque_steps <= self.horizon, "1 up to the horizon"),
+            ("q_weights", _weights(self.q_weights, 28), "28 finite weights, each at least 0"),
+            ("r_weights", _weights(self.r_weights, 24), "24 finite weights, each at least 0"),
+        )
+        for name, ok, allowed in checks:
+            if not ok:
+                raise ValueError(f"MpcConfig({name}={getattr(self, name)!r}): {allowed}")
+
     @property
     def dt(self) -> float:
         return 1.0 / self.rate_hz
+
+
+def _weights(w: tuple[float, ...], n: int) -> bool:
+    return len(w) == n and all(math.isfinite(x) and x >= 0 for x in w)

@@ -5,6 +5,7 @@ constraints (:mod:`skatelib.control.wbc_constraints`) and the QP (:mod:`skatelib
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 NV = 18  # the floating-base model's velocity (and joint-acceleration) dimension: base 6 + joints 12
@@ -47,3 +48,21 @@ class WbcSettings:
     friction_rows: bool = True
     qp_solver: str = "daqp"
     compiled: bool = True
+
+    def __post_init__(self) -> None:
+        """Raises:
+            ValueError: A gain or weight that is negative or not finite, a regularization of 0 or
+                below, normal force bounds that cross, a backend that is not in the table.
+        """
+        from skatelib.control.qp import SOLVERS
+
+        for name, value in vars(self).items():
+            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"WbcSettings({name}={value!r}): a finite value of at least 0")
+        if not self.regularization > 0:
+            raise ValueError(f"WbcSettings(regularization={self.regularization!r}): above 0 (a strictly convex QP)")
+        if not 0 <= self.normal_min_N <= self.normal_max_N:
+            raise ValueError(f"WbcSettings(normal_min_N={self.normal_min_N!r}, normal_max_N={self.normal_max_N!r}): "
+                             "0 <= normal_min_N <= normal_max_N")
+        if self.qp_solver not in SOLVERS:
+            raise ValueError(f"WbcSettings(qp_solver={self.qp_solver!r}): one of {', '.join(SOLVERS)}")

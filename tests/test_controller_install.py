@@ -120,3 +120,34 @@ def test_a_bad_reading_is_refused_and_leaves_the_controller_as_it_was(field):
         ticks.append(ctrl.tick(ref.t0, good, update=True))
     assert np.isfinite(ticks[1].out.tau).all()
     np.testing.assert_array_equal(ticks[1].out.tau, ticks[0].out.tau)
+
+
+def test_settings_out_of_range_and_a_first_tick_without_the_mpc_are_refused():
+    """MpcConfig and WbcSettings name a setting out of its range when made; a first tick that would
+    aim at MPC forces not yet computed is refused."""
+    from skatelib.control.body_plan import BodyPlan
+    from skatelib.control.controller import Rates, SkateController
+    from skatelib.control.feedback import planned_state
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.mpc import MpcConfig
+    from skatelib.control.params import SkateParams
+    from skatelib.control.reference import EntryReference
+    from skatelib.control.settings import TrackSettings
+    from skatelib.control.wbc_settings import WbcSettings
+    from skatelib.runtime import MotionLibrary
+
+    for kw, name in (({"mu": 0.0}, "mu"), ({"facets": 3}, "facets"), ({"f_min_N": 500.0}, "f_min_N"),
+                     ({"r_weights": (1.0,) * 23}, "r_weights"), ({"solver": "gurobi"}, "solver")):
+        with pytest.raises(ValueError, match=rf"MpcConfig\({name}="):
+            MpcConfig(**kw)
+    for kw, name in (({"kp_com": float("nan")}, "kp_com"), ({"normal_min_N": 200.0}, "normal_min_N")):
+        with pytest.raises(ValueError, match=rf"WbcSettings\({name}="):
+            WbcSettings(**kw)
+    lib = MotionLibrary.open(LIBRARY)
+    entry = lib["v0.30_s1"]
+    p = SkateParams.from_library(lib)
+    ref = EntryReference(lib, entry, p, TrackSettings())
+    ctrl = SkateController(lib, ref, BodyPlan(ref, LegKinematics.from_library(lib).foot_radius_m), p, MpcConfig(),
+                           WbcSettings(), Rates())
+    with pytest.raises(ValueError, match="update=True on the first tick"):
+        ctrl.tick(ref.t0, planned_state(entry, 0, p.com_offset_m))

@@ -211,7 +211,11 @@ def test_every_backend_of_the_table_solves_the_whole_body_qp_alike(pair, backend
         assert np.allclose(base, 0.0, atol=1e-4)
 
 
-def test_an_unknown_backend_is_refused_with_the_known_ones(pair):
-    T, ctl, _ = _standing(pair, qp_solver="cvxopt")
+def test_an_unknown_backend_is_refused_with_the_known_ones():
+    """In the settings, before any controller is made of them; and by the table itself."""
+    from skatelib.control.qp import backend
+
+    with pytest.raises(ValueError, match=r"qp_solver='cvxopt'\): one of daqp, proxqp, osqp"):
+        WbcSettings(qp_solver="cvxopt")
     with pytest.raises(ValueError, match="unknown QP solver 'cvxopt'; choose one of daqp, proxqp, osqp"):
-        ctl.solve(T, _targets([0.0, 0.0, 0.0]))
+        backend("cvxopt")
