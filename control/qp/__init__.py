@@ -104,28 +104,27 @@ def _values(M: Any) -> np.ndarray:
 
 def _check_data(p: QpProblem, solver: str) -> None:
     """Refuse a problem no solver should be given: it would hang (ProxQP on NaN), drop a row (a NaN
-    bound reads as none) or report a solution of nothing."""
-    if not (np.isfinite(_values(p.H)).all() and np.isfinite(p.g).all() and np.isfinite(_values(p.A)).all()):
+    bound reads as none) or report a solution of nothing. A few microseconds on the good path."""
+    if not np.isfinite(np.concatenate([_values(p.H), p.g, _values(p.A)], axis=None)).all():
         raise QpSolveFailed(f"{solver}: the QP's cost or rows are not finite (a NaN or inf in the state, the "
                             "targets or the model); nothing was solved")
     for name, lo, up in (("rows", p.lower, p.upper), ("variables", p.lb, p.ub)):
-        if lo is not None and up is not None and not np.all(lo <= up):  # NaN compares False
+        if lo is not None and up is not None and not (lo <= up).all():  # NaN compares False
             bad = int(np.flatnonzero(~(lo <= up))[0])
             raise QpSolveFailed(f"{solver}: the bounds of the QP's {name} cross or are NaN (index {bad}: "
                                 f"{lo[bad]} > {up[bad]}): check the limits in the settings and the model")
 
 
 def _check_solution(p: QpProblem, x: np.ndarray, solver: str) -> None:
-    """Refuse an answer that is not finite or lies outside its own rows."""
+    """Refuse an answer that is not finite or lies outside its own rows (by more than
+    :data:`ROW_TOLERANCE`, relative beyond 1 to the largest row or variable)."""
     if not np.isfinite(x).all():
         raise QpSolveFailed(f"{solver}: the solution is not finite")
-    Ax = p.A @ x
-    for name, v, lo, up in (("row", Ax, p.lower, p.upper), ("variable", x, p.lb, p.ub)):
-        if lo is None or up is None:
+    for name, v, lo, up in (("row", p.A @ x, p.lower, p.upper), ("variable", x, p.lb, p.ub)):
+        if lo is None or up is None or not len(v):
             continue
-        tol = ROW_TOLERANCE * (1.0 + np.abs(v))
-        out = (v < lo - tol) | (v > up + tol)
-        if out.any():
-            i = int(np.flatnonzero(out)[0])
+        out = np.maximum(lo - v, v - up)
+        if out.max() > ROW_TOLERANCE * (1.0 + np.abs(v).max()):
+            i = int(np.argmax(out))
             raise QpSolveFailed(f"{solver}: the answer leaves its {name} {i} ({v[i]:.6g} outside [{lo[i]:.6g}, "
                                 f"{up[i]:.6g}]): the QP has no solution (limits that cannot all be met)")
