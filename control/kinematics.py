@@ -41,8 +41,8 @@ class LegKinematics:
 
     @staticmethod
     def from_library(lib: MotionLibrary) -> LegKinematics:
+        m = lib.quadruped_model  # a library of another kind is refused, named
         robot = json.loads(str(lib.attrs[schema.A_CONFIG_RESOLVED]))["robot"]
-        m = lib.quadruped_model
         model = pin.buildModelFromXML(lib.urdf)
         joints = [model.getJointId(n) for n in robot["joint_names"]]
         return LegKinematics(

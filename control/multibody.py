@@ -63,6 +63,7 @@ class RobotDynamics:
 
     @staticmethod
     def from_library(lib: Any) -> RobotDynamics:
+        _ = lib.quadruped_model  # a library of another kind is refused, named
         robot = json.loads(str(lib.attrs[schema.A_CONFIG_RESOLVED]))["robot"]
         return RobotDynamics(lib.urdf, robot["joint_names"], robot["foot_frames"])
 

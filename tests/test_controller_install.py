@@ -151,3 +151,16 @@ def test_settings_out_of_range_and_a_first_tick_without_the_mpc_are_refused():
                            WbcSettings(), Rates())
     with pytest.raises(ValueError, match="update=True on the first tick"):
         ctrl.tick(ref.t0, planned_state(entry, 0, p.com_offset_m))
+
+
+def test_a_library_of_another_kind_is_named_as_such(hrp2_walk_path):
+    from skatelib.control.kinematics import LegKinematics
+    from skatelib.control.multibody import RobotDynamics
+    from skatelib.control.params import SkateParams
+    from skatelib.library.errors import LibraryFormatError
+    from skatelib.runtime import MotionLibrary
+
+    lib = MotionLibrary.open(hrp2_walk_path)
+    for make in (LegKinematics.from_library, RobotDynamics.from_library, SkateParams.from_library):
+        with pytest.raises(LibraryFormatError, match="a humanoid library has no quadruped model"):
+            make(lib)
