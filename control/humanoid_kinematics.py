@@ -21,6 +21,11 @@ class HumanoidKinematics:
     def __init__(self, urdf: str, joint_names: tuple[str, ...]):
         self.model: Any = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
         self.data: Any = self.model.createData()
+        missing = [n for n in (*SOLES, WAIST) if not self.model.existFrame(n)] + [
+            n for n in FOOT_SENSORS if not self.model.existJointName(n)]
+        if missing:
+            raise ValueError(f"the URDF has no {', '.join(missing)}: the stabilizer reads a humanoid's soles, waist "
+                             "and ankle sensors (a library of another kind?)")
         self.soles = [self.model.getFrameId(n) for n in SOLES]
         self.waist = self.model.getFrameId(WAIST)
         self.ankles = [self.model.getJointId(n) for n in FOOT_SENSORS]

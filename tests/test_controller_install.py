@@ -164,3 +164,13 @@ def test_a_library_of_another_kind_is_named_as_such(hrp2_walk_path):
     for make in (LegKinematics.from_library, RobotDynamics.from_library, SkateParams.from_library):
         with pytest.raises(LibraryFormatError, match="a humanoid library has no quadruped model"):
             make(lib)
+
+
+def test_the_humanoid_kinematics_name_what_a_robot_lacks():
+    """A quadruped's URDF given to the humanoid stabilizer's kinematics: the missing soles, waist
+    and ankle sensors named when it is made, not a pinocchio error at the first tick."""
+    from skatelib.control.humanoid_kinematics import HumanoidKinematics
+    from skatelib.runtime import MotionLibrary
+
+    with pytest.raises(ValueError, match="has no R_sole, L_sole, waist"):
+        HumanoidKinematics(MotionLibrary.open(LIBRARY).urdf, ())

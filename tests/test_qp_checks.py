@@ -52,3 +52,11 @@ def test_data_that_are_not_finite_or_cross_are_refused_before_the_solve(solver, 
         setattr(p, where, arr)
     with pytest.raises(QpSolveFailed, match=r"not finite|cross"):
         solve_qp(p, solver)
+
+
+def test_daqp_says_in_words_why_it_stopped():
+    """An infeasible pair of rows: DAQP's own flag comes with its meaning."""
+    p = QpProblem(np.eye(2), np.zeros(2), np.array([[1.0, 1.0], [1.0, 1.0]]), np.array([1.0, -INF]),
+                  np.array([INF, -1.0]))
+    with pytest.raises(QpSolveFailed, match=r"DAQP: exit flag -1 \(infeasible"):
+        solve_qp(p, "daqp")

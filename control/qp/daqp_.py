@@ -6,6 +6,10 @@ import numpy as np
 from skatelib.control.qp import QpProblem, QpSolution, QpSolveFailed
 
 EQUALITY = 5  # DAQP's sense of a row held at equality (active and immutable)
+# DAQP's exit flags other than 1 (solved), in words (its constants.h, DAQP_EXIT_*).
+FLAGS = {2: "soft optimal", -1: "infeasible: limits that cannot all be met", -2: "cycling", -3: "unbounded",
+         -4: "iteration limit", -5: "not convex", -6: "initial working set overdetermined", -7: "time limit",
+         -8: "unsupported"}
 
 
 def solve(problem: QpProblem, warm_start: np.ndarray | None = None) -> QpSolution:
@@ -24,5 +28,5 @@ def solve(problem: QpProblem, warm_start: np.ndarray | None = None) -> QpSolutio
         sense = np.concatenate([np.zeros(n, dtype=np.intc), sense])
     x, _, flag, info = daqp.solve(problem.H, problem.g, A, upper, lower, sense)
     if flag != 1:
-        raise QpSolveFailed(f"DAQP: exit flag {flag}")
+        raise QpSolveFailed(f"DAQP: exit flag {flag} ({FLAGS.get(flag, 'unknown')})")
     return QpSolution(np.asarray(x), int(info["iterations"]))
