@@ -22,30 +22,20 @@ def check(cfg: QuadrupedConfig, opts: BuildOptions) -> None:
     """The build's size within the bounds (or ``--yes``). Compiled stage functions are kept in the
     folder of compiled code (the cache folder unless ``$SKATELIB_COMPILE_DIR`` sets it apart): it
     must be usable even with ``--no-cache`` (with the cache on and compiled code in it,
-    ``build.check_options`` checks it next). A twin judge must be able to run, and pinocchio must
-    read the robot's URDF."""
+    ``build.check_options`` checks it next). A twin judge must be able to run, and the robot must
+    load from its URDF with the config's joints and feet."""
     from skatelib.library import trust
     from skatelib.pipeline.build.preflight import check_compile_dir
     from skatelib.pipeline.build.size import check_size
+    from skatelib.pipeline.quadruped.model.system import robot_of
     from skatelib.pipeline.quadruped.size import build_size
     from skatelib.pipeline.quadruped.transitions.twin_judge import check_twin_judge
 
     check_size(cfg.path, build_size(cfg), opts.yes)
     check_twin_judge(cfg)
-    check_urdf(cfg)
+    robot_of(cfg)
     if cfg.optimization.compile and not (opts.cache and trust.compile_dir() == trust.cache_dir()):
         check_compile_dir()
-
-
-def check_urdf(cfg: QuadrupedConfig) -> None:
-    """The config's URDF loads in pinocchio, or the error names the config and ``[robot] urdf``."""
-    from skatelib.library.errors import ConfigError, ModelError
-    from skatelib.pipeline.quadruped.model.urdf import free_flyer_model
-
-    try:
-        free_flyer_model(cfg.urdf_path)
-    except ModelError as e:
-        raise ConfigError(cfg.path, "robot.urdf", str(e)) from e
 
 
 def announce(cfg: QuadrupedConfig) -> None:

@@ -46,6 +46,19 @@ class Stance:
 END_BAND_M = 0.02  # the push foot ends at most this far above its least end height
 
 
+
+def robot_of(cfg: QuadrupedConfig) -> Quadruped:
+    """The config's robot from its URDF.
+
+    Raises:
+        ConfigError: Naming the config and ``[robot] urdf``: a URDF pinocchio cannot read, or one
+            without the config's joints, feet or three-joint legs.
+    """
+    try:
+        return Quadruped(cfg.urdf_path, cfg.robot.joint_names, cfg.robot.foot_frames)
+    except ModelError as e:
+        raise ConfigError(cfg.path, "robot.urdf", str(e)) from e
+
 @dataclass(frozen=True)
 class SkateSystem:
     """Everything the dynamics, the TO and the checks need to know about robot and board."""
@@ -99,10 +112,7 @@ class SkateSystem:
     @staticmethod
     def from_config(cfg: QuadrupedConfig) -> SkateSystem:
         """Load the URDF, solve the nominal stance, compute the SRB and the board model."""
-        try:
-            robot = Quadruped(cfg.urdf_path, cfg.robot.joint_names, cfg.robot.foot_frames)
-        except ModelError as e:
-            raise ConfigError(cfg.path, "robot.urdf", str(e)) from e
+        robot = robot_of(cfg)
         st = cfg.stance
         r = cfg.robot.foot_radius_m
         xs = (st.foot_x_front_m, st.foot_x_front_m, st.foot_x_rear_m, st.foot_x_rear_m)
