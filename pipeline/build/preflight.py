@@ -11,7 +11,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from skatelib.library import trust
-from skatelib.library.errors import ConfigError, OutputError
+from skatelib.library.digest import read_raw
+from skatelib.library.errors import ConfigError, LibraryFormatError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
 from skatelib.library.temporaries import remove_stale_temporaries
 from skatelib.library.trust import CACHE_ENV, cache_dir
@@ -21,12 +22,11 @@ SCHEDULER_RE = re.compile(r"^(tcp|tls)://(?P<host>\[[0-9a-fA-F:]+\]|[^:/\s]+):(?
 
 def is_skatelib_library(path: Path) -> bool:
     """True when ``path`` is an HDF5 file that names itself a skatelib motion library, even a
-    damaged one. Reads the raw bytes only: a damaged file can hang HDF5's parser."""
-    if not path.is_file():  # a device such as /dev/zero would be read without end
-        return False
+    damaged one. Reads the raw bytes only (as the reader does first): a damaged file can hang HDF5's
+    parser."""
     try:
-        raw = path.read_bytes()
-    except OSError:
+        raw = read_raw(path)  # a device or a folder is none; a file that is not HDF5 is read no further
+    except LibraryFormatError:
         return False
     return raw.startswith(HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
 
