@@ -112,9 +112,13 @@ def atomic_folder(out: Path) -> Iterator[Path]:
         raise
 
 
-def _head(path: Path) -> bytes:
-    with open(path, "rb") as f:
-        return f.read(4)
+def head(path: Path, n: int) -> bytes:
+    """The first ``n`` bytes of a file (empty when it cannot be read): where a format's signature is."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(n)
+    except OSError:
+        return b""
 
 
 def _refuse_foreign(old: Path, new: Path) -> None:
@@ -126,7 +130,7 @@ def _refuse_foreign(old: Path, new: Path) -> None:
     """
     if not old.exists():
         return
-    if old.is_dir() or not old.is_file() or _head(old) != _head(new):
+    if old.is_dir() or not old.is_file() or head(old, 4) != head(new, 4):
         raise OutputError(old, f"exists and is not a {new.suffix or 'plain'} file this command writes; refusing to "
                                "overwrite it (move it away, or choose another folder)")
 

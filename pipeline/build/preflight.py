@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from skatelib.library import trust
+from skatelib.library.atomic import head
 from skatelib.library.digest import read_raw
 from skatelib.library.errors import ConfigError, LibraryFormatError, OutputError
 from skatelib.library.schema import FORMAT_NAME, HDF5_SIGNATURE
@@ -31,23 +32,14 @@ def is_skatelib_library(path: Path) -> bool:
     return raw.startswith(HDF5_SIGNATURE) and FORMAT_NAME.encode() in raw
 
 
-def _head(path: Path, n: int) -> bytes:
-    """The first ``n`` bytes of a file (empty when it cannot be read)."""
-    try:
-        with open(path, "rb") as f:
-            return f.read(n)
-    except OSError:
-        return b""
-
-
 def is_hdf5(path: Path) -> bool:
     """True when ``path`` starts with the HDF5 signature (a library, perhaps a damaged or foreign one)."""
-    return _head(path, len(HDF5_SIGNATURE)) == HDF5_SIGNATURE
+    return head(path, len(HDF5_SIGNATURE)) == HDF5_SIGNATURE
 
 
 def is_rerun_recording(path: Path) -> bool:
     """True when ``path`` starts with the Rerun recording signature."""
-    return _head(path, 3) == b"RRF"
+    return head(path, 3) == b"RRF"
 
 
 def check_output(out: Path, inputs: Sequence[Path] = (), force: bool | None = None, what: str = "library") -> None:
@@ -191,28 +183,28 @@ def check_scheduler(address: str, timeout_s: float = 3.0) -> None:
 
 def is_mjcf(path: Path) -> bool:
     """Whether ``path`` starts like a MuJoCo model file."""
-    return _head(path, 64).lstrip().startswith(b"<mujoco")
+    return head(path, 64).lstrip().startswith(b"<mujoco")
 
 
 def is_mcap(path: Path) -> bool:
     """Whether ``path`` starts with the MCAP magic."""
-    return _head(path, 5) == b"\x89MCAP"
+    return head(path, 5) == b"\x89MCAP"
 
 
 def is_json(path: Path) -> bool:
     """Whether ``path`` starts like a JSON object (a frontier file)."""
-    return _head(path, 64).lstrip().startswith(b"{")
+    return head(path, 64).lstrip().startswith(b"{")
 
 
 def is_html(path: Path) -> bool:
     """Whether ``path`` starts like an HTML document (a report)."""
-    return _head(path, 64).lstrip().lower().startswith((b"<!doctype html", b"<html"))
+    return head(path, 64).lstrip().lower().startswith((b"<!doctype html", b"<html"))
 
 
 def is_video(path: Path) -> bool:
     """Whether ``path`` starts like an MP4 (an ``ftyp`` box) or a GIF."""
-    head = _head(path, 12)
-    return head[4:8] == b"ftyp" or head[:6] in (b"GIF87a", b"GIF89a")
+    start = head(path, 12)
+    return start[4:8] == b"ftyp" or start[:6] in (b"GIF87a", b"GIF89a")
 
 
 # what -> (an example file name, whether an existing file is of that kind, what it is called)
