@@ -9,7 +9,6 @@ array handed out is read-only.
 from __future__ import annotations
 
 import bisect
-from math import isfinite
 from typing import Any
 
 import numpy as np
@@ -127,7 +126,7 @@ class Entry:
         if a is None or a.ndim < 1 or len(a) != self._n:
             names = [k for k, v in self.arrays.items() if v.ndim >= 1 and len(v) == self._n and k != schema.D_T]
             raise KeyError(f"no per-knot array {name!r}; arrays: {', '.join(names)}")
-        if not (type(t) is float and isfinite(t)) and not real(t):  # a float: the fast way
+        if not real(t):
             raise ValueError(f"array_at(name, t): t must be a finite time in seconds, got {t!r}")
         i, f = self._locate(t)
         if a.dtype.kind in "biu":  # codes and indices hold
@@ -182,7 +181,7 @@ class Entry:
         Raises:
             ValueError: When ``t`` is NaN or infinite.
         """
-        if not (type(t) is float and isfinite(t)) and not real(t):  # a float: the fast way
+        if not real(t):
             raise ValueError(f"sample(t): t must be a finite time in seconds, got {t!r}")
         i, a = self._locate(t)
         x = self._rows[i] + a * self._drows[i]

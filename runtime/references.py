@@ -18,6 +18,8 @@ WINDOW_MAX_DT_S = 60.0
 
 def real(value: Any) -> bool:
     """True for one finite real number: not a bool, a string or an array of several values."""
+    if type(value) is float:  # the controller's usual time: one test
+        return isfinite(value)
     return not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating)) and isfinite(value)
 
 

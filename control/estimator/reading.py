@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
 from skatelib.control.feedback import check_arrays
+from skatelib.runtime.references import real
 
 
 class Reading(Protocol):
@@ -45,9 +45,10 @@ def check_reading(reading: Reading, last_t: float | None) -> None:
         ReadingError: Naming the field and what is wrong.
     """
     t = reading.t
-    if not (isinstance(t, (int, float)) and math.isfinite(t)) or (last_t is not None and t < last_t):
+    if not real(t) or (last_t is not None and t < last_t):
         raise ReadingError(f"reading.t = {t!r}: a finite time in seconds, not before the last reading's ({last_t})")
     check_arrays("reading", {name: (getattr(reading, name), shape) for name, shape in SHAPES.items()}, ReadingError)
+
 
 def check_still(still: Sequence[Reading]) -> None:
     """Readings to calibrate on: at least one, each one the estimator can take.
