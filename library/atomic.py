@@ -130,7 +130,7 @@ def _refuse_foreign(old: Path, new: Path) -> None:
     """
     if not old.exists():
         return
-    if old.is_dir() or not old.is_file() or head(old, 4) != head(new, 4):
+    if not old.is_file() or head(old, 4) != head(new, 4):
         raise OutputError(old, f"exists and is not a {new.suffix or 'plain'} file this command writes; refusing to "
                                "overwrite it (move it away, or choose another folder)")
 

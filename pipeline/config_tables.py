@@ -93,13 +93,18 @@ def _read_text(path: Path) -> str:
         raise ConfigError(path, "-", f"is not UTF-8 text (byte {e.start}); a config is a TOML text file") from e
 
 
+def base_of(path: Path, parent: str) -> Path:
+    """The file the config ``path`` extends: ``parent`` relative to it, or a shipped config."""
+    shipped = parent.startswith(SHIPPED)
+    return (CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent).resolve()
+
+
 def _read_base(path: Path, parent: Any, chain: tuple[Path, ...]) -> dict[str, Any]:
     """The merged table of the config ``path`` extends (``parent``: its ``extends`` value); a base
     that cannot be read is named by the ``extends`` key of ``path``."""
     if not isinstance(parent, str):
         raise ConfigError(path, "extends", "must be a file name (string)")
-    shipped = parent.startswith(SHIPPED)
-    base_path = (CONFIG_DIR / parent.removeprefix(SHIPPED) if shipped else path.parent / parent).resolve()
+    base_path = base_of(path, parent)
     try:
         return read_toml(base_path, (*chain, path.resolve()))[0]
     except ConfigError as e:
@@ -129,7 +134,7 @@ def defining_file(path: Path, key: str) -> Path | None:
         parent = data.get("extends")
         if not isinstance(parent, str):
             return None
-        at = (CONFIG_DIR / parent.removeprefix(SHIPPED) if parent.startswith(SHIPPED) else at.parent / parent).resolve()
+        at = base_of(at, parent)
     return None
 
 
