@@ -128,3 +128,25 @@ def test_damped_newton_settles_at_the_nearest_reachable_point(system):
 
     far = float(np.linalg.norm(np.asarray(fk(plain(q0))[0]).reshape(-1) - goal))
     assert far > residual + 0.01, (far, residual)
+
+
+def test_buffered_evaluation_gives_the_functions_values_to_the_bit(system):
+    """``Evaluated`` (the guess's leg kinematics through CasADi's buffer) returns what the function's
+    own call returns, to the last bit, on 200 random poses, as new arrays each call; a function with
+    a sparse output is refused (its buffer would hold the nonzeros only)."""
+    import casadi as ca
+    from skatelib.pipeline.quadruped.model.robot import Evaluated, foot_position_leg
+
+    q = ca.SX.sym("q", 3)
+    pos = foot_position_leg(system.robot.chains[0], q)
+    fn = ca.Function("fk", [q], [pos, ca.densify(ca.jacobian(pos, q))])
+    fast = Evaluated(fn)
+    rng = np.random.default_rng(1)
+    first = fast(np.zeros(3))
+    for _ in range(200):
+        x = rng.uniform(-2.0, 2.0, 3)
+        got, want = fast(x), [np.asarray(v) for v in fn(x)]
+        assert all(g.shape == w.shape and np.array_equal(g, w) for g, w in zip(got, want, strict=True))
+    assert np.array_equal(first[0], np.asarray(fn(np.zeros(3))[0]))  # not overwritten by later calls
+    with pytest.raises(ValueError, match="dense outputs"):
+        Evaluated(ca.Function("sparse", [q], [ca.jacobian(pos, q)]))

@@ -12,7 +12,7 @@ from collections.abc import Callable
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F, U_QD
-from skatelib.pipeline.quadruped.model.robot import DampedNewton, foot_position_leg
+from skatelib.pipeline.quadruped.model.robot import DampedNewton, Evaluated, foot_position_leg
 from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.model.system import SkateSystem
 from skatelib.pipeline.quadruped.problem.knots import I_BOARD_XY, NXA
@@ -148,10 +148,10 @@ def _forces(system: SkateSystem, sch: KnotSchedule, acc: np.ndarray) -> np.ndarr
     return f
 
 
-def _leg_fk(system: SkateSystem) -> ca.Function:
+def _leg_fk(system: SkateSystem) -> Evaluated:
     """Push-leg foot position in the trunk frame and its 3x3 Jacobian, from the leg's joints (built
-    once per guess, about a millisecond)."""
+    once per guess, about a millisecond; evaluated some 1,200 times by a guess's inverse kinematics)."""
     q_leg = ca.SX.sym("q", 3)
     pos = foot_position_leg(system.robot.chains[system.push_index], q_leg)
-    return ca.Function("leg_fk", [q_leg], [pos, ca.jacobian(pos, q_leg)])
+    return Evaluated(ca.Function("leg_fk", [q_leg], [pos, ca.densify(ca.jacobian(pos, q_leg))]))
 
