@@ -187,9 +187,10 @@ class Evaluated:
         self._res = [np.zeros(fn.nnz_out(i)) for i in range(fn.n_out())]
         self._shapes = [fn.size_out(i) for i in range(fn.n_out())]
         self._buffer, self._eval = fn.buffer()
-        self._buffer.set_arg(0, memoryview(self._arg))
+        # CasADi's stubs name a size argument that its binding does not take (it reads the buffer's)
+        self._buffer.set_arg(0, self._arg.data)  # type: ignore[call-arg]
         for i, res in enumerate(self._res):
-            self._buffer.set_res(i, memoryview(res))
+            self._buffer.set_res(i, res.data)  # type: ignore[call-arg]
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, ...]:
         self._arg[:] = np.asarray(x, dtype=float).reshape(-1)
