@@ -98,7 +98,8 @@ def test_damped_newton_settles_at_the_nearest_reachable_point(system):
     (the cold guess's push leg differed by up to 0.45 rad between OpenBLAS's Haswell and Prescott
     kernels)."""
     import casadi as ca
-    from skatelib.pipeline.quadruped.model.robot import DampedNewton, foot_position_leg
+    from skatelib.pipeline.quadruped.model.ik import DampedNewton
+    from skatelib.pipeline.quadruped.model.robot import foot_position_leg
 
     p = system.push_index
     leg = slice(3 * p, 3 * p + 3)
@@ -135,7 +136,8 @@ def test_buffered_evaluation_gives_the_functions_values_to_the_bit(system):
     own call returns, to the last bit, on 200 random poses, as new arrays each call; a function with
     a sparse output is refused (its buffer would hold the nonzeros only)."""
     import casadi as ca
-    from skatelib.pipeline.quadruped.model.robot import Evaluated, foot_position_leg
+    from skatelib.pipeline.quadruped.model.ik import Evaluated
+    from skatelib.pipeline.quadruped.model.robot import foot_position_leg
 
     q = ca.SX.sym("q", 3)
     pos = foot_position_leg(system.robot.chains[0], q)

@@ -13,8 +13,9 @@ from skatelib.library.errors import ConfigError, ModelError
 from skatelib.pipeline.ocp.rotations import rpy_to_matrix
 from skatelib.pipeline.quadruped.config import ContactConfig, QuadrupedConfig
 from skatelib.pipeline.quadruped.model.board import BoardModel
+from skatelib.pipeline.quadruped.model.ik import DampedNewton
 from skatelib.pipeline.quadruped.model.riding import riding_pose
-from skatelib.pipeline.quadruped.model.robot import DampedNewton, Quadruped, SingleRigidBody
+from skatelib.pipeline.quadruped.model.robot import Quadruped, SingleRigidBody
 
 
 @dataclass(frozen=True)

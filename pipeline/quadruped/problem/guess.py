@@ -12,7 +12,8 @@ from collections.abc import Callable
 import casadi as ca
 import numpy as np
 from skatelib.library.channels import GROUND, NU, S_BOARD_V, S_POS, S_Q, S_VEL, SWING, U_F, U_QD
-from skatelib.pipeline.quadruped.model.robot import DampedNewton, Evaluated, foot_position_leg
+from skatelib.pipeline.quadruped.model.ik import DampedNewton, Evaluated
+from skatelib.pipeline.quadruped.model.robot import foot_position_leg
 from skatelib.pipeline.quadruped.model.schedule import KnotSchedule
 from skatelib.pipeline.quadruped.model.system import SkateSystem
 from skatelib.pipeline.quadruped.problem.knots import I_BOARD_XY, NXA
