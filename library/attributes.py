@@ -11,10 +11,13 @@ from typing import Any
 from skatelib.library.records import jsonable, text
 
 VOLATILE = frozenset({"created_utc", "solve_time_s", "build_time_s", "cache_key", "content_sha256", "config_toml",
-                      "format"})
+                      "format", "closed_loop_utc", "closed_loop_twin_utc"})  # the *_utc: when the verdicts were made
 EFFORT = frozenset({"iterations", "attempts"})  # reported, not counted
 # Figures inside the JSON attributes that measure the build rather than the motion: reported, not counted.
 EFFORT_FIGURES = frozenset({"wholebody.feet_s", "wholebody.ik_and_filter_s", "wholebody.ik_iterations_max"})
+# The controller's solve times in any closed-loop verdict (the model plant's, the twin's, a maneuver's):
+# the machine's speed, not the motion's.
+TIMINGS = frozenset({"mpc_median_ms", "mpc_max_ms", "wbc_median_ms"})
 PROVENANCE = frozenset({"git_commit", "git_dirty", "skatelib_version", "casadi_version", "ipopt_version",
                         "pinocchio_version", "format_version", "name", "solver_options_json", "ipopt_options_json"})
 
@@ -52,7 +55,7 @@ def split(figures: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     for k, v in figures.items():
         last = k.rsplit(".", 1)[-1]
         if last not in VOLATILE:
-            (effort if last in EFFORT or k in EFFORT_FIGURES else counted)[k] = v
+            (effort if last in EFFORT | TIMINGS or k in EFFORT_FIGURES else counted)[k] = v
     return counted, effort
 
 

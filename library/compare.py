@@ -3,17 +3,21 @@ the files alone (numpy and h5py).
 
 Two libraries are *equal* when they hold the same entries with the same outcome (success,
 status), the same arrays within the tolerances (``|a - b| <= atol + rtol |b|``, element by element,
-NaN equal to NaN), the same label-level figures within the same tolerances (scalar attributes and
-the numbers of ``physics_json`` and the closed-loop verdicts) and the same model. What differs
+NaN equal to NaN, an infinity to itself), the same label-level figures within the same tolerances
+(scalar attributes and the numbers of ``physics_json`` and the closed-loop verdicts) and the same
+model. What differs
 between two builds of one problem anyway (creation time, solve times, cache keys) is left out;
 provenance (code commit, package and solver versions, solver options, the config's keys) and
-solver effort (iterations, attempts; a humanoid's stage times) are reported but do not make two
-libraries differ.
+solver effort (iterations, attempts; a humanoid's stage times; the controller's solve times in the
+closed-loop verdicts) are reported but do not make two libraries differ. Arrays are compared column
+by column under their names; their column names and units are compared too, and an integer array
+(contact codes, a humanoid's step index) exactly, whatever the tolerance. Libraries of two kinds are
+not compared (:class:`KindsDiffer`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,47 +26,16 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.attributes import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
 from skatelib.library.certificate import certificate_figures
+from skatelib.library.channel_diff import EXACT, ChannelChange, Tolerance, ValueChange, by_name
+from skatelib.library.channel_diff import channels as column_changes
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord, jsonable
 
+__all__ = ["ChannelChange", "EntryChange", "KindsDiffer", "LibraryDiff", "Tolerance", "ValueChange", "compare",
+           "compare_files"]
+
 CONFIG = "config_resolved_json"
 CERTIFICATE = schema.A_CERTIFICATE
-
-
-@dataclass(frozen=True)
-class Tolerance:
-    """Element-wise ``|a - b| <= atol + rtol |b|``; the defaults demand bit-identical numbers."""
-
-    atol: float = 0.0
-    rtol: float = 0.0
-
-    def exceeded(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-        both_nan = np.isnan(a) & np.isnan(b)
-        with np.errstate(invalid="ignore"):
-            return ~both_nan & ~(np.abs(a - b) <= self.atol + self.rtol * np.abs(b))
-
-
-@dataclass(frozen=True)
-class ChannelChange:
-    """The largest deviation of one column of one array, and when it occurs."""
-
-    array: str
-    column: str
-    unit: str
-    max_abs: float
-    at_s: float | None  # the entry's time of that row (None when the array has no row per knot)
-    a: float
-    b: float
-
-
-@dataclass(frozen=True)
-class ValueChange:
-    """A scalar that differs: an attribute, a figure of a JSON attribute, a config key."""
-
-    name: str
-    a: object  # None: absent on that side
-    b: object
 
 
 @dataclass(frozen=True)
@@ -97,10 +70,15 @@ class LibraryDiff:
         return not (self.added or self.removed or self.model or any(c.differs for c in self.changed))
 
     def as_dict(self) -> dict[str, Any]:
-        return {"equal": self.equal, **asdict(self)}
+        """The comparison as plain data; each changed entry says whether it ``differs`` (an entry
+        whose solver effort alone changed does not)."""
+        doc = {"equal": self.equal, **asdict(self)}
+        for entry, change in zip(doc["changed"], self.changed, strict=True):
+            entry["differs"] = change.differs
+        return doc
 
 
-def compare_files(a: Path | str, b: Path | str, tolerance: Tolerance = Tolerance(),
+def compare_files(a: Path | str, b: Path | str, tolerance: Tolerance = EXACT,
                   keys: list[str] | None = None) -> LibraryDiff:
     """Compare the libraries at ``a`` and ``b`` (both verified first); ``keys`` restricts the
     entries compared.
@@ -111,23 +89,37 @@ def compare_files(a: Path | str, b: Path | str, tolerance: Tolerance = Tolerance
     return compare(read_library(a), read_library(b), tolerance, keys)
 
 
-def compare(A: LibraryData, B: LibraryData, tol: Tolerance = Tolerance(), keys: list[str] | None = None) -> LibraryDiff:
-    """Compare two read libraries (module docstring)."""
+class KindsDiffer(ValueError):
+    """Two libraries of different kinds (a quadruped's and a humanoid's): nothing to compare."""
+
+    def __init__(self, A: LibraryData, B: LibraryData):
+        super().__init__(f"{A.path} is a {A.kind} library and {B.path} a {B.kind} one: only libraries of one kind "
+                         "can be compared")
+
+
+def compare(A: LibraryData, B: LibraryData, tol: Tolerance = EXACT, keys: list[str] | None = None) -> LibraryDiff:
+    """Compare two read libraries (module docstring).
+
+    Raises:
+        KindsDiffer: One is a quadruped's library and the other a humanoid's.
+    """
+    if A.kind != B.kind:
+        raise KindsDiffer(A, B)
     ka, kb = set(A.entries), set(B.entries)
     if keys:
         ka, kb = ka & set(keys), kb & set(keys)
     changed = [c for k in sorted(ka & kb) if (c := _entry(A.entries[k], B.entries[k], tol)) is not None]
     model = _values(A.model_attrs, B.model_attrs, tol) + _arrays_equal(A.model_arrays, B.model_arrays, tol)
-    model += [ValueChange(k, "...", "...") for k in sorted(set(A.model_text) | set(B.model_text))
-              if A.model_text.get(k) != B.model_text.get(k)]
-    config = _values(json_figures(A.attrs.get(CONFIG)), json_figures(B.attrs.get(CONFIG)), Tolerance())
+    model += [_first_line_unlike(k, A.model_text.get(k), B.model_text.get(k))
+              for k in sorted(set(A.model_text) | set(B.model_text)) if A.model_text.get(k) != B.model_text.get(k)]
+    config = _values(json_figures(A.attrs.get(CONFIG)), json_figures(B.attrs.get(CONFIG)), EXACT)
     prov = _values({k: v for k, v in A.attrs.items() if k in PROVENANCE},
-                   {k: v for k, v in B.attrs.items() if k in PROVENANCE}, Tolerance())
+                   {k: v for k, v in B.attrs.items() if k in PROVENANCE}, EXACT)
     other = {k for k in set(A.attrs) | set(B.attrs) if k not in PROVENANCE | VOLATILE | {CONFIG, CERTIFICATE}}
     prov += _values({k: A.attrs[k] for k in other if k in A.attrs}, {k: B.attrs[k] for k in other if k in B.attrs},
                     tol)
     cert = _values(certificate_figures(A.attrs.get(CERTIFICATE)), certificate_figures(B.attrs.get(CERTIFICATE)),
-                   Tolerance())
+                   EXACT)
     return LibraryDiff(str(A.path), str(B.path), tol, tuple(sorted(kb - ka)), tuple(sorted(ka - kb)), tuple(changed),
                        len(ka & kb) - sum(c.differs for c in changed), tuple(model), tuple(config), tuple(prov),
                        tuple(cert))
@@ -143,48 +135,18 @@ def _entry(a: EntryRecord, b: EntryRecord, tol: Tolerance) -> EntryChange | None
             shapes.append(ValueChange(name, None if x is None else list(np.shape(x)),
                                       None if y is None else list(np.shape(y))))
             continue
-        channels += _channels(name, np.asarray(x), np.asarray(y), b, t, tol)
+        x, layout = by_name(name, np.asarray(x), a, b)
+        shapes += layout
+        channels += column_changes(name, x, np.asarray(y), b, t, tol)
     attrs_a = {k: v for k, v in a.attrs.items() if k not in VOLATILE | EFFORT | PROVENANCE}
     attrs_b = {k: v for k, v in b.attrs.items() if k not in VOLATILE | EFFORT | PROVENANCE}
     (fig_a, effort_a), (fig_b, effort_b) = split(expand(attrs_a)), split(expand(attrs_b))
     figures = _values(fig_a, fig_b, tol)
     effort = _values({**{k: v for k, v in a.attrs.items() if k in EFFORT}, **effort_a},
-                     {**{k: v for k, v in b.attrs.items() if k in EFFORT}, **effort_b}, Tolerance())
+                     {**{k: v for k, v in b.attrs.items() if k in EFFORT}, **effort_b}, EXACT)
     if not (channels or shapes or figures or effort):
         return None
     return EntryChange(a.key, tuple(channels), tuple(shapes), tuple(figures), tuple(effort))
-
-
-def _channels(name: str, x: np.ndarray, y: np.ndarray, e: EntryRecord, t: np.ndarray,
-              tol: Tolerance) -> Iterator[ChannelChange]:
-    X, Y = x.reshape(len(x), -1) if x.ndim else x.reshape(1, 1), y.reshape(len(y), -1) if y.ndim else y.reshape(1, 1)
-    bad = tol.exceeded(X, Y)
-    if not bad.any():
-        return
-    names, units = column_names(name, y, e)
-    with np.errstate(invalid="ignore"):
-        dev = np.where(bad, np.abs(X.astype(np.float64) - Y.astype(np.float64)), -1.0)
-    for j in np.nonzero(bad.any(axis=0))[0]:
-        row = int(np.nanargmax(np.where(np.isnan(dev[:, j]), np.inf, dev[:, j])))
-        per_knot = y.ndim and len(y) in (len(t), len(t) - 1)  # a row per knot (or per interval)
-        at = float(t[row]) if per_knot else None
-        yield ChannelChange(name, names[j], units[j], float(dev[row, j]), at, float(X[row, j]), float(Y[row, j]))
-
-
-def column_names(name: str, y: np.ndarray, e: EntryRecord) -> tuple[list[str], list[str]]:
-    """A column name and unit for each of the flattened trailing axes of array ``name``."""
-    width = int(np.prod(y.shape[1:])) if y.ndim > 1 else 1
-    cols, units = list(e.columns.get(name, [])), list(e.units.get(name, []))
-    if y.ndim <= 1:
-        return [name], [units[0] if units else ""]
-    if len(cols) == width:
-        return cols, units or [""] * width
-    if len(cols) == y.shape[1]:  # (K, n, 3): a column per named row and axis
-        inner = width // y.shape[1]
-        axes = "xyz" if inner == 3 else [str(i) for i in range(inner)]
-        return ([f"{c}.{ax}" for c in cols for ax in axes],
-                [u for u in (units or [""] * len(cols)) for _ in range(inner)])
-    return [f"{name}[{j}]" for j in range(width)], [""] * width
 
 
 def _values(a: Mapping[str, Any], b: Mapping[str, Any], tol: Tolerance) -> list[ValueChange]:
@@ -211,10 +173,29 @@ def _same(x: Any, y: Any, tol: Tolerance) -> bool:
 
 
 def _arrays_equal(a: Mapping[str, np.ndarray], b: Mapping[str, np.ndarray], tol: Tolerance) -> list[ValueChange]:
+    """The model's arrays that differ: where the largest deviation is, and both values there (the
+    shapes, where they differ)."""
     out = []
     for k in sorted(set(a) | set(b)):
         x, y = a.get(k), b.get(k)
-        if x is None or y is None or np.shape(x) != np.shape(y) or tol.exceeded(x, y).any():
-            out.append(ValueChange(k, None if x is None else jsonable(np.asarray(x)),
-                                   None if y is None else jsonable(np.asarray(y))))
+        if x is None or y is None or np.shape(x) != np.shape(y):
+            out.append(ValueChange(f"{k} shape", None if x is None else list(np.shape(x)),
+                                   None if y is None else list(np.shape(y))))
+        elif (bad := tol.exceeded(x, y)).any():
+            with np.errstate(invalid="ignore"):
+                dev = np.where(bad, np.abs(np.asarray(x, float) - np.asarray(y, float)), -1.0)
+            at = np.unravel_index(int(np.argmax(np.where(np.isnan(dev), np.inf, dev))), np.shape(x))
+            where = "[" + ", ".join(str(int(i)) for i in at) + "]" if np.ndim(x) else ""
+            out.append(ValueChange(f"{k}{where}", jsonable(np.asarray(x)[at]), jsonable(np.asarray(y)[at])))
     return out
+
+
+def _first_line_unlike(name: str, a: str | None, b: str | None) -> ValueChange:
+    """A text of the model (the URDF) that differs: its first line that does, on each side."""
+    lines_a, lines_b = (a or "").splitlines(), (b or "").splitlines()
+    for i in range(max(len(lines_a), len(lines_b))):
+        x = lines_a[i].strip() if i < len(lines_a) else None
+        y = lines_b[i].strip() if i < len(lines_b) else None
+        if x != y:
+            return ValueChange(f"{name} line {i + 1}", x if a is not None else None, y if b is not None else None)
+    return ValueChange(name, a, b)  # the same lines, other line ends

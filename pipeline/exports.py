@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from skatelib.library import schema
 from skatelib.library.atomic import atomic_folder, confined, write_atomic
-from skatelib.library.compare import column_names
+from skatelib.library.channel_diff import column_names
 from skatelib.library.errors import OutputError
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord

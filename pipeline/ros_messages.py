@@ -8,8 +8,8 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
+from skatelib.library.channel_diff import column_names
 from skatelib.library.channels import LEGS
-from skatelib.library.compare import column_names
 from skatelib.library.records import EntryRecord
 from skatelib.library.rotations import board_rotations, rpy_matrices
 

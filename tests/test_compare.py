@@ -110,12 +110,16 @@ def test_build_check_passes_unchanged_and_fails_changed(pair):
 
 def test_humanoid_libraries_compare_too(hrp2_walk_path, tmp_path):
     """A humanoid library equals its copy, and a rebuild of it (its stage times differ: reported as
-    effort, not counted); with its COM height moved 2 mm at one knot it differs, naming the entry,
-    com_z, its unit and that knot's time."""
+    effort, not counted), and is not compared with a quadruped's (exit 2); with its COM height moved
+    2 mm at one knot it differs, naming the entry, com_z, its unit and that knot's time."""
     root = TINY.parents[2]
     lib = hrp2_walk_path
     shutil.copy(lib, tmp_path / "copy.h5")
     assert _cli(["diff", str(lib), str(tmp_path / "copy.h5")]).returncode == 0
+    r = _cli(["diff", str(root / "tests" / "data" / "tiny-reference.h5"), str(lib)])  # a quadruped's: usage error
+    assert r.returncode == 2 and "a humanoid one: only libraries of one kind" in " ".join(r.stderr.split()), r.stderr
+    r = _cli(["build", str(TINY), "--check", str(lib), "--no-progress"])  # refused before any solve
+    assert r.returncode == 2 and "a humanoid library" in " ".join(r.stderr.split()), r.stdout + r.stderr
     again = tmp_path / "again.h5"
     r = _cli(["build", str(root / "configs" / "hrp2_walk.toml"), "-o", str(again), "--no-progress", "--no-cache"])
     assert r.returncode == 0, r.stdout + r.stderr

@@ -150,9 +150,13 @@ def _build_and_check(cfg: Any, opts: Any, reference: Path, tolerance: tuple[floa
     from skatelib.library.compare import Tolerance, compare_files
     from skatelib.library.reader import read_library
     from skatelib.pipeline.cli.build_run import run_build
+    from skatelib.pipeline.kinds import kind_of
     from skatelib.pipeline.views.diff_view import show_diff
 
-    read_library(reference)  # a missing or damaged reference is refused before any solve (exit 3)
+    kind = read_library(reference).kind  # a missing or damaged reference is refused before any solve (exit 3)
+    if kind != kind_of(cfg).name:
+        raise typer.BadParameter(f"{reference} is a {kind} library and {cfg.path} a {kind_of(cfg).name} config: "
+                                 "compare a build with a library of its kind", param_hint="--check")
     with tempfile.TemporaryDirectory(prefix="skatelib-check-") as tmp:
         built = Path(tmp) / reference.name
         run = run_build(cfg, built, opts)

@@ -4,7 +4,6 @@ comparison) and ``export``."""
 from __future__ import annotations
 
 import enum
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -12,7 +11,7 @@ import typer
 from rich.markup import escape
 from skatelib.pipeline.cli.library_commands import LibArg
 from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_RTOL, finite
-from skatelib.pipeline.views.console import jsonable
+from skatelib.pipeline.views.console import json_text
 
 AtolOpt = Annotated[float, typer.Option("--atol", min=0.0, max=MAX_ATOL, callback=finite,
                                         help="Absolute tolerance (in each channel's unit).")]
@@ -30,12 +29,15 @@ def diff(
 ) -> None:
     """What changed between two libraries: entries added, removed and changed (the largest deviation
     of each channel, with its unit and time), label-level figures, model, config keys and
-    provenance. Exit 0 when equal within the tolerances (default: bit for bit), 1 when they differ."""
-    from skatelib.library.compare import Tolerance, compare
+    provenance. Exit 0 when equal within the tolerances (default: bit for bit), 1 when they differ,
+    2 on bad usage (libraries of two kinds among it), 3 when a file is missing or damaged."""
+    from skatelib.library.compare import KindsDiffer, Tolerance, compare
     from skatelib.library.reader import read_library
     from skatelib.pipeline.views.diff_view import show_diff
 
     A, B = read_library(a), read_library(b)
+    if A.kind != B.kind:
+        raise typer.BadParameter(str(KindsDiffer(A, B)), param_hint="B")
     known = set(A.entries) | set(B.entries)
     unknown = [k for k in entry or [] if k not in known]
     if unknown:
@@ -43,7 +45,7 @@ def diff(
                                  param_hint="--entry")
     d = compare(A, B, Tolerance(atol, rtol), entry)
     if as_json:
-        print(json.dumps(d.as_dict(), indent=1, default=jsonable))
+        print(json_text(d.as_dict()))
     else:
         show_diff(d)
     if not d.equal:

@@ -5,7 +5,6 @@ library function and prints."""
 from __future__ import annotations
 
 import enum
-import json
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -16,7 +15,7 @@ from skatelib.pipeline.cli.option_checks import MAX_JOBS, perturbation
 from skatelib.pipeline.views.console import (
     console,
     count,
-    jsonable,
+    json_text,
     left_out,
     mesh_note,
     viewer_hint,
@@ -62,7 +61,7 @@ def info(
 
     lib = MotionLibrary.open(library)  # verifies the checksum first
     if as_json:
-        print(json.dumps(library_json(lib, library), indent=1, default=jsonable))
+        print(json_text(library_json(lib, library)))
     elif wide:
         library_wide(lib, library)
     else:
@@ -128,7 +127,7 @@ def validate(
         if closed_loop:
             doc["closed_loop"] = {"plant": perturb, "simulator": plant.value, "failed": failed,
                                   "entries": [r.as_dict() for r in results]}
-        print(json.dumps(doc, indent=1, default=jsonable))
+        print(json_text(doc))
     if problems or failed or not usable:
         raise typer.Exit(1)
 

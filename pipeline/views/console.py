@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import shlex
 import sys
@@ -134,6 +136,25 @@ def label_error(label: float, speed: float | None, digits: int = 1) -> str:
 def jsonable(v: Any) -> Any:
     """A ``json.dumps`` default: numpy scalars and arrays as JSON numbers and lists."""
     return v.tolist() if hasattr(v, "tolist") else str(v)
+
+
+def json_text(doc: Any) -> str:
+    """``doc`` as strict JSON, which every parser reads: a number that is not finite (NaN, an
+    infinity) as ``null`` (JSON has no other way to write it), numpy values as numbers and lists,
+    anything else as its string."""
+    return json.dumps(_strict(doc), indent=1, allow_nan=False)
+
+
+def _strict(v: Any) -> Any:
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {str(k): _strict(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_strict(x) for x in v]
+    if v is None or isinstance(v, (str, int)):
+        return v
+    return _strict(v.tolist()) if hasattr(v, "tolist") else str(v)
 
 
 def phase_table(rows: list[Any], wall_s: float, jobs: int) -> None:

@@ -1,16 +1,17 @@
 """``skatelib diff`` and ``build --check`` on the console: what was added, removed and changed,
-each changed entry's largest deviations per channel (with units and times), its label-level
-figures, the model, the config's differing keys and the provenance."""
+each changed entry's largest deviations of each array (with units and times), its label-level
+figures, the solver's effort, the model, the config's differing keys and the provenance."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from rich.markup import escape
-from skatelib.library.compare import LibraryDiff, ValueChange
+from skatelib.library.compare import ChannelChange, EntryChange, LibraryDiff, ValueChange
 from skatelib.pipeline.views.console import console, count, entry_table
 
-CHANNELS_SHOWN = 6  # per entry, the largest; the rest counted
+CHANNELS_SHOWN = 6  # values tables: the first; the rest counted
+PER_ARRAY = 3  # per entry and array, its largest deviations (metres are not compared with newtons)
 # The label-level figures shown first (the rest counted; --json has all): outcome, the speed it
 # rides at, Coulomb's margin, the torque with the legs' mass, the re-integration defect, the verdicts.
 HEADLINE = ("success", "status", "physics.momentum_speed_mps", "physics.min_friction_margin_N",
@@ -19,10 +20,18 @@ HEADLINE = ("success", "status", "physics.momentum_speed_mps", "physics.min_fric
 
 
 def _v(x: Any) -> str:
+    """A value for a table: numbers to 6 digits, text whole (a status names every failed check),
+    anything else (a list) cut to 60 characters."""
     if isinstance(x, float):
         return f"{x:.6g}"
     s = str(x)
-    return s if len(s) <= 60 else s[:57] + "..."
+    return s if isinstance(x, str) or len(s) <= 60 else s[:57] + "..."
+
+
+def _gap(a: Any, b: Any) -> str:
+    """``|a - b|`` of two numbers (what 6 digits may not show), else empty."""
+    numbers = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (a, b))
+    return f"{abs(float(a) - float(b)):.3g}" if numbers else ""
 
 
 def _values(title: str, changes: tuple[ValueChange, ...], first: tuple[str, ...] = ()) -> None:
@@ -34,11 +43,32 @@ def _values(title: str, changes: tuple[ValueChange, ...], first: tuple[str, ...]
     if not shown:
         shown = list(changes[:CHANNELS_SHOWN])
     shown.sort(key=lambda c: first.index(c.name) if c.name in first else 0)
-    t = entry_table(title, ("name", "a", "b"))
+    t = entry_table(title, ("name", "a", "b", "|a - b|"))
     for c in shown:
-        t.add_row(escape(c.name), escape(_v(c.a)), escape(_v(c.b)))
+        t.add_row(escape(c.name), escape(_v(c.a)), escape(_v(c.b)), _gap(c.a, c.b))
     if len(shown) < len(changes):
-        t.add_row(f"(and {len(changes) - len(shown)} more: --json lists them)", "", "")
+        t.add_row(f"(and {len(changes) - len(shown)} more: --json lists them)", "", "", "")
+    console.print(t)
+
+
+def _channels(e: EntryChange) -> None:
+    """The entry's largest deviations, the :data:`PER_ARRAY` largest of each array (a force's
+    newtons and a position's metres are not ranked against each other)."""
+    if not e.channels:
+        return
+    t = entry_table(f"{e.key}: {count(len(e.channels), 'channel')} differ", (
+        "array", "column", "unit", "max |a - b|", "at t [s]", "a", "b"))
+    arrays: dict[str, list[ChannelChange]] = {}
+    for c in e.channels:
+        arrays.setdefault(c.array, []).append(c)
+    shown = 0
+    for changes in arrays.values():
+        for c in sorted(changes, key=lambda c: -c.max_abs)[:PER_ARRAY]:
+            t.add_row(c.array, escape(c.column), escape(c.unit), f"{c.max_abs:.3g}",
+                      "-" if c.at_s is None else f"{c.at_s:.3f}", f"{c.a:.6g}", f"{c.b:.6g}")
+            shown += 1
+    if shown < len(e.channels):
+        t.add_row("", f"(and {len(e.channels) - shown} more: --json lists them)", "", "", "", "", "")
     console.print(t)
 
 
@@ -51,20 +81,10 @@ def show_diff(d: LibraryDiff) -> None:
     if d.removed:
         console.print(escape(f"removed in b: {', '.join(d.removed)}"))
     for e in d.changed:
-        if not e.differs:
-            continue
-        t = entry_table(f"{e.key}: {count(len(e.channels), 'channel')} differ", (
-            "array", "column", "unit", "max |a - b|", "at t [s]", "a", "b"))
-        ranked = sorted(e.channels, key=lambda c: -c.max_abs)
-        for c in ranked[:CHANNELS_SHOWN]:
-            t.add_row(c.array, escape(c.column), escape(c.unit), f"{c.max_abs:.3g}",
-                      "-" if c.at_s is None else f"{c.at_s:.3f}", f"{c.a:.6g}", f"{c.b:.6g}")
-        if len(ranked) > CHANNELS_SHOWN:
-            t.add_row("", f"(and {len(ranked) - CHANNELS_SHOWN} more)", "", "", "", "", "")
-        if e.channels:
-            console.print(t)
-        _values(f"{e.key}: arrays of another shape", e.shapes)
-        _values(f"{e.key}: outcome and figures", e.figures, HEADLINE)
+        if e.differs:
+            _channels(e)
+            _values(f"{e.key}: arrays of another shape, columns or units", e.shapes)
+            _values(f"{e.key}: outcome and figures", e.figures, HEADLINE)
         _values(f"{e.key}: solver effort (not counted)", e.effort)
     _values("model", d.model)
     _values("config (resolved; not counted: the entries show what it changed)", d.config)
