@@ -150,6 +150,7 @@ def test_a_motion_that_fails_before_its_whole_body_is_stored_as_failed(tmp_path)
     cli = [sys.executable, "-c", "from skatelib.pipeline.cli.app import main; main()"]
     v = subprocess.run([*cli, "validate", str(rep.path)], capture_output=True, text=True, env=env)
     assert v.returncode == 0 and "skate_v1.00: stored as failed" in v.stdout, v.stdout + v.stderr
+    assert "1 solved entry valid; 1 entry stored as failed (skipped)" in v.stdout  # not "all entries valid"
 
 
 def test_build_report_marks_all_entries(hrp2_walk_path):
