@@ -86,19 +86,51 @@ def _where_unlike(a: list[str], b: list[str], labels: Any) -> tuple[dict[str, st
 
 def channels(name: str, x: np.ndarray, y: np.ndarray, e: EntryRecord, t: np.ndarray,
               tol: Tolerance) -> Iterator[ChannelChange]:
+    """Each column of array ``name`` that moved beyond ``tol``: its largest deviation, with the time
+    of that row where the array has a row per knot (or per interval); a humanoid's node arrays
+    (``nodes_state``: steps x nodes x channels) by channel, naming the step and node, at the node's
+    time. Integer arrays (codes) compare exactly."""
+    nodes = _node_layout(name, y, e)
+    if nodes is not None:
+        x, y = x.reshape(-1, y.shape[2]), y.reshape(-1, y.shape[2])
     X, Y = x.reshape(len(x), -1) if x.ndim else x.reshape(1, 1), y.reshape(len(y), -1) if y.ndim else y.reshape(1, 1)
     exact = np.issubdtype(x.dtype, np.integer) and np.issubdtype(y.dtype, np.integer)  # codes: contact, step
     bad = (EXACT if exact else tol).exceeded(X, Y)
     if not bad.any():
         return
-    names, units = column_names(name, y, e)
+    names, units = column_names(name, y, e) if nodes is None else nodes[:2]
     with np.errstate(invalid="ignore"):
         dev = np.where(bad, np.abs(X.astype(np.float64) - Y.astype(np.float64)), -1.0)
     for j in np.nonzero(bad.any(axis=0))[0]:
         row = int(np.nanargmax(np.where(np.isnan(dev[:, j]), np.inf, dev[:, j])))
-        per_knot = y.ndim and len(y) in (len(t), len(t) - 1)  # a row per knot (or per interval)
-        at = float(t[row]) if per_knot else None
-        yield ChannelChange(name, names[j], units[j], float(dev[row, j]), at, float(X[row, j]), float(Y[row, j]))
+        column, at = names[j], None
+        if nodes is not None:
+            column, at = f"{column} (step {nodes[2][row][0]}, node {nodes[2][row][1]})", nodes[2][row][2]
+        elif y.ndim and len(y) in (len(t), len(t) - 1):  # a row per knot (or per interval)
+            at = float(t[row])
+        yield ChannelChange(name, column, units[j], float(dev[row, j]), at, float(X[row, j]), float(Y[row, j]))
+
+
+def _node_layout(name: str, y: np.ndarray, e: EntryRecord
+                 ) -> tuple[list[str], list[str], list[tuple[int, int, float | None]]] | None:
+    """For a humanoid's node array (S steps x M nodes x channels, named ``nodes_<array>`` and laid
+    out as ``<array>``): the channels' names and units, and per flattened row its step, node and
+    time (``nodes_t`` holds each step's start, its nodes and its end: a state at every one of those,
+    a control at the nodes alone). None for any other array."""
+    base = name.removeprefix("nodes_")
+    cols = list(e.columns.get(base, []))
+    if base == name or y.ndim != 3 or len(cols) != y.shape[2]:
+        return None
+    units = list(e.units.get(base, [])) or [""] * len(cols)
+    times = np.asarray(e.arrays.get("nodes_t", np.zeros((0, 0))))
+    first = 0 if times.ndim == 2 and times.shape[1] == y.shape[1] else 1  # controls: the nodes, not the ends
+    rows = []
+    for s in range(y.shape[0]):
+        for n in range(y.shape[1]):
+            k = n + first
+            at = float(times[s, k]) if times.ndim == 2 and s < times.shape[0] and k < times.shape[1] else None
+            rows.append((s, n, at))
+    return cols, units, rows
 
 
 def column_names(name: str, y: np.ndarray, e: EntryRecord) -> tuple[list[str], list[str]]:

@@ -134,6 +134,9 @@ def _entry(a: EntryRecord, b: EntryRecord, tol: Tolerance) -> EntryChange | None
         if x is None or y is None or np.shape(x) != np.shape(y):
             shapes.append(ValueChange(name, None if x is None else list(np.shape(x)),
                                       None if y is None else list(np.shape(y))))
+            if name == "t" and x is not None and y is not None and np.size(x) and np.size(y):  # how long each lasts
+                shapes.append(ValueChange("duration [s]", float(np.asarray(x)[-1] - np.asarray(x)[0]),
+                                          float(np.asarray(y)[-1] - np.asarray(y)[0])))
             continue
         x, layout = by_name(name, np.asarray(x), a, b)
         shapes += layout

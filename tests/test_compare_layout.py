@@ -169,3 +169,37 @@ def test_json_is_strict_json(tmp_path):
     (entry,) = doc["changed"]
     assert r.returncode == 1 and entry["differs"] is True
     assert entry["channels"][0]["column"] == "base_z" and entry["channels"][0]["max_abs"] is None
+
+
+def test_a_humanoids_node_arrays_name_step_node_channel_and_time():
+    """nodes_state (steps x start, nodes, end x channels, laid out as state) with one value moved:
+    named by its channel, step and node, at that node's time in nodes_t; nodes_control (the nodes
+    alone) at the time of its node, one past the step's start."""
+    from skatelib.library.channel_diff import channels
+    from skatelib.library.records import EntryRecord
+
+    rng = np.random.default_rng(0)
+    times = np.cumsum(rng.uniform(0.05, 0.1, (3, 6)), axis=None).reshape(3, 6)
+    state, control = rng.normal(size=(3, 6, 2)), rng.normal(size=(3, 4, 2))
+    rec = EntryRecord("walk", {}, {"nodes_t": times, "nodes_state": state, "nodes_control": control},
+                      {"state": ("com_x", "com_y"), "control": ("com_ax", "com_ay")},
+                      {"state": ("m", "m"), "control": ("m/s^2", "m/s^2")})
+    moved_state, moved_control = state.copy(), control.copy()
+    moved_state[2, 4, 1] += 0.002
+    moved_control[1, 0, 0] -= 0.5
+    (s,) = channels("nodes_state", state, moved_state, rec, np.zeros(0), Tolerance())
+    (c,) = channels("nodes_control", control, moved_control, rec, np.zeros(0), Tolerance())
+    assert (s.column, s.unit, s.at_s) == ("com_y (step 2, node 4)", "m", times[2, 4])
+    assert s.max_abs == pytest.approx(0.002)
+    assert (c.column, c.unit, c.at_s) == ("com_ax (step 1, node 0)", "m/s^2", times[1, 1])
+
+
+def test_other_knots_give_both_durations(tmp_path):
+    """The entry stored a knot shorter: the arrays' shapes, and how long each motion lasts."""
+    out = _doctored(tmp_path / "short.h5", lambda r: type(r)(r.key, r.attrs, {k: v[:-1] for k, v in r.arrays.items()},
+                                                              r.columns, r.units))
+    (change,) = compare_files(REFERENCE, out).changed
+    t = read_library(REFERENCE).entries[KEY].arrays["t"]
+    shapes = {s.name: (s.a, s.b) for s in change.shapes}
+    assert shapes["t"] == ([len(t)], [len(t) - 1])
+    assert shapes["duration [s]"] == (pytest.approx(t[-1] - t[0]), pytest.approx(t[-2] - t[0]))
