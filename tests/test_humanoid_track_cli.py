@@ -38,6 +38,24 @@ def test_the_humanoid_keys_are_checked_and_the_quadrupeds_refused(hrp2_walk_path
     assert r.returncode != 0 and "--plant mujoco" in r.stdout + r.stderr
     r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--ride", "0:0.5"])
     assert r.returncode != 0 and re.search(r"--ride", r.stdout + r.stderr)
+    for option in (["--state", "true"], ["--solver", "osqp"], ["--mpc-mu", "0.3"]):  # the MPC's, not the stabilizer's
+        r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", *option, "--no-progress"])
+        assert r.returncode != 0 and option[0] in " ".join((r.stdout + r.stderr).split()), option
+
+
+def test_a_humanoid_library_without_a_solved_entry_is_not_tracked(hrp2_walk_path, tmp_path):
+    """Every entry stored as failed: exit 1 saying so, as for a quadruped's library (not an empty
+    table and exit 0)."""
+    from skatelib.library.reader import read_library
+    from skatelib.library.writer import write_library
+
+    data = read_library(hrp2_walk_path)
+    failed = [type(e)(e.key, {**e.attrs, "success": False, "status": "test: failed"}, e.arrays, e.columns, e.units)
+              for e in data.entries.values()]
+    keep = {k: v for k, v in data.attrs.items() if k not in ("format", "format_version", "content_sha256")}
+    lib = write_library(tmp_path / "failed.h5", keep, data.model_attrs, data.model_arrays, data.model_text, failed)
+    r = run_cli(["track", str(lib), "--plant", "mujoco", "--no-progress"])
+    assert r.returncode == 1 and "no entry of this library was solved" in r.stdout + r.stderr, r.stdout + r.stderr
 
 
 @pytest.mark.slow

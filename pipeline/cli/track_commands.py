@@ -22,6 +22,7 @@ from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
+from skatelib.pipeline.cli.track_ride import track_ride
 from skatelib.pipeline.track_setup import DEFAULT_TWIN_STATE, plant_errors, run_jobs
 from skatelib.pipeline.views.console import (
     console,
@@ -85,8 +86,10 @@ def track(
 ) -> None:
     """Closed loop: the paper's MPC (30 Hz) drives a plant with model error through each entry, the transfer
     and 1.5 s of riding (exit 1 if any fails): the model plant, the twin (--plant mujoco), a humanoid's twin."""
+    entry = list(dict.fromkeys(entry)) if entry else entry  # an entry named twice is tracked once
     if is_humanoid(library):
-        quadruped_only = ride is not None or maneuver is not Maneuver.entries or (report, draw) != (None, None)
+        quadruped_only = (ride is not None or maneuver is not Maneuver.entries or (report, draw, mpc_mu) != (None,) * 3
+                          or state is not DEFAULT_STATE or solver is not QpSolver.daqp)
         return track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
                               (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed), (save, video))
     mpc, settings = _controller(solver, mpc_mu, seed, state)
@@ -96,7 +99,7 @@ def track(
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco,
                      (report, ride if maneuver is Maneuver.entries else "the steering maneuver"))
     if ride is not None:
-        return _track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
+        return track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
                            (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
     if plant is PlantKind.mujoco:
         return _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver,
@@ -105,10 +108,15 @@ def track(
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
     if maneuver is not Maneuver.steer:
         return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), (save, report))
+    return _track_steer(library, (plant_error, perturb), mpc, settings, jobs)
+
+
+def _track_steer(library: Path, errors: tuple[str, str], mpc: Any, settings: Any, jobs: int) -> None:
+    """The steering maneuver on the model plant, at rest and at 0.5 m/s; exit 1 if it fails."""
     from skatelib.pipeline.build.sweep import run_calls
     from skatelib.proving.track import steer_jobs
 
-    if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs), perturb):
+    if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), errors[0], mpc, settings), jobs), errors[1]):
         raise typer.Exit(1)
 
 
@@ -132,52 +140,6 @@ def _library_checked(library: Path, all_entries: bool, on_twin: bool, report: tu
         raise typer.Exit(1)
     if on_twin:
         mesh_note(library)
-
-
-def _track_ride(library: Path, text: str, errors: tuple[str, str], controller: tuple[Any, Any],
-                outputs: tuple[Path | None, Path | None], how: tuple[bool, bool]) -> None:
-    """A chained ride (:mod:`skatelib.proving.ride`), its stages' table. ``errors``: the plant's
-    perturbation and its name; ``controller``: the MPC's and the run's settings; ``outputs``: a
-    recording and a video (the twin's) to write; ``how``: no option that rides something else (the
-    steering maneuver, entries), and whether on the twin."""
-    alone, on_twin = how
-    save, video = outputs
-    if not alone:
-        raise SkatelibError("--ride rides its stages: leave out --maneuver and --entry")
-    if video is not None and not on_twin:
-        raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
-    (plant_error, perturb), (mpc, settings) = errors, controller
-    from skatelib.pipeline.views.verdict_tables import ride_table
-    from skatelib.proving.ride import parse_ride, ride
-    from skatelib.proving.track import JobSpec, _quadruped
-
-    try:
-        stages = parse_ride(text)
-    except ValueError as e:
-        raise typer.BadParameter(str(e), param_hint="--ride") from None
-    save_closed_loop = recording(library, save)
-    if video is not None:
-        from skatelib.pipeline.build.preflight import check_output
-
-        check_output(video, [library], what="video")
-    if on_twin:
-        from skatelib.proving.twin.ride import twin_ride
-        from skatelib.runtime import MotionLibrary
-
-        lib = MotionLibrary.open(library)
-        result = twin_ride(library, stages, plant_error, mpc, settings, (save is not None, video))
-        perturb = f"{perturb} (MuJoCo twin, whole-body controller)"
-    else:
-        lib = _quadruped(library, plant_error, "a ride")
-        result = ride(lib, stages, JobSpec(str(library), plant_error, mpc, settings).loop(lib),
-                      keep_trace=save is not None)
-    if save is not None and save_closed_loop is not None and result.entry is not None:
-        save_closed_loop(lib, [(result.run.key, result.entry)], save, {result.run.key: result.reference})
-        console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
-    if video is not None:
-        console.print(escape(f"wrote {video}"))
-    if not ride_table(result, perturb):
-        raise typer.Exit(1)
 
 
 def _track_model(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,

@@ -28,10 +28,14 @@ def track_humanoid(library: Path, entry: list[str] | None, perturb: str | None, 
     ``outputs``: a Rerun recording and a video to write (checked before any run)."""
     on_twin, quadruped_only = how
     if quadruped_only:
-        raise SkatelibError("a humanoid library's track executes its entries: --ride, --maneuver, --report and "
-                            "--draw are the quadruped's")
+        raise SkatelibError("a humanoid library's track executes its entries under the balance stabilizer, fed by "
+                            "its sensors: --ride, --maneuver, --report, --draw, --state, --solver and --mpc-mu are "
+                            "the quadruped's")
     if not on_twin:
         raise SkatelibError("a humanoid library is executed on its physical twin: add --plant mujoco")
+    if not entry and not _any_solved(library):
+        console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
+        raise typer.Exit(1)
     save, video = outputs
     save_runs = _outputs_checked(library, save, video)
     from skatelib.pipeline.views.humanoid_table import humanoid_table
@@ -59,6 +63,12 @@ def track_humanoid(library: Path, entry: list[str] | None, perturb: str | None, 
     if failed:
         console.print(escape(f"{failed} of {count(len(results), 'entry')} failed on the twin"))
         raise typer.Exit(1)
+
+
+def _any_solved(library: Path) -> bool:
+    from skatelib.runtime import MotionLibrary
+
+    return any(e.success for e in MotionLibrary.open(library))
 
 
 def _outputs_checked(library: Path, save: Path | None, video: Path | None) -> Any:
