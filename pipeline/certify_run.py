@@ -171,9 +171,9 @@ def certify_plan(path: Path, keys: Sequence[str] | None, samples: int | None, se
     import dataclasses
 
     from skatelib.pipeline.certify_spec import config_spec, library_spec
-    from skatelib.runtime import MotionLibrary
+    from skatelib.proving.twin.track import check_twin
 
-    lib = MotionLibrary.open(path)
+    lib = check_twin(path, "")  # a quadruped's library, MuJoCo there: before anything is printed or ridden
     spec = config_spec(config) if config is not None else library_spec(lib)
     spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
                                seed=spec.seed if seed is None else seed)

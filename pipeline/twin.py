@@ -22,7 +22,8 @@ def twin_figures(source: Path | Any) -> Any:
             raise SkatelibError(f"{source}: the twin is a quadruped's; this library is {lib.kind}")
         return TwinFigures.from_library(lib)
     if source.meta.kind != "quadruped":
-        raise SkatelibError(f"{source.path}: the twin is a quadruped's; this config is {source.meta.kind}")
+        raise SkatelibError(f"{source.path}: a {source.meta.kind}'s twin is made from its built library (it stands "
+                            "in a planned posture): skatelib build CONFIG, then skatelib model LIB.h5 --twin OUT.xml")
     from skatelib.pipeline.quadruped.entries import quadruped_model
     from skatelib.pipeline.quadruped.model.system import SkateSystem
 

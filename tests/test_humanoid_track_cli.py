@@ -31,13 +31,16 @@ def test_the_walk_as_planned_passes_with_its_figures(hrp2_walk_path):
 
 
 def test_the_humanoid_keys_are_checked_and_the_quadrupeds_refused(hrp2_walk_path):
-    """A quadruped's error key is refused naming the humanoid's; the model plant and --ride too."""
+    """A quadruped's error key is refused naming the humanoid's, a shove after the run's end too; the
+    model plant, --ride and the MPC's options (--state, --solver, --mpc-mu) too."""
     r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--perturb", "kb=-20%", "--no-progress"])
     assert r.returncode == 2 and "com_x" in r.stderr, r.stderr
     r = run_cli(["track", str(hrp2_walk_path), "--no-progress"])
     assert r.returncode != 0 and "--plant mujoco" in r.stdout + r.stderr
     r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--ride", "0:0.5"])
     assert r.returncode != 0 and re.search(r"--ride", r.stdout + r.stderr)
+    r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", "--perturb", "shove=300,shove_t=30"])
+    assert r.returncode == 2 and "ends at 7.60 s" in " ".join(r.stderr.split()), r.stderr  # a shove after the run
     for option in (["--state", "true"], ["--solver", "osqp"], ["--mpc-mu", "0.3"]):  # the MPC's, not the stabilizer's
         r = run_cli(["track", str(hrp2_walk_path), "--plant", "mujoco", *option, "--no-progress"])
         assert r.returncode != 0 and option[0] in " ".join((r.stdout + r.stderr).split()), option

@@ -41,8 +41,8 @@ YesOpt = Annotated[bool, typer.Option(
 
 def model(
     config: Annotated[Path | None, typer.Argument(
-        help="Build config (TOML) or a library (.h5, quadruped or humanoid); the shipped default config when "
-             "omitted.")] = None,
+        help="Build config (TOML), or with --twin a library (.h5, quadruped or humanoid); the shipped default "
+             "config when omitted.")] = None,
     twin: Annotated[Path | None, typer.Option(
         help="Write the physical twin (MuJoCo MJCF: robot and jointed skateboard) to this file.")] = None,
 ) -> None:
@@ -53,7 +53,8 @@ def model(
     from skatelib.pipeline.build.preflight import is_hdf5
     from skatelib.pipeline.twin import write_twin
 
-    if config is not None and is_hdf5(config):  # a library, or a damaged one that the library reader names
+    # a library (by its bytes, or by its name: a missing or empty .h5 is a library the reader names as such)
+    if config is not None and (is_hdf5(config) or config.suffix.lower() in (".h5", ".hdf5")):
         if twin is None:
             raise typer.BadParameter("a library's model is shown by skatelib info; give --twin OUT.xml",
                                      param_hint="CONFIG")

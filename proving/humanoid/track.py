@@ -89,6 +89,23 @@ class HumanoidJob:
                                    float(run.t[-1]) if len(run.t) else 0.0, written, run if self.keep_run else None)
 
 
+def _shove_in_run(errors: Any, entry: Any) -> None:
+    """A shove that the run of ``entry`` would end before: refused, not silently left out.
+
+    Raises:
+        HumanoidPerturbationError: ``shove_t`` at or after the run's end (the entry and the hold).
+    """
+    from skatelib.proving.humanoid.loop import HOLD_S
+    from skatelib.sim.humanoid.errors import HumanoidPerturbationError
+
+    if errors is None or errors.shove_N == 0.0:
+        return
+    end = float(entry.duration_s) + HOLD_S
+    if errors.shove_t_s >= end:
+        raise HumanoidPerturbationError(f"shove_t={errors.shove_t_s:g} s: the run of {entry.key} ends at {end:.2f} s "
+                                        f"({entry.duration_s:.2f} s of motion and {HOLD_S:g} s of hold); shove earlier")
+
+
 def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabilizer: bool = True,
                   seed: int = 0, outputs: tuple[Path | None, bool] = (None, False)) -> list[HumanoidJob]:
     """One job per entry (``entries``, or every successful one); ``outputs``: a video to render
@@ -110,12 +127,12 @@ def humanoid_jobs(path: Path, entries: Sequence[str] | None, perturb: str, stabi
         raise SkatelibError(f"{path}: a skate library planned without a board (both soles on the ground, no deck "
                             "height): the twin cannot ride it on a deck; rebuild it from a config with a [board] "
                             "table (configs/hrp2_skate.toml)")
-    if perturb:
-        parse_humanoid_perturbation(perturb)
+    errors = parse_humanoid_perturbation(perturb) if perturb else None
     keys = list(entries) if entries else [e.key for e in lib if e.success]
     for k in keys:
         if not lib[k].success:
             raise SkatelibError(f"{path}: entry {k} is stored as failed (no motion to execute)")
+        _shove_in_run(errors, lib[k])
     video, keep = outputs
     if video is not None:
         from skatelib.proving.twin.track import video_path

@@ -140,7 +140,9 @@ def twin_library(path: Path, kind: str, other_kind: str, modules: Sequence[str])
 
 def check_twin(path: Path, perturb: str) -> MotionLibrary:
     """The library at ``path`` for the twin: a quadruped one, ``perturb`` valid and MuJoCo there."""
-    lib = twin_library(path, "quadruped", "the twin is a quadruped's; this library is ",
+    lib = twin_library(path, "quadruped", "the MPC and whole-body controller ride a quadruped's entries on its twin "
+                       "(a humanoid library is executed on its own twin by `skatelib track LIB --plant mujoco` or "
+                       "skatelib.validate(LIB, closed_loop=True, plant='mujoco')); this library is ",
                        ("skatelib.control.params", "skatelib.sim.errors"))
     from skatelib.control.params import SkateParams
     from skatelib.sim.errors import parse_twin_perturbation
