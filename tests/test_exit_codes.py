@@ -46,7 +46,8 @@ def test_an_unknown_option_is_usage(command):
     ["info", "{missing}"], ["validate", "{missing}"], ["inspect", "{missing}", "--save", "{tmp}/x.rrd"],
     ["plot", "{missing}", "-o", "{tmp}/fig"], ["track", "{missing}"], ["diff", "{missing}", "{ref}"],
     ["diff", "{ref}", "{missing}"], ["export", "{missing}", "-f", "csv", "-o", "{tmp}/csv"],
-    ["model", "{damaged}", "--twin", "{tmp}/t.xml"], ["info", "{damaged}"], ["build", "{tiny}", "--check", "{missing}"],
+    ["model", "{damaged}", "--twin", "{tmp}/t.xml"], ["model", "{missing}", "--twin", "{tmp}/t.xml"],
+    ["info", "{damaged}"], ["build", "{tiny}", "--check", "{missing}"],
     ["certify", "{missing}"], ["certify", "{damaged}"],
 ])
 def test_a_missing_or_damaged_library_is_3(tmp_path, args):
