@@ -205,11 +205,13 @@ def build_section(path: Path, prefix: str, cls: type, data: dict[str, Any]) -> A
     return cls(**kwargs)
 
 
-def sections(path: Path, data: dict[str, Any], tables: dict[str, type]) -> dict[str, Any]:
-    """Validate every table of a config; unknown or missing tables are errors."""
+def sections(path: Path, data: dict[str, Any], tables: dict[str, type], optional: tuple[str, ...] = ()
+             ) -> dict[str, Any]:
+    """Validate every table of a config; unknown or missing tables are errors. ``optional``: the
+    tables the caller reads itself (taken out of ``data``), named among the allowed ones."""
     unknown = set(data) - set(tables)
     if unknown:
-        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join(tables)}")
+        raise ConfigError(path, sorted(unknown)[0], f"unknown table; allowed: {', '.join([*tables, *optional])}")
     out = {}
     for name, cls in tables.items():
         if name not in data:

@@ -180,6 +180,22 @@ def test_a_toe_off_longer_than_the_push_is_a_config_error(tmp_path):
         load_config(p)
 
 
+@pytest.mark.parametrize(("extra", "field"), [
+    ("[board]\ndeck_height_m = 0.0\n", r"board\.deck_height_m.*above the axles"),  # the deck on the floor
+    ("[board]\ndeck_height_m = 0.04\n", r"board\.deck_height_m"),  # below the axles and a deck's thickness
+    ("[humanoid]\ncom_height_m = 1.5\n", r"humanoid\.com_height_m.*outside the legs' reach"),
+    ("[skate]\ntransition_com_height_m = 0.4\n", r"skate\.transition_com_height_m.*0\.45 to 0\.92"),
+    ("[boardd]\ndeck_height_m = 0.1\n", r"boardd.*allowed: .*board"),  # the board among the allowed tables
+])
+def test_a_skate_that_cannot_stand_is_a_config_error(tmp_path, extra, field):
+    """A deck on the floor or under its axles, a COM out of the legs' reach (standing or at the
+    transition), a misspelt table: refused before any solve, naming the field and why."""
+    p = tmp_path / "x.toml"
+    p.write_text(f'extends = "{SKATE.as_posix()}"\n{extra}')
+    with pytest.raises(ConfigError, match=field):
+        load_config(p)
+
+
 def test_humanoid_build_goes_the_one_build_path(hrp2_skate_build, tmp_path):
     """`skatelib build` of a humanoid config runs through the same sweep as a quadruped's: its motions
     solve as tasks in worker processes (-j 2, the session's build from an empty cache), a second

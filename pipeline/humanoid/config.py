@@ -144,6 +144,8 @@ class HumanoidConfig:
             d.pop("board", None)
         return json.dumps(d, sort_keys=True)
 
+DECK_THICKNESS_M = 0.015  # a 7-ply maple deck, as the twin builds it (skatelib.sim.figures)
+
 _HUMANOID_SECTIONS: dict[str, type] = {
     "meta": MetaConfig, "humanoid": HumanoidModelConfig, "gpm": GpmConfig, "walk": WalkConfig,
     "skate": SkateConfig, "sweep": HumanoidSweepConfig, "wholebody": WholebodyConfig,
@@ -163,7 +165,8 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
     data = {**data, "wholebody": data.get("wholebody", {})}  # an optional table: its defaults
     board = _board(path, data)
     data = {k: v for k, v in data.items() if k != "board"}
-    cfg = HumanoidConfig(path=path.resolve(), text=text, **sections(path, data, _HUMANOID_SECTIONS), board=board)
+    tables = sections(path, data, _HUMANOID_SECTIONS, ("board",))
+    cfg = HumanoidConfig(path=path.resolve(), text=text, **tables, board=board)
     urdf = cfg.wholebody.urdf_path(cfg.path)
     if not urdf.is_file():
         raise ConfigError(path, "wholebody.urdf", f"{urdf} is not a file; name a URDF, or leave the key out for "
@@ -174,6 +177,7 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
         raise ConfigError(path, "gpm.solver", f"{cfg.gpm.solver!r}: use 'ipopt' or 'sqp'")
     if cfg.humanoid.leg_min_m >= cfg.humanoid.leg_max_m:
         raise ConfigError(path, "humanoid.leg_min_m", "must be below humanoid.leg_max_m")
+    _check_reach(path, cfg)
     if cfg.skate.toe_off_s > cfg.skate.push_s:
         raise ConfigError(path, "skate.toe_off_s", f"{cfg.skate.toe_off_s} s is longer than the push "
                                                    f"(skate.push_s = {cfg.skate.push_s} s): the heel rises within it")
@@ -183,6 +187,17 @@ def from_toml(path: Path, data: dict[str, Any], text: str) -> HumanoidConfig:
         raise ConfigError(path, "sweep.velocities_mps", "is empty: list at least one speed")
     check_unique_keys(path, cfg.sweep.velocities_mps)
     return cfg
+
+
+def _check_reach(path: Path, cfg: HumanoidConfig) -> None:
+    """Standing, the COM is its height over the sole it stands on: a height outside the legs' reach
+    (Eq. 21's r_min to r_max) has no plan, which the solver would spend its iterations finding out."""
+    h = cfg.humanoid
+    for key, height in (("humanoid.com_height_m", h.com_height_m),
+                        ("skate.transition_com_height_m", cfg.skate.transition_com_height_m)):
+        if not h.leg_min_m < height < h.leg_max_m:
+            raise ConfigError(path, key, f"{height} m is outside the legs' reach, humanoid.leg_min_m to leg_max_m "
+                                         f"({h.leg_min_m} to {h.leg_max_m} m): the COM stands that high over its sole")
 
 
 def _check_skate(path: Path, cfg: HumanoidConfig) -> None:
@@ -202,6 +217,10 @@ def _check_skate(path: Path, cfg: HumanoidConfig) -> None:
         raise ConfigError(path, "board.foot_ahead_m", f"the soles span {rear:+.3f} to {front:+.3f} m along the deck "
                                                       f"(its ends at +-{b.deck_length_m / 2:.3f} m): move the board "
                                                       "foot, or change skate.landing_behind_m or the deck's length")
+    if b.deck_height_m < b.wheel_radius_m + DECK_THICKNESS_M:
+        raise ConfigError(path, "board.deck_height_m", f"{b.deck_height_m} m: the deck's top stands a deck's "
+                                                       f"thickness ({DECK_THICKNESS_M} m) at least above the axles "
+                                                       f"(board.wheel_radius_m = {b.wheel_radius_m} m)")
     if h.foot_width_m > b.deck_width_m:
         raise ConfigError(path, "board.deck_width_m", f"{b.deck_width_m} m is narrower than a sole "
                                                       f"({h.foot_width_m} m): widen the deck")
