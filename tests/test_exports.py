@@ -107,19 +107,27 @@ def test_quaternion_matches_the_rotation():
 
 
 def test_failed_entries_are_left_out_and_named(tmp_path):
-    """A library whose one entry failed: the export writes no file for it and says so."""
+    """A library with a failed entry beside a solved one: the export writes the solved one's file
+    alone and names the one left out; a library whose only entry failed: exit 1, nothing to export,
+    no folder made."""
     from skatelib.library import schema
     from skatelib.library.writer import write_library
 
     from tests.test_cpp_reader import _entry, _root
 
     good = _entry(0.3, 1, False)
-    bad = type(good)(good.key, {**good.attrs, schema.A_SUCCESS: False, schema.A_STATUS: "Infeasible"},
-                     good.arrays, good.columns, good.units)
-    lib = write_library(tmp_path / "f.h5", _root(), dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0), {}, {}, [bad])
+    other = _entry(0.4, 1, False)
+    bad = type(other)(other.key, {**other.attrs, schema.A_SUCCESS: False, schema.A_STATUS: "Infeasible"},
+                      other.arrays, other.columns, other.units)
+    model = dict.fromkeys(schema.QUADRUPED_MODEL_ATTRS, 1.0)
+    lib = write_library(tmp_path / "f.h5", _root(), model, {}, {}, [good, bad])
     r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "csv")])
     assert r.returncode == 0 and "left out 1 failed entry" in r.stdout, r.stdout + r.stderr
-    assert list((tmp_path / "csv").iterdir()) == []
+    assert {p.name for p in (tmp_path / "csv").iterdir()} == {f"{good.key}.csv"}
+    lib = write_library(tmp_path / "g.h5", _root(), model, {}, {}, [bad])
+    r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "none")])
+    assert r.returncode == 1 and "nothing to export" in r.stdout, r.stdout + r.stderr
+    assert not (tmp_path / "none").exists()
 
 
 REFERENCE = Path(__file__).parent / "data" / "tiny-reference.h5"  # two solved entries

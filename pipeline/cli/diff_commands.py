@@ -77,6 +77,10 @@ def export(
         check_folder(out)
     from skatelib.runtime import MotionLibrary
 
+    if not any(e.success for e in MotionLibrary.open(library)):
+        console.print(escape(f"{library}: no entry of this library was solved: nothing to export"))
+        raise typer.Exit(1)
+
     written = write(library, fmt.value, out)
     if written:
         more = " ..." if len(written) > 1 else ""
