@@ -203,3 +203,22 @@ def test_other_knots_give_both_durations(tmp_path):
     shapes = {s.name: (s.a, s.b) for s in change.shapes}
     assert shapes["t"] == ([len(t)], [len(t) - 1])
     assert shapes["duration [s]"] == (pytest.approx(t[-1] - t[0]), pytest.approx(t[-2] - t[0]))
+
+
+def test_validate_names_stored_figures_that_its_checks_do_not_give(tmp_path):
+    """A library whose physics_json claims a Coulomb margin of 5 N (its arrays give about 2.4 N),
+    sealed again: validate names the stored and the computed figure; the untouched reference has
+    no such note (the same code gives the same numbers)."""
+    from skatelib.pipeline.quadruped.kind import stored_figures_note
+
+    def claimed(r):
+        physics = json.loads(r.attrs["physics_json"])
+        return type(r)(r.key, {**r.attrs, "physics_json": json.dumps({**physics, "min_friction_margin_N": 5.0})},
+                       r.arrays, r.columns, r.units)
+
+    r = run_cli(["validate", str(_doctored(tmp_path / "claimed.h5", claimed))])
+    line = next(x for x in r.stdout.splitlines() if x.startswith(KEY))
+    assert "stored figures differ" in line and "min_friction_margin_N 5 stored" in line, r.stdout
+    assert "stored figures differ" not in run_cli(["validate", str(REFERENCE)]).stdout
+    assert stored_figures_note('{"max_defect": 1e-5}', {"max_defect": 1e-5 * (1 + 1e-12)}) == ""
+    assert "max_defect" in stored_figures_note('{"max_defect": 1e-5}', {"max_defect": 2e-5})

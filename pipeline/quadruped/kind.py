@@ -105,8 +105,26 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         figures = {"momentum_speed_mps": rep.momentum_speed_mps, "momentum_speed_error": rep.momentum_speed_error,
                    "min_friction_margin_N": rep.min_friction_margin_N, "max_defect": rep.max_defect,
                    "max_torque_rigid_legs_Nm": rep.max_torque_rigid_legs_Nm}
-        report(e.key, "failed" if failures else "ok", ok if not failures else "; ".join(failures), figures)
+        note = stored_figures_note(e.attrs.get("physics_json"), figures)
+        report(e.key, "failed" if failures else "ok", (ok if not failures else "; ".join(failures)) + note, figures)
     return bad + validate_chain(lib, report)
+
+
+def stored_figures_note(stored_json: Any, figures: dict[str, float]) -> str:
+    """What a library's stored figures (``physics_json``, which ``info`` and ``diff`` show) say
+    otherwise than the checks just made of its arrays: nothing when they agree (the same code gives
+    the same numbers), else a note naming each (another version of the checks made them, or the
+    file was edited and sealed again)."""
+    import json
+    import math
+
+    try:
+        stored = json.loads(stored_json) if stored_json is not None else {}
+    except ValueError:
+        return "; its stored figures (physics_json) cannot be read"
+    off = [f"{k} {stored[k]:.6g} stored, {v:.6g} now" for k, v in figures.items()
+           if isinstance(stored.get(k), (int, float)) and not math.isclose(stored[k], v, rel_tol=1e-9, abs_tol=1e-12)]
+    return f"; its stored figures differ from these checks': {', '.join(off)}" if off else ""
 
 
 def validate_chain(lib: MotionLibrary, report: ReportFn) -> int:
