@@ -105,7 +105,7 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
         figures = {"momentum_speed_mps": rep.momentum_speed_mps, "momentum_speed_error": rep.momentum_speed_error,
                    "min_friction_margin_N": rep.min_friction_margin_N, "max_defect": rep.max_defect,
                    "max_torque_rigid_legs_Nm": rep.max_torque_rigid_legs_Nm}
-        note = stored_figures_note(e.attrs.get("physics_json"), figures)
+        note = stored_figures_note(e.attrs.get(schema.A_PHYSICS), figures)
         report(e.key, "failed" if failures else "ok", (ok if not failures else "; ".join(failures)) + note, figures)
     return bad + validate_chain(lib, report)
 
