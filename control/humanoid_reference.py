@@ -14,8 +14,11 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.model import HumanoidModel
 from skatelib.runtime.entry import Entry
+from skatelib.runtime.references import real
 
 GROUND_M = 0.002  # a planned sole this close to the ground supports
+# The arrays a humanoid entry holds of its whole body (format 1.3 on, where its COM motion held).
+WHOLE_BODY = (schema.D_JOINTS, schema.D_BASE_POSE, schema.D_FEET, schema.D_COM_REFERENCE, schema.D_ZMP)
 
 
 def _cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -154,7 +157,17 @@ class HumanoidReference:
     """An entry's whole body sampled at any time (linear between knots, clamped at the ends)."""
 
     def __init__(self, entry: Entry, model: HumanoidModel):
+        """Raises:
+            ValueError: For an entry without a humanoid's whole body (a quadruped's, or a humanoid's
+                whose COM motion failed), naming it and the arrays it lacks.
+        """
         a = entry.arrays
+        missing = [d for d in WHOLE_BODY if d not in a]
+        if missing:
+            what = ("a quadruped's entry, not a humanoid's" if entry.board_pos is not None else
+                    "a humanoid entry without its whole body (its COM motion failed, or a library before format 1.3)")
+            raise ValueError(f"HumanoidReference: {entry.key!r} is {what}: it has no {', '.join(missing)}; take an "
+                             "entry of a humanoid library whose whole body was solved")
         self.t = np.asarray(entry.t, dtype=float)
         self.q = np.asarray(a[schema.D_JOINTS])
         self.base = np.asarray(a[schema.D_BASE_POSE])
@@ -203,8 +216,8 @@ class HumanoidReference:
     def sample(self, t: float) -> ReferenceSample:
         """The reference at ``t`` [s]; from the end on, the static hold of the last knot: no motion,
         the ZMP under the COM (a plan's last knots may still have it elsewhere). A ValueError for
-        a ``t`` that is not finite."""
-        if not math.isfinite(t):
+        a ``t`` that is not one finite real number."""
+        if not real(t):
             raise ValueError(f"sample(t): t must be a finite time in seconds, got {t!r}")
         k, w, last = self._knot(t)
         x = (1 - w) * self._knots[k] + w * self._knots[k + 1]

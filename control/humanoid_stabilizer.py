@@ -35,35 +35,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from skatelib.control import humanoid_native
-from skatelib.control.feedback import check_arrays
+from skatelib.control.feedback import StateError, check_arrays
+from skatelib.control.humanoid_gains import StabilizerGains as StabilizerGains  # this module's API too
 from skatelib.control.humanoid_kinematics import HumanoidKinematics, solve_rows
 from skatelib.control.humanoid_reference import ReferenceSample
+from skatelib.runtime.references import real
 
 MIN_LOAD_N = 30.0  # a sole carrying less is not in the measured ZMP
 TOE_OFF_RAD = 0.01  # a support sole planned pitched more than this stands on its toe
-
-
-@dataclass(frozen=True)
-class StabilizerGains:
-    """The stabilizer's figures (chosen; docs/humanoid-twin.md says how they were found)."""
-
-    dcm_gain_per_s: float = 3.0  # k: the desired ZMP's DCM feedback
-    velocity_cutoff_hz: float = 15.0  # the COM velocity's low-pass filter
-    offset_rate_per_s: float = 1.0  # the COM offset observer's rate
-    polygon_margin_m: float = 0.01  # the desired ZMP this far inside the support polygon
-    ankle_damping_Nms_per_rad: float = 400.0  # D
-    ankle_return_s: float = 0.5  # T
-    ankle_tilt_max_rad: float = 0.1
-    com_shift_max_m: float = 0.08
-    com_mode: str = "velocity"  # or "lip"
-    com_velocity_gain_per_s: float = 2.0  # k_c
-    landing_load_N: float = 50.0  # a swing sole this loaded near its touchdown has landed
-    landing_window_m: float = 0.01  # near: the plan has it this low over its foothold
-    swing_height_gain_per_s: float = 30.0  # a swing sole's height error (measured: encoders, IMU) integrated
-    swing_return_s: float = 0.1  # a support sole's lift returns to the plan at this time constant
-    landing: bool = True  # the landing detection (off: the clock alone says when a sole lands)
-    enabled: bool = True
-    compiled: bool = True  # the tick's arithmetic in C (humanoid_native) when a C compiler is there
+QUAT_NORM_TOL = 1e-3  # the IMU's quaternion this close to unit length (pinocchio does not normalize it)
 
 
 @dataclass(frozen=True)
@@ -94,16 +74,35 @@ def _anchors(r: ReferenceSample) -> np.ndarray:
     return sup
 
 
+def _unit(quat_xyzw: np.ndarray) -> np.ndarray:
+    """The IMU's attitude normalized (pinocchio would scale the body by its squared norm: a COM
+    estimate off by decimetres).
+
+    Raises:
+        StateError: Beyond :data:`QUAT_NORM_TOL` of unit length (a zero one is no attitude, not upright).
+    """
+    n = math.hypot(*quat_xyzw.tolist())  # a fifth of numpy's norm on four numbers
+    if not abs(n - 1.0) <= QUAT_NORM_TOL:
+        raise StateError(f"sensors.quat_xyzw is not a unit quaternion ({quat_xyzw!r}: norm {n:.6g}, 1 +- "
+                         f"{QUAT_NORM_TOL:g} expected): the IMU's attitude is wrong; skip it, hold the last command "
+                         "or stop (nothing has used it)")
+    return quat_xyzw if abs(n - 1.0) <= 1e-12 else quat_xyzw / n  # an IMU's unit quaternion as it came
+
+
 class LipStabilizer:
     """One robot's stabilizer state, ticked at a fixed rate (with the C tick, :attr:`native`
     holds the state and the attributes here stay at their start)."""
 
     def __init__(self, kin: HumanoidKinematics, dt: float, gains: StabilizerGains | None = None):
+        """``dt``: the tick's period [s]; a ValueError if not finite, not above 0 (the filters divide
+        by it) or beyond the gains' time constants (their decays, one explicit step a tick, would overshoot)."""
         self.kin, self.dt, self.g = kin, dt, gains or StabilizerGains()
-        self.dc, self.dv, self.acc = np.zeros(2), np.zeros(2), np.zeros(2)
-        self.offset = np.zeros(2)
+        shortest = min(self.g.ankle_return_s, self.g.swing_return_s)
+        if not (real(dt) and 0.0 < dt <= shortest):
+            raise ValueError(f"LipStabilizer(dt={dt!r}): the tick's period, a finite number of seconds above 0 and at "
+                             f"most {shortest:g} (the gains' ankle_return_s, swing_return_s)")
+        self.dc, self.dv, self.acc, self.offset, self.lift = (np.zeros(2) for _ in range(5))
         self.tilt = np.zeros((2, 2))
-        self.lift = np.zeros(2)
         self.swing_z = np.zeros(2)  # the soles' heights by kinematics, anchored on the support soles
         self.rel_prev: np.ndarray | None = None
         self.support_prev: tuple[bool, bool] = (True, True)
@@ -157,10 +156,13 @@ class LipStabilizer:
     def tick(self, r: ReferenceSample, q: np.ndarray, quat_xyzw: np.ndarray, force: np.ndarray,
              torque: np.ndarray) -> StabilizerOutput:
         """Joint targets from the sensors (``force``, ``torque``: (2, 3) the ground side's wrench on
-        each foot at its ankle sensor, foot frame) and the reference at this instant; a
-        ``StateError`` naming a sensor of another shape or not finite (nothing of it used)."""
+        each foot at its ankle sensor, foot frame; any array-like) and the reference at this instant;
+        a ``StateError`` naming a sensor of another shape, not finite, or an attitude that is no unit
+        quaternion (nothing of it used)."""
+        q, quat_xyzw, force, torque = np.asarray(q), np.asarray(quat_xyzw), np.asarray(force), np.asarray(torque)
         check_arrays("sensors", {"q": (q, (self.kin.model.nq - 7,)), "quat_xyzw": (quat_xyzw, (4,)),
                                  "force": (force, (2, 3)), "torque": (torque, (2, 3))})
+        quat_xyzw = _unit(quat_xyzw)
         if self.native is not None:
             return self._tick_native(self.native, r, q, quat_xyzw, force, torque)
         g, dt = self.g, self.dt
