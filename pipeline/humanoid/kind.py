@@ -37,10 +37,12 @@ def print_model(cfg: HumanoidConfig) -> None:
 
 
 def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
-    """Every step's GPM nodes against the plan stored with the entry, and its whole body's checks
-    when it has one; returns the failures."""
+    """Every step's GPM nodes against the plan stored with the entry, the arrays it serves a
+    controller (:func:`.verify.served_failures`), and its whole body's checks when it has one;
+    returns the failures."""
     from skatelib.pipeline.humanoid.motion import step_model, stored_plan
-    from skatelib.pipeline.humanoid.verify import check_steps, failures
+    from skatelib.pipeline.humanoid.served import Served
+    from skatelib.pipeline.humanoid.verify import check_steps, failures, served_failures
 
     try:
         cfg = config_from_json(str(lib.attrs[schema.A_CONFIG_RESOLVED]), lib.path, None, HumanoidConfig)
@@ -57,8 +59,8 @@ def validate_entries(lib: MotionLibrary, report: ReportFn) -> int:
             continue
         plan = stored_plan(lib, e)  # as solved, not as today's code would plan it
         nodes = (e.arrays[schema.D_NODES_T], e.arrays[schema.D_NODES_STATE], e.arrays[schema.D_NODES_CONTROL])
-        rep = check_steps(plan, *nodes, step_model(cfg))
-        fails = failures(rep)
+        model = step_model(cfg)
+        fails = failures(check_steps(plan, *nodes, model)) + served_failures(Served.of(e.arrays), plan, model.g)
         if schema.D_JOINTS in e.arrays:  # the whole body (format 1.3), by its own checks
             if robot is None:
                 fails.append("whole body: the library stores no robot description (/model/robot_urdf) to check it on")

@@ -1,14 +1,18 @@
 """Independent checks of humanoid GPM steps: everything from stored node values and the step
-plan, with scipy's barycentric interpolation and numpy polynomials (not skatelib's GPM code)."""
+plan, with scipy's barycentric interpolation and numpy polynomials (not skatelib's GPM code); and
+of the arrays an entry serves a controller: their shapes, times and step indices here, their
+physics in :mod:`.served`."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
 from skatelib.pipeline.humanoid.config import HumanoidConfig
 from skatelib.pipeline.humanoid.motion import Motion, node_arrays, step_model
+from skatelib.pipeline.humanoid.served import TIME_TOL_S, Served, physics_failures, steps_of
 from skatelib.pipeline.humanoid.step import StepModel, StepSpec
 
 
@@ -102,8 +106,95 @@ def failures(report: dict[str, float], tol: float = 1e-6) -> list[str]:
 
 
 def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
-    """The independent step checks (``skatelib validate``'s) on a solved motion's node values."""
+    """The independent checks (``skatelib validate``'s) on a solved motion: its node values and the
+    arrays the library will serve."""
     if not motion.success:
         return ()
     nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)
-    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, step_model(config))))
+    model = step_model(config)
+    served = Served(motion.t, motion.state, motion.control, motion.zmp, motion.contact_point, motion.step_index,
+                    nodes_t, nodes_state, nodes_control, np.stack([r.P0 for r in motion.steps]))
+    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, model))
+                 + served_failures(served, list(motion.plan), model.g))
+
+
+def served_failures(s: Served, plan: list[StepSpec], g: float) -> list[str]:
+    """What is wrong with the arrays an entry serves (empty: they hold), each message naming the
+    array: shapes and finite numbers first, then times (the physics interpolates in them), then
+    ``step_index`` and the physics of :mod:`.served`."""
+    found = _shape_failures(s, len(plan)) or _finite_failures(s)
+    found = found or _time_failures(s, plan)
+    if found:
+        return found
+    return _step_index_failures(s, steps_of(s.t, s.nodes_t)) + physics_failures(s, plan, g)
+
+
+def _shape_failures(s: Served, n_steps: int) -> list[str]:
+    """Every array's shape against ``t``'s K knots and the plan's S steps of N nodes."""
+    K, S = len(s.t), len(s.nodes_t)
+    N = s.nodes_control.shape[1] if s.nodes_control.ndim == 3 else -1
+    want = {"t": (K,), "state": (K, 6), "control": (K - 1, 3), "zmp": (K, 2), "contact_point": (K, 3),
+            "step_index": (K,), "nodes_t": (S, N + 2), "nodes_state": (S, N + 2, 6), "nodes_control": (S, N, 3),
+            "nodes_contact_point": (S, N, 3)}
+    found = [f"{name}: shape {getattr(s, name).shape}, expected {shape} (K = {K} knots, S = {S} steps, "
+             f"N = {N} nodes)" for name, shape in want.items() if getattr(s, name).shape != shape]
+    if n_steps != S:
+        found.append(f"nodes_t: {S} steps; the plan stored with the entry has {n_steps}")
+    if K < 2 or S < 1:
+        found.append(f"t: {K} knots and nodes_t {S} steps; a motion has at least 2 and 1")
+    return found
+
+
+def _finite_failures(s: Served) -> list[str]:
+    """Every array of numbers, and finite."""
+    found = []
+    for f in dataclasses.fields(Served):
+        a = getattr(s, f.name)
+        if a.dtype.kind not in "iuf":
+            found.append(f"{f.name}: dtype {a.dtype}, expected numbers")
+        elif not np.isfinite(a).all():
+            rows = np.flatnonzero(~np.isfinite(a.reshape(len(a), -1)).all(axis=1))
+            found.append(f"{f.name}: not finite at row {int(rows[0])}")
+    return found
+
+
+def _time_failures(s: Served, plan: list[StepSpec]) -> list[str]:
+    """``t`` strictly increasing from the first step's start to the last step's end; the steps'
+    node times increasing, each step starting where the one before ended and lasting as planned."""
+    found = []
+    bad = np.flatnonzero(np.diff(s.t) <= 0)
+    if len(bad):
+        k = int(bad[0])
+        found.append(f"t: not strictly increasing at knot {k + 1} (t[{k}] = {s.t[k]:.6f} s, t[{k + 1}] = "
+                     f"{s.t[k + 1]:.6f} s)")
+    nt = s.nodes_t
+    for name, have, want in (("starts", s.t[0], nt[0, 0]), ("ends", s.t[-1], nt[-1, -1])):
+        if abs(have - want) > TIME_TOL_S:
+            found.append(f"t: {name} at {have:.6f} s, nodes_t at {want:.6f} s")
+    late = np.abs(nt[1:, 0] - nt[:-1, -1]) > TIME_TOL_S
+    long = np.abs(nt[:, -1] - nt[:, 0] - np.array([spec.duration_s for spec in plan])) > TIME_TOL_S
+    for name, steps in (("are not increasing", (np.diff(nt, axis=1) <= 0).any(axis=1)),
+                        ("do not start where the step before ends", np.r_[False, late]),
+                        ("do not span the planned duration", long)):
+        if steps.any():
+            found.append(f"nodes_t: the times of step {int(np.argmax(steps))} {name}")
+    return found
+
+
+def _step_index_failures(s: Served, steps: np.ndarray) -> list[str]:
+    """``step_index`` integer, non-decreasing, and the step ``nodes_t`` puts each knot in."""
+    si = s.step_index
+    if si.dtype.kind not in "iu":
+        return [f"step_index: dtype {si.dtype}, expected integers"]
+    found = []
+    down = np.flatnonzero(np.diff(si) < 0)
+    if len(down):
+        k = int(down[0]) + 1
+        found.append(f"step_index: decreases at knot {k} (t = {s.t[k]:.3f} s) from {si[k - 1]} to {si[k]}")
+    wrong = np.flatnonzero(si != steps)
+    if len(wrong):
+        k = int(wrong[0])
+        starts = ", ".join(f"{x:g}" for x in s.nodes_t[1:, 0])
+        found.append(f"step_index: {si[k]} at knot {k} (t = {s.t[k]:.3f} s), nodes_t puts it in step {steps[k]} "
+                     f"(steps change at t = {starts} s; {len(wrong)} knots differ)")
+    return found
