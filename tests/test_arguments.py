@@ -125,3 +125,26 @@ def test_the_twin_rides_on_the_estimate_unless_told_and_refuses_noise_it_would_n
         told = CliRunner().invoke(app, ["track", lib_copy, "--plant", "mujoco", "--state", "true", "--perturb", text,
                                         "-e", "v9.99_s9"])
         assert "v9.99_s9" in str(told.exception) + told.output and instead not in told.output, told.output
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["--plant", "mujoco", "-e", "v0.30_s1", "--draw", "5", "--save", "x.rrd"], "leave out --save"),
+    (["--plant", "mujoco", "-e", "v0.30_s1", "--draw", "5", "--perturb", "mu=0.4", "--seed", "3"],
+     "leave out --perturb, --seed"),
+    (["--plant", "mujoco", "-e", "v0.30_s1", "--draw", "5", "--report", "r.html"], "leave out --report"),
+    (["--maneuver", "steer", "--save", "x.rrd"], "records none: leave out --save"),
+    (["--maneuver", "steer", "-e", "v0.30_s1"], "leave out --entry"),
+    (["--plant", "mujoco", "--maneuver", "steer", "-e", "v0.30_s1"], "leave out --entry"),
+    (["-e", "v0.30_s1", "--state", "true"], "add --plant mujoco"),
+])
+def test_options_a_ride_would_leave_unused_are_refused(tmp_path, args, words):
+    """A certificate's draw rides as drawn (its errors, noise, state; no recording or report), the
+    steering maneuver rides no entry and records nothing, the model plant feeds its own state:
+    each option they would leave unused is refused, named, before any ride (it was dropped
+    without a word)."""
+    pytest.importorskip("mujoco")
+    lib = tmp_path / "lib.h5"
+    shutil.copyfile(REFERENCE, lib)
+    r = subprocess.run([*CLI, "track", str(lib), *args], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 2 and words in " ".join(r.stderr.split()), r.stdout + r.stderr
+    assert not (tmp_path / "x.rrd").exists() and not (tmp_path / "r.html").exists()

@@ -15,7 +15,7 @@ from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED
 MAX_ATOL = 1e6  # --atol, in each channel's unit: beyond it every library equals every other
 MAX_RTOL = 1.0  # --rtol: 1 lets a value differ by its own size
 
-__all__ = ["MAX_ATOL", "MAX_JOBS", "MAX_RTOL", "MAX_SEED", "allowed", "finite", "perturbation"]
+__all__ = ["MAX_ATOL", "MAX_JOBS", "MAX_RTOL", "MAX_SEED", "allowed", "distinct", "finite", "perturbation"]
 
 
 def finite(param: typer.CallbackParam, value: Any) -> Any:
@@ -28,6 +28,11 @@ def finite(param: typer.CallbackParam, value: Any) -> Any:
         if isinstance(v, float) and not math.isfinite(v):
             raise typer.BadParameter(f"{v} is not a finite number; allowed: {allowed(param)}")
     return value
+
+
+def distinct(value: list[str] | None) -> list[str] | None:
+    """A repeated option's values, each once, in the order first given (``-e K -e K`` rides K once)."""
+    return list(dict.fromkeys(value)) if value else value
 
 
 def allowed(param: typer.CallbackParam) -> str:

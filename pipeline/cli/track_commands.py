@@ -18,7 +18,7 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
-from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, finite
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, distinct, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
@@ -51,11 +51,13 @@ class StateKind(enum.StrEnum):
 DEFAULT_STATE = StateKind(DEFAULT_TWIN_STATE)
 
 
+EntryOpt = Annotated[list[str] | None, typer.Option(
+    "--entry", "-e", callback=distinct, help="Entry key (repeatable); all successful ones by default.")]
+
+
 def track(
     library: LibArg,
-    entry: Annotated[list[str] | None,
-                     typer.Option("--entry", "-e", help="Entry key (repeatable); all successful ones by default.")
-                     ] = None,
+    entry: EntryOpt = None,
     perturb: PerturbOpt = DEFAULT_PERTURB,
     solver: Annotated[QpSolver, typer.Option(help="QP solver: daqp or proxqp (condensed, dense), osqp (sparse).")
                       ] = QpSolver.daqp,
@@ -86,42 +88,70 @@ def track(
 ) -> None:
     """Closed loop: the paper's MPC (30 Hz) drives a plant with model error through each entry, the transfer
     and 1.5 s of riding (exit 1 if any fails): the model plant, the twin (--plant mujoco), a humanoid's twin."""
-    entry = list(dict.fromkeys(entry)) if entry else entry  # an entry named twice is tracked once
     if is_humanoid(library):
         quadruped_only = (ride is not None or maneuver is not Maneuver.entries or (report, draw, mpc_mu) != (None,) * 3
                           or state is not DEFAULT_STATE or solver is not QpSolver.daqp)
         return track_humanoid(library, entry, None if perturb == DEFAULT_PERTURB else perturb,
                               (plant is PlantKind.mujoco, quadruped_only), (jobs, progress, seed), (save, video))
-    mpc, settings = _controller(solver, mpc_mu, seed, state)
+    mpc, settings = _controller(solver, mpc_mu, seed, state, plant is PlantKind.mujoco)
     if draw is not None:
-        return track_draw(library, entry, draw, plant is PlantKind.mujoco, video, mpc)
+        refused = _given(save=save, report=report, ride=ride, maneuver=maneuver is not Maneuver.entries,
+                         perturb=perturb != DEFAULT_PERTURB, seed=seed != 0, state=state is not DEFAULT_STATE)
+        return track_draw(library, entry, draw, (plant is PlantKind.mujoco, video), (
+            refused, _given(solver=solver is not QpSolver.daqp, mpc_mu=mpc_mu), mpc))
     plant_error = plant_errors(perturb, plant is PlantKind.mujoco, state.value)
     _library_checked(library, maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco,
                      (report, ride if maneuver is Maneuver.entries else "the steering maneuver"))
     if ride is not None:
         return track_ride(library, ride, (plant_error, perturb), (mpc, settings), (save, video),
                            (maneuver is Maneuver.entries and not entry, plant is PlantKind.mujoco))
+    if maneuver is Maneuver.steer:
+        return _track_steer(library, plant is PlantKind.mujoco, (plant_error, perturb), (mpc, settings), jobs,
+                            _given(entry=entry, save=save, video=video))
     if plant is PlantKind.mujoco:
-        return _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), maneuver,
-                           (save, video, report))
+        return _track_twin(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), (save, video, report))
     if video is not None:
         raise SkatelibError("--video renders runs on the twin: add --plant mujoco")
-    if maneuver is not Maneuver.steer:
-        return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), (save, report))
-    return _track_steer(library, (plant_error, perturb), mpc, settings, jobs)
+    return _track_model(library, entry, plant_error, perturb, mpc, settings, (jobs, progress), (save, report))
 
 
-def _track_steer(library: Path, errors: tuple[str, str], mpc: Any, settings: Any, jobs: int) -> None:
-    """The steering maneuver on the model plant, at rest and at 0.5 m/s; exit 1 if it fails."""
+def _track_steer(library: Path, on_twin: bool, errors: tuple[str, str], controller: tuple[Any, Any], jobs: int,
+                 given: list[str]) -> None:
+    """The steering maneuver (four legs on the deck, at rest and at 0.5 m/s) on either plant; exit 1
+    if it fails. ``given``: options of the entries' runs, refused (it rides its own two runs)."""
+    if given:
+        raise SkatelibError(f"the steering maneuver rides its own two runs (no entry of the library) and records "
+                            f"none: leave out {', '.join(given)}")
     from skatelib.pipeline.build.sweep import run_calls
-    from skatelib.proving.track import steer_jobs
 
-    if steer_table(run_calls(steer_jobs(library, (0.0, 0.5), errors[0], mpc, settings), jobs), errors[1]):
+    (plant_error, perturb), (mpc, settings) = errors, controller
+    calls: list[Any]
+    if on_twin:
+        from skatelib.proving.twin.track import twin_steer_jobs
+
+        calls, title = twin_steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), (
+            f"{perturb} (MuJoCo twin, whole-body controller)")
+    else:
+        from skatelib.proving.track import steer_jobs
+
+        calls, title = steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), perturb
+    if steer_table(run_calls(calls, jobs), title):
         raise typer.Exit(1)
 
 
-def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind) -> tuple[Any, Any]:
-    """The MPC's and the run's settings (the controller's packages there, or the install hint)."""
+def _given(**options: Any) -> list[str]:
+    """The options given (a value, or True where a comparison with the default was made), as spelt."""
+    return [f"--{name.replace('_', '-')}" for name, v in options.items() if v is not None and v is not False]
+
+
+def _controller(solver: QpSolver, mpc_mu: float | None, seed: int, state: StateKind, on_twin: bool
+                ) -> tuple[Any, Any]:
+    """The MPC's and the run's settings (the controller's packages there, or the install hint); a
+    ``--state`` other than the default is the twin's alone (the model plant feeds its own state)."""
+    if state is not DEFAULT_STATE and not on_twin:
+        raise typer.BadParameter("what the controller is fed is chosen on the twin: add --plant mujoco (the model "
+                                 "plant feeds the controller its own state, with --perturb noise)",
+                                 param_hint="--state")
     from skatelib.pipeline.track_setup import controller
 
     return controller(solver.value, mpc_mu, seed, state.value)
@@ -167,22 +197,13 @@ def _track_model(library: Path, entry: list[str] | None, plant_error: str, pertu
 
 
 def _track_twin(library: Path, entry: list[str] | None, plant_error: str, perturb: str, mpc: Any, settings: Any,
-                runner: tuple[int, bool], maneuver: Maneuver,
-                outputs: tuple[Path | None, Path | None, Path | None]) -> None:
+                runner: tuple[int, bool], outputs: tuple[Path | None, Path | None, Path | None]) -> None:
     """``runner``: parallel jobs, and whether to show progress; ``outputs``: a recording, a video and a
     report."""
     jobs, progress = runner
-    from skatelib.pipeline.build.sweep import run_calls
-    from skatelib.proving.twin.track import twin_jobs, twin_steer_jobs
+    from skatelib.proving.twin.track import twin_jobs
 
     save, video, report = outputs
-    if maneuver is Maneuver.steer:
-        if save is not None or video is not None:
-            raise SkatelibError("--save and --video record the entries' runs, not the steering maneuver")
-        if steer_table(run_calls(twin_steer_jobs(library, (0.0, 0.5), plant_error, mpc, settings), jobs),
-                       f"{perturb} (MuJoCo twin, whole-body controller)"):
-            raise typer.Exit(1)
-        return
     save_closed_loop = recording(library, save)
     if video is not None:
         from skatelib.pipeline.build.preflight import check_output

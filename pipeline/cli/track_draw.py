@@ -15,9 +15,18 @@ from skatelib.pipeline.views.console import console
 from skatelib.pipeline.views.verdict_tables import twin_table
 
 
-def track_draw(library: Path, keys: list[str] | None, seed: int, on_twin: bool, video: Path | None,
-               mpc: Any) -> None:
-    """Ride entry ``keys[0]`` under the draw of ``seed``; exit 1 when it fails."""
+def track_draw(library: Path, keys: list[str] | None, seed: int, where: tuple[bool, Path | None],
+               controller: tuple[list[str], list[str], Any]) -> None:
+    """Ride entry ``keys[0]`` under the draw of ``seed``; exit 1 when it fails. ``where``: on the
+    twin, and a video to render; ``controller``: the options given that a draw does not take (its
+    errors, noise, state and outputs are the certificate's: refused), the controller's options
+    given (a ride under another controller than the certificate's: said so), and the MPC's config."""
+    refused, changed, mpc = controller
+    on_twin, video = where
+    if refused:
+        raise typer.BadParameter(f"--draw rides the certificate's draw as it was drawn (its errors, shove, noise "
+                                 f"and state) and writes a video at most: leave out {', '.join(refused)}",
+                                 param_hint="--draw")
     from skatelib.pipeline.certify_spec import library_spec
     from skatelib.proving.certify.draw import make_draw
     from skatelib.proving.certify.ride import ride_draw
@@ -41,8 +50,9 @@ def track_draw(library: Path, keys: list[str] | None, seed: int, on_twin: bool, 
                          f"x{e.kb_scale:.3f}, rolling x{e.rolling_scale:.3f}, deck x{e.deck_mass_scale:.3f}, motors "
                          f"x{e.motor_scale:.3f}; shove {draw.shove_Ns:.2f} N s toward "
                          f"{draw.shove_direction_rad:+.2f} rad at {100 * draw.shove_at:.0f} % of the entry"))
-    _, verdict = ride_draw(library, keys[0], spec, seed, mpc, video)
+    _, verdict = ride_draw(library, keys[0], spec, seed, mpc if changed else None, video)
     if video is not None:
         console.print(escape(f"wrote {video}"))
-    if twin_table([verdict], f"draw {seed} of the certificate's distributions ({spec.state} state fed)"):
+    note = f"; with {' and '.join(changed)} given: not the certificate's controller" if changed else ""
+    if twin_table([verdict], f"draw {seed} of the certificate's distributions ({spec.state} state fed{note})"):
         raise typer.Exit(1)
