@@ -63,11 +63,12 @@ def certify(path: Path, spec: CertifySpec, keys: Sequence[str] | None, options: 
     """
     from skatelib.proving.certify.draw import draw_seeds
     from skatelib.proving.certify.stats import summarize
+    from skatelib.proving.track import chosen_keys
     from skatelib.proving.twin.fingerprint import twin_fingerprint
     from skatelib.proving.twin.track import check_twin
 
     lib = check_twin(path, "")
-    chosen = list(keys) if keys else [e.key for e in lib if e.success]
+    chosen = chosen_keys(lib, keys)
     if not chosen:
         raise SkatelibError(f"{path}: no entry of this library was solved: nothing to certify")
     code = twin_fingerprint()
@@ -171,13 +172,14 @@ def certify_plan(path: Path, keys: Sequence[str] | None, samples: int | None, se
     import dataclasses
 
     from skatelib.pipeline.certify_spec import config_spec, library_spec
+    from skatelib.proving.track import chosen_keys
     from skatelib.proving.twin.track import check_twin
 
     lib = check_twin(path, "")  # a quadruped's library, MuJoCo there: before anything is printed or ridden
     spec = config_spec(config) if config is not None else library_spec(lib)
     spec = dataclasses.replace(spec, samples=spec.samples if samples is None else samples,
                                seed=spec.seed if seed is None else seed)
-    return spec, list(keys) if keys else [e.key for e in lib if e.success]
+    return spec, chosen_keys(lib, keys)
 
 
 def certify_into(path: Path, spec: CertifySpec, keys: Sequence[str], options: CertifyOptions,

@@ -65,6 +65,28 @@ class SteerJob:
         return steer(lib, self.spec.loop(lib), self.target_velocity_mps)
 
 
+def chosen_keys(lib: MotionLibrary, keys: Sequence[str] | None) -> list[str]:
+    """The entries a ride or a certificate asks for: ``keys`` (each once), or every successful entry
+    when None.
+
+    Raises:
+        TypeError: One string for the keys (one key is a list of one; a string would be ridden letter
+            by letter).
+        ValueError: No key (an empty list asks for nothing; it rode every entry before).
+        EntryNotFound: A key the library does not hold, naming the valid ones.
+    """
+    if keys is None:
+        return [e.key for e in lib if e.success]
+    if isinstance(keys, (str, bytes)):
+        raise TypeError(f"entries: a list of entry keys, not the string {keys!r} (one key: [{keys!r}])")
+    chosen = list(dict.fromkeys(keys))
+    if not chosen:
+        raise ValueError("entries: an empty list asks for no entry; give None for every successful one")
+    for k in chosen:
+        lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
+    return chosen
+
+
 def _quadruped(path: Path, perturb: str, what: str) -> MotionLibrary:
     lib = MotionLibrary.open(path)
     if lib.kind != "quadruped":
@@ -82,9 +104,7 @@ def track_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcCon
             entry key (naming the valid ones), before any work.
     """
     lib = _quadruped(path, perturb, "closed-loop tracking")
-    chosen = list(keys) if keys else [e.key for e in lib if e.success]
-    for k in chosen:
-        lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
+    chosen = chosen_keys(lib, keys)
     spec = JobSpec(str(path), perturb, mpc or MpcConfig(), settings or TrackSettings())
     return [TrackJob(spec, k, keep_runs) for k in chosen]
 

@@ -90,6 +90,8 @@ def test_the_shipped_config_by_name_loads(tmp_path):
     (lambda p: skatelib.track(REFERENCE, seed=-1), "seed=-1"),
     (lambda p: skatelib.track(REFERENCE, mpc_mu=float("nan")), "mpc_mu=nan"),
     (lambda p: skatelib.validate(REFERENCE, jobs=True), "jobs=True"),
+    (lambda p: skatelib.track(REFERENCE, []), "entries: an empty list asks for no entry"),  # not every entry
+    (lambda p: skatelib.certify(shutil.copy(REFERENCE, p.with_name("c.h5")), []), "entries: an empty list asks"),
 ])
 def test_arguments_out_of_range_are_named(tmp_path, call, message):
     """A wrong value of a typed argument is a ValueError naming the argument and what is allowed,

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from skatelib.control.mpc_config import MpcConfig
 from skatelib.control.settings import TrackSettings
 from skatelib.library.errors import SkatelibError
+from skatelib.proving.track import chosen_keys
 from skatelib.runtime import Entry, MotionLibrary
 
 if TYPE_CHECKING:  # MuJoCo's side, imported when a job runs (check_twin names the missing extra)
@@ -175,9 +176,7 @@ def twin_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcConf
     """
     video, keep_runs = outputs
     lib = check_twin(path, perturb)
-    chosen = list(keys) if keys else [e.key for e in lib if e.success]
-    for k in chosen:
-        lib[k]  # an unknown key raises EntryNotFound, naming the valid ones
+    chosen = chosen_keys(lib, keys)
     mpc, settings = mpc or MpcConfig(), settings or TrackSettings()
     if video is not None:
         from skatelib.sim.video import FORMATS
