@@ -153,9 +153,12 @@ def check_writable(path: Path, options: CertifyOptions) -> None:
 
     Raises:
         OutputError: The file cannot be rewritten.
-        SkatelibError: ``--backend dask`` without ``--scheduler``, or one nothing listens at.
+        SkatelibError: ``--backend dask`` without ``--scheduler``, or one nothing listens at; a
+            scheduler without the dask backend.
     """
     check_amendable(path)
+    if options.backend != "dask" and options.scheduler is not None:
+        raise SkatelibError("--scheduler names the dask cluster the rides go to: add --backend dask")
     if options.backend == "dask" and not hasattr(options.scheduler, "submit"):  # an address, not a Client
         if options.scheduler is None:
             raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")

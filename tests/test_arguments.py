@@ -148,3 +148,22 @@ def test_options_a_ride_would_leave_unused_are_refused(tmp_path, args, words):
     r = subprocess.run([*CLI, "track", str(lib), *args], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 2 and words in " ".join(r.stderr.split()), r.stdout + r.stderr
     assert not (tmp_path / "x.rrd").exists() and not (tmp_path / "r.html").exists()
+
+
+@pytest.mark.parametrize(("command", "words"), [
+    (["validate", "LIB", "--plant", "mujoco"], "add --closed-loop"),
+    (["validate", "LIB", "--perturb", "mu=0.3"], "add --closed-loop"),
+    (["certify", "LIB", "-e", "v0.30_s1", "--samples", "1", "--scheduler", "tcp://127.0.0.1:8786"],
+     "add --backend dask"),
+    (["build", "--scheduler", "tcp://127.0.0.1:8786"], "add --backend dask"),
+    (["track", "LIB", "-e", "v0.30_s1", "--save", "ride.txt"], "ending in .rrd"),
+])
+def test_an_option_of_another_mode_is_refused_naming_what_to_add(tmp_path, command, words):
+    """Options whose help says what they go with, given without it (the closed loop's plant and
+    errors, a dask scheduler, a recording not named .rrd), are refused, not left unused."""
+    lib = tmp_path / "lib.h5"
+    shutil.copyfile(REFERENCE, lib)
+    line = [str(lib) if a == "LIB" else a for a in command]
+    r = subprocess.run([*CLI, *line], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 2 and words in " ".join(r.stderr.split()), r.stdout + r.stderr
+    assert not (tmp_path / "ride.txt").exists()

@@ -82,6 +82,8 @@ def check_options(cfg: Any, opts: BuildOptions) -> None:
         if opts.scheduler is None:
             raise SkatelibError("--backend dask needs --scheduler tcp://HOST:PORT")
         check_scheduler(opts.scheduler)
+    elif opts.scheduler is not None:
+        raise SkatelibError("--scheduler names the dask cluster the build goes to: add --backend dask")
     kind_of(cfg).check(cfg, opts)
     if opts.cache:
         check_cache_dir()

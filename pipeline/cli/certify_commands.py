@@ -73,9 +73,9 @@ def certify(
             cert = certify_into(library, spec, keys, options, rates)
         except KeyboardInterrupt:
             done = sum(v[1] for v in rates.passed.values())
-            kept = f"{done} of {total} rides are cached" if cache else "nothing is cached (--no-cache)"
-            raise Interrupted(f"interrupted: {kept}; the library is unchanged. Run the same command to resume."
-                              ) from None
+            kept = (f"{done} of {total} rides are cached; the library is unchanged. Run the same command to resume"
+                    if cache else "nothing is cached (--no-cache); the library is unchanged")
+            raise Interrupted(f"interrupted: {kept}.") from None
     certificate_table(cert, str(library), stale_reasons(MotionLibrary.open(library), cert))
     console.print(escape(f"wrote the certificate into {library}"))
 

@@ -100,6 +100,9 @@ def validate(
 
     # the rides made (the file writable, --perturb parsed) before any check or ride
     rides = []
+    if not closed_loop and (perturb != DEFAULT_PERTURB or plant is not PlantKind.model):
+        raise typer.BadParameter("--perturb and --plant choose the closed-loop rides: add --closed-loop",
+                                 param_hint="--perturb" if perturb != DEFAULT_PERTURB else "--plant")
     if closed_loop:
         from skatelib.sim.humanoid.errors import HumanoidPerturbationError
 

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
 from skatelib.pipeline.views.console import console
@@ -41,6 +42,8 @@ def recording(library: Path, save: Path | None, writer: Callable[[], Any] | None
     asked for, its output checked before the runs; None when none is."""
     if save is None:
         return None
+    if save.suffix.lower() != ".rrd":
+        raise typer.BadParameter(f"{save}: a Rerun recording is written to a file ending in .rrd", param_hint="--save")
     from skatelib.pipeline.build.preflight import check_output
 
     try:
