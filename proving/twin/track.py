@@ -68,10 +68,9 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str | TwinErrors,
     and record (for a recording or a video). Returns the run
     (:class:`skatelib.proving.twin.loop.TwinRun`) and the plant it rode."""
     from skatelib.control.params import SkateParams
-    from skatelib.proving.setup import ClosedLoop
+    from skatelib.proving.setup import ClosedLoop, one_blas_thread
     from skatelib.proving.twin.loop import TwinLoop, TwinLoopSettings
     from skatelib.proving.twin.sensors import Sensors
-    from threadpoolctl import threadpool_limits
 
     mpc, settings = controller
     nominal = SkateParams.from_library(lib)
@@ -80,7 +79,7 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str | TwinErrors,
                     TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
                                      sensor_errors=errors.sensors, shove=shove),
                     keep=keep)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         run = loop.ride()
     return run, plant
 
@@ -97,18 +96,17 @@ class TwinSteerJob:
 
     def __call__(self) -> SteerResult:
         from skatelib.control.params import SkateParams
-        from skatelib.proving.setup import ClosedLoop
+        from skatelib.proving.setup import ClosedLoop, one_blas_thread
         from skatelib.proving.twin.loop import TwinLoopSettings
         from skatelib.proving.twin.sensors import Sensors
         from skatelib.proving.twin.steer import SteerRun, steer_twin
-        from threadpoolctl import threadpool_limits
 
         lib = MotionLibrary.open(self.path)
         nominal = SkateParams.from_library(lib)
         plant, errors = _plant(lib, self.perturb, nominal.mu)
         sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=self.settings.state,
                                    sensor_errors=errors.sensors)
-        with threadpool_limits(limits=1, user_api="blas"):
+        with one_blas_thread():
             return steer_twin(lib, ClosedLoop(nominal, nominal, mpc=self.mpc, settings=self.settings), plant,
                               self.target_velocity_mps, SteerRun(loop=sensors))
 
