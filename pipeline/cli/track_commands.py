@@ -190,7 +190,7 @@ def _track_model(library: Path, entry: list[str] | None, plant_error: str, pertu
         save_closed_loop(MotionLibrary.open(library), [(r.key, run) for r, run in runs if run is not None], save)
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = track_table(results, perturb)
-    write_report(library, report, list(runs), f"skatelib track on the model plant, errors: {perturb}")
+    write_report(library, report, list(runs), "on the model plant", perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed in closed loop[/]")
         raise typer.Exit(1)
@@ -223,8 +223,7 @@ def _track_twin(library: Path, entry: list[str] | None, plant_error: str, pertur
         save_closed_loop(MotionLibrary.open(library), [(r.key, e) for r, _, e in runs if e is not None], save)
         console.print(escape(f"wrote {save}; {viewer_hint(save)}"))
     failed = twin_table(results, perturb)
-    write_report(library, report, [(r, e) for r, _, e in runs],
-                  f"skatelib track on the MuJoCo twin, errors: {perturb}")
+    write_report(library, report, [(r, e) for r, _, e in runs], "on the MuJoCo twin", perturb)
     if failed:
         console.print(f"[bold red]{failed} of {count(len(results), 'entry')} failed on the twin[/]")
         raise typer.Exit(1)

@@ -26,14 +26,15 @@ def report_checked(library: Path, report: Path | None, of_entries: bool = True) 
     check_output(report, [library], what="report")
 
 
-def write_report(library: Path, report: Path | None, runs: list[tuple[Any, Any]], heading: str) -> None:
-    """Write the report of ``runs`` (each verdict and its kept run) when one was asked for."""
+def write_report(library: Path, report: Path | None, runs: list[tuple[Any, Any]], where: str, errors: str) -> None:
+    """Write the report of ``runs`` (each verdict and its kept run) when one was asked for: ridden
+    ``where``, under the --perturb text ``errors``."""
     if report is None:
         return
     from skatelib.pipeline.views.track_report import write_report
     from skatelib.runtime import MotionLibrary
 
-    write_report(report, MotionLibrary.open(library), runs, heading)
+    write_report(report, MotionLibrary.open(library), runs, f"skatelib track {where}, errors: {errors}", errors)
     console.print(escape(f"wrote {report}"))
 
 

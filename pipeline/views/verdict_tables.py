@@ -91,16 +91,39 @@ def twin_table(results: list[Any], perturb: str) -> int:
 
 
 def steer_table(results: list[Any], perturb: str) -> int:
-    """Print the steering verdicts; returns how many failed."""
-    rows = [[f"{r.target_velocity_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
-             f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
-             f"{r.mpc_median_ms:.1f}", verdict(r.passed)] for r in results]
-    print_table(console, f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}",
-                ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
-                 "unloaded [steps]", "slips [steps]", "MPC med [ms]", "verdict"), rows,
-                "unloaded: plant steps in which a deck foot carried no load; slips: plant steps with a foot force "
-                "outside the cone")
+    """Print the steering verdicts, on the twin in its own units (:func:`_twin_steer_table`); returns
+    how many failed."""
+    from skatelib.proving.twin.steer import TwinSteerResult
+
+    if results and all(isinstance(r, TwinSteerResult) for r in results):
+        _twin_steer_table(results, perturb)
+    else:
+        rows = [[f"{r.target_velocity_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
+                 f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps), str(r.slips),
+                 f"{r.mpc_median_ms:.1f}", verdict(r.passed)] for r in results]
+        print_table(console, f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}",
+                    ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
+                     "unloaded [steps]", "slips [steps]", "MPC med [ms]", "verdict"), rows,
+                    "unloaded: plant steps in which a deck foot carried no load; slips: plant steps with a foot force "
+                    "outside the cone")
     failed = [r for r in results if not r.passed]
     for r in failed:
         console.print(escape(f"{r.target_velocity_mps:.2f} m/s: {r.reasons}"))
     return len(failed)
+
+
+def _twin_steer_table(results: list[Any], perturb: str) -> None:
+    """The steering verdicts on the twin: its contacts are counted in whole-body ticks (2 ms) and its
+    slips per stance, as its entries' are."""
+    rows = [[f"{r.target_velocity_mps:.2f}", f"{r.roll_rms_error_rad:.4f}", f"{r.max_roll_rad:.3f}",
+             f"{r.max_lateral_shift_m:.3f}", f"{r.min_normal_N:.2f}", str(r.unloaded_steps),
+             f"{100 * r.max_slip_m:.2f}", str(r.slips), str(r.floor_touch_ticks), str(r.wheel_lift_ticks),
+             f"{r.mpc_median_ms:.1f}", verdict(r.passed)] for r in results]
+    print_table(console, f"four-leg steering, deck roll 0.1 rad sine, 3 s period; plant: {perturb}",
+                ("speed [m/s]", "roll RMS err [rad]", "roll max [rad]", "torso shift [m]", "min f_n [N]",
+                 "off deck [ticks]", "slip max [cm]", "slips [stances]", "floor [ticks]", "wheel lift [ticks]",
+                 "MPC med [ms]", "verdict"), rows,
+                "min f_n: the smallest normal force of a foot on the twin's contacts; off deck: ticks (2 ms) with a "
+                "foot touching nothing; slip max: the largest slip of a stance at its contact point against the deck; "
+                "slips: stances that slipped more than 1 cm; floor, wheel lift: ticks with a foot or link on the "
+                "floor and with a wheel off the floor for 10 ms or more (each fails the maneuver)")
