@@ -122,10 +122,11 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
 
     Raises:
         LibraryFormatError: A missing, damaged or incomplete file (naming it and the field).
-        SkatelibError: A bad ``perturb`` (naming the key and its range).
+        SkatelibError: A bad ``perturb`` (empty, not a text, a key out of its range: naming it).
         ValueError: An argument out of its range (naming it).
     """
     require_pipeline("skatelib.validate")
+    from skatelib.pipeline.track_setup import named_errors
     from skatelib.pipeline.validate import (
         EntryVerdict,
         ValidationReport,
@@ -138,6 +139,7 @@ def validate(library: PathLike, *, closed_loop: bool = False, plant: Plant = "mo
     check_choice("skatelib.validate", "plant", plant, ("model", "mujoco"))
     path = Path(library)
     if closed_loop:
+        named_errors(perturb, plant == "mujoco", "skatelib.validate(perturb=...)")
         perturb = closed_loop_perturbation(path, perturb, DEFAULT_PLANT_PERTURBATION)
     rides = closed_loop_jobs(path, perturb, plant) if closed_loop else []  # refused before any check or ride
     verdicts: list[EntryVerdict] = []
@@ -169,8 +171,9 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
         entries: Entry keys; every successful entry when None.
         plant: ``model`` (the single-rigid-body plant) or ``mujoco`` (the physical twin under the
             whole-body controller; needs the ``[sim]`` extra).
-        perturb: The plant's model errors, ``KEY=VALUE,...`` (``+10%`` relative, ``0.5`` absolute;
-            ``none``: the plant as planned); the keys are listed by ``skatelib track --help``.
+        perturb: The plant's model errors, ``KEY=VALUE,...`` (``+10%`` relative to the planned
+            figure, ``0.5`` absolute in the key's unit on either plant; ``none``: the plant as
+            planned); the keys are listed by ``skatelib track --help``.
         solver: The MPC's QP solver.
         mpc_mu: The friction coefficient the MPC assumes; the library's planning value when None.
         seed: Seed of the feedback noise (0 to 2**32 - 1).
@@ -187,7 +190,9 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
 
     Raises:
         SkatelibError: A library that is not a quadruped's, an unknown entry key (naming the valid
-            ones) or a bad ``perturb`` (naming the key and its range), before any run.
+            ones) or a bad ``perturb`` (an empty text or not a text, a key out of its range, an
+            ``impulse_t`` at or after an entry's run ends: naming it), before any run; a
+            ``PerturbationError`` or ``TwinPerturbationError``, both a ValueError.
         ImportError: The controller's packages are missing, naming the extra (MuJoCo missing on
             ``plant="mujoco"``: a SkatelibError naming it).
         ValueError: An argument out of its range (naming it).
@@ -199,7 +204,7 @@ def track(library: PathLike, entries: Sequence[str] | None = None, *, plant: Pla
     mpc, settings = controller(check_choice("skatelib.track", "solver", solver, ("daqp", "proxqp", "osqp")),
                                mpc_mu, seed, check_choice("skatelib.track", "state", state, ("true", "estimate")))
     errors = plant_errors(perturb, plant == "mujoco", state, "skatelib.track(perturb=...)")
-    keys = list(entries) if entries is not None else None
+    keys = entries  # checked by the jobs (proving.track.chosen_keys)
     if plant == "mujoco":
         from skatelib.proving.twin.track import twin_jobs
 

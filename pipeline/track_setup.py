@@ -35,12 +35,34 @@ SENSED_KEYS = {"noise": "imu_noise", "delay": "sensor_delay"}
 
 
 def plant_errors(perturb: str, on_twin: bool, state: str, option: str = "--perturb") -> str:
-    """``track``'s model-error text (``none``: none), its sensed-state keys checked on the twin
-    (:func:`sensed_keys_checked`)."""
-    errors = "" if perturb == "none" else perturb
+    """``track``'s model-error text (``none``: none), a text that names errors
+    (:func:`named_errors`), its sensed-state keys checked on the twin (:func:`sensed_keys_checked`)."""
+    errors = "" if named_errors(perturb, on_twin, option) == "none" else perturb
     if on_twin:
         sensed_keys_checked(errors, state, option)
     return errors
+
+
+def named_errors(perturb: object, on_twin: bool, option: str) -> str:
+    """``perturb`` when it is a text that names at least one model error, or ``none``: what the
+    command line's ``--perturb`` refuses at its edge, checked for the Python functions too (an
+    empty text would ride the plant as planned under the name '').
+
+    Raises:
+        PerturbationError: (TwinPerturbationError on the twin; both a ValueError) naming ``option``,
+            the value and the spelling of no error.
+    """
+    if isinstance(perturb, str) and any(s.strip() for s in perturb.split(",")):
+        return perturb
+    what = "names no model error" if isinstance(perturb, str) else "is not a text"
+    message = f"{option}: {perturb!r} {what}: give KEY=VALUE,... or 'none' for the plant as planned"
+    if on_twin:
+        from skatelib.sim.errors import TwinPerturbationError
+
+        raise TwinPerturbationError(message)
+    from skatelib.proving.perturb import PerturbationError
+
+    raise PerturbationError(message)
 
 
 def sensed_keys_checked(perturb: str, state: str, option: str = "--perturb") -> None:

@@ -13,21 +13,24 @@ angles.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from skatelib.control.kinematics import LegKinematics
 from skatelib.control.linear_model import Feedback
 from skatelib.control.qp import QpSolveFailed
-from skatelib.control.reference import Reference
+from skatelib.control.reference import EntryReference, Reference
 from skatelib.control.update import MpcUpdate
 from skatelib.library.channels import BOARD, GROUND, I_BOARD_ROLL, NX, S_Q, SWING
 from skatelib.library.margins import forward_speed
 from skatelib.library.rotations import board_rotations, rpy_matrices
+from skatelib.proving.perturb import impulse_checked, run_updates
 from skatelib.proving.plant import Plant, PlantInput
 from skatelib.proving.setup import ClosedLoop
 from skatelib.proving.trace import Run, Trace
 from skatelib.proving.verdict import fall_reason
+from skatelib.runtime import MotionLibrary
 
 
 def simulate(ref: Reference, x_init: np.ndarray, loop: ClosedLoop, keep_trace: bool = False,
@@ -46,11 +49,29 @@ def simulate(ref: Reference, x_init: np.ndarray, loop: ClosedLoop, keep_trace: b
     BLAS runs on one thread meanwhile, as in a controller's real-time loop: the MPC's matrices are
     small (about 100 x 400), and a multi-threaded BLAS makes an update several times slower on
     2 cores.
+
+    Raises:
+        PerturbationError: An impulse the run would never apply, before it starts
+            (:func:`skatelib.proving.perturb.impulse_checked`).
     """
     from threadpoolctl import threadpool_limits
 
+    impulse_checked(loop.dist, ref, (loop.mpc.dt, loop.settings.plant_substeps))
     with threadpool_limits(limits=1, user_api="blas"):
         return _Loop(ref, x_init, loop, kinematics, keep_trace).run()
+
+
+def entry_impulses_checked(lib: MotionLibrary, keys: Sequence[str], loop: ClosedLoop) -> None:
+    """:func:`skatelib.proving.perturb.impulse_checked` for the runs of the entries ``keys`` of
+    ``lib``, before any of them rides (:func:`simulate` checks each run again as it starts).
+
+    Raises:
+        PerturbationError: Naming ``impulse_t``, the first entry whose run it is beyond and its end.
+    """
+    if loop.dist.impulse_Ns:
+        for key in keys:
+            ref = EntryReference(lib, lib[key], loop.model, loop.settings)
+            impulse_checked(loop.dist, ref, (loop.mpc.dt, loop.settings.plant_substeps), f"the run of {key}")
 
 
 class _Loop:
@@ -81,7 +102,7 @@ class _Loop:
 
     def run(self) -> Run:
         cfg = self.loop.mpc
-        for _ in range(round((self.ref.t_stop - self.ref.t0) / cfg.dt)):
+        for _ in range(run_updates(self.ref, cfg.dt)):
             update = self.update()
             if update is None:
                 break

@@ -6,11 +6,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skatelib.control.params import SkateParams
 from skatelib.library.errors import SkatelibError
 from skatelib.library.perturb import BOUNDS, FACTOR, bounded, perturbation_items
+
+if TYPE_CHECKING:  # the controller's reference, imported by the loops that ride it
+    from skatelib.control.reference import Reference
 
 
 class PerturbationError(SkatelibError, ValueError):
@@ -40,7 +43,8 @@ class Disturbances:
         noise_std: Standard deviation of the feedback noise on positions [m] and angles [rad]
             (velocities get 5x that per second of it, joint angles none).
         impulse_Ns: Lateral impulse on the trunk [N s], applied over one plant step.
-        impulse_t_s: When, from the start of the entry [s].
+        impulse_t_s: When, from the start of the entry [s]: before the run's end
+            (:func:`impulse_checked`).
         init_error_m: Initial lateral and vertical base position error [m].
     """
 
@@ -95,3 +99,35 @@ def parse_perturbation(text: str, nominal: SkateParams) -> tuple[SkateParams, Di
 
 
 DEFAULT_PERTURBATION = "mass=+10%,kb=-20%,rolling=+100%,mu=0.5"
+
+
+def run_updates(ref: Reference, mpc_dt_s: float) -> int:
+    """How many MPC updates the loop (:mod:`skatelib.proving.loop`) ticks in a run of ``ref``: whole
+    updates from ``ref.t0`` to the nearest of ``ref.t_stop`` (an entry's: its plan, then the
+    transfer and the riding of its ``TrackSettings``; a chained ride's: the joined stages' plan,
+    then the same; the steering maneuver's: its duration)."""
+    return round((ref.t_stop - ref.t0) / mpc_dt_s)
+
+
+def impulse_checked(dist: Disturbances, ref: Reference, rates: tuple[float, int], what: str = "the run") -> None:
+    """Refuse an impulse timed where the run of ``ref`` would never apply it. The loop applies it in
+    the plant step that starts within half a step of ``impulse_t``, so none at or after the run's
+    end less half a step. The run's length is the reference's own: an entry's, a chained ride's
+    and the steering maneuver's are each checked exactly.
+
+    Args:
+        dist: The disturbances (an impulse of 0 is never refused).
+        ref: The run's reference.
+        rates: The MPC's update period [s] and the plant steps per update.
+        what: The run, for the message.
+
+    Raises:
+        PerturbationError: Naming ``impulse_t``, ``what`` and when it ends.
+    """
+    mpc_dt_s, substeps = rates
+    end = ref.t0 + run_updates(ref, mpc_dt_s) * mpc_dt_s
+    latest = end - mpc_dt_s / substeps / 2
+    if dist.impulse_Ns and dist.impulse_t_s >= latest:
+        plan = f" (its plan ends at {ref.t_end:.2f} s, then transfer and riding)" if ref.t_end > ref.t0 else ""
+        raise PerturbationError(f"--perturb impulse_t={dist.impulse_t_s:g}: {what} ends at {end:.2f} s{plan}, so "
+                                f"the impulse would never be applied; give an impulse_t below {latest:.3f} s")

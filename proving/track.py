@@ -100,12 +100,16 @@ def track_jobs(path: Path, keys: Sequence[str] | None, perturb: str, mpc: MpcCon
     """One job per chosen entry (all successful ones by default).
 
     Raises:
-        SkatelibError: A library that is not a quadruped one, a bad perturbation, or an unknown
-            entry key (naming the valid ones), before any work.
+        SkatelibError: A library that is not a quadruped one, a bad perturbation (an ``impulse_t``
+            at or after an entry's run ends among it), or an unknown entry key (naming the valid
+            ones), before any work.
     """
+    from skatelib.proving.loop import entry_impulses_checked
+
     lib = _quadruped(path, perturb, "closed-loop tracking")
     chosen = chosen_keys(lib, keys)
     spec = JobSpec(str(path), perturb, mpc or MpcConfig(), settings or TrackSettings())
+    entry_impulses_checked(lib, chosen, spec.loop(lib))  # an impulse no run would apply: before any ride
     return [TrackJob(spec, k, keep_runs) for k in chosen]
 
 

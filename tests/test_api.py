@@ -143,6 +143,40 @@ def test_track_on_the_model_plant_and_its_errors():
         skatelib.track(REFERENCE, ["v0.30_s1"], perturb="bogus=1")
 
 
+def _no_run(*args, **kwargs):
+    raise AssertionError("a run started")
+
+
+@pytest.mark.parametrize("plant", ["model", "mujoco"])
+@pytest.mark.parametrize("perturb", ["", " , ", None])
+def test_a_perturbation_that_names_no_error_is_refused(monkeypatch, plant, perturb):
+    """``perturb`` empty (or commas alone) or not a text is a ValueError naming ``perturb`` before any
+    run, on either plant, as the command refuses ``--perturb ''`` (not the plant as planned, nor an
+    AttributeError)."""
+    monkeypatch.setattr("skatelib.pipeline.api.run_jobs", _no_run)
+    with pytest.raises(ValueError, match=r"skatelib\.track\(perturb=\.\.\.\): .*give KEY=VALUE,\.\.\. or 'none'"):
+        skatelib.track(REFERENCE, ["v0.30_s1"], plant=plant, perturb=perturb, jobs=1)
+
+
+@pytest.mark.parametrize("perturb", ["", None])
+def test_validate_refuses_a_perturbation_that_names_no_error(tmp_path, perturb):
+    """``validate(closed_loop=True)`` refuses the same ``perturb`` values, naming it, before any
+    check or ride: the file is unchanged."""
+    lib = tmp_path / "lib.h5"
+    shutil.copy(REFERENCE, lib)
+    with pytest.raises(ValueError, match=r"skatelib\.validate\(perturb=\.\.\.\)"):
+        skatelib.validate(lib, closed_loop=True, perturb=perturb)
+    assert lib.read_bytes() == REFERENCE.read_bytes()
+
+
+def test_track_refuses_an_impulse_after_a_run_before_any_run(monkeypatch):
+    """An ``impulse_t`` at or after an entry's run ends (3.10 s for the 1.2 s entries) is refused
+    naming it, the entry and the end, before any entry rides."""
+    monkeypatch.setattr("skatelib.pipeline.api.run_jobs", _no_run)
+    with pytest.raises(ValueError, match=r"impulse_t=30: the run of v0\.30_s1 ends at 3\.10 s"):
+        skatelib.track(REFERENCE, ["v0.30_s1", "v0.40_s1"], perturb="impulse=20,impulse_t=30", jobs=1)
+
+
 def test_track_on_the_twin_reports_progress():
     """``plant="mujoco"``: a TwinResult per entry, and the progress callback hears (done, total)."""
     heard: list[tuple[int, int]] = []

@@ -69,13 +69,17 @@ def info(
 
 
 PerturbOpt = Annotated[str, typer.Option(
-    help="Plant model error, KEY=VALUE,... (+10% relative, 0.5 absolute). Model plant: mass inertia board_mass "
-         "kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass mu kb bb rolling "
-         "armature payload payload_x payload_y payload_z, with --state true noise delay (on the twin's own state), "
-         "and on the estimate (track's default) the sensors' gyro_bias accel_bias imu_noise encoder_offset imu_tilt "
-         "sensor_delay (omitted: "
-         f"{DEFAULT_SENSOR_PERTURBATION}). 'none' for the plant as planned. Ranges: "
-         f"{bounds_text(BOUNDS)}.", callback=perturbation)]
+    help="Plant model error, KEY=VALUE,...: +10% or -20% relative to the planned figure; a plain number an "
+         "absolute value in the key's unit, the same on both plants (mass=9.37 is a 9.37 kg robot): mass, "
+         "board_mass (the whole board) [kg], kb [N m/rad], bb [N m s/rad], rolling [N at the planned weight], "
+         "armature [kg m^2 per joint], motor [N m per commanded N m], the others in their ranges' units below; "
+         "inertia takes a factor; impulse_t [s from the entry's start] before the run ends. Model plant: mass "
+         "inertia board_mass kb bb rolling mu tanh com noise impulse impulse_t init; twin (--plant mujoco): mass "
+         "mu kb bb rolling armature board_mass motor payload payload_x payload_y payload_z, with --state true "
+         "noise delay (on the twin's own state), and on the estimate (track's default) the sensors' gyro_bias "
+         "accel_bias imu_noise encoder_offset imu_tilt sensor_delay (omitted: "
+         f"{DEFAULT_SENSOR_PERTURBATION}). 'none' for the plant as planned. Ranges (a factor of the planned "
+         f"figure where one scales): {bounds_text(BOUNDS)}.", callback=perturbation)]
 DEFAULT_PERTURB = DEFAULT_PLANT_PERTURBATION
 
 

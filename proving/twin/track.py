@@ -74,7 +74,7 @@ def ride_twin(lib: MotionLibrary, what: str | Entry, perturb: str | TwinErrors,
 
     mpc, settings = controller
     nominal = SkateParams.from_library(lib)
-    plant, errors = _plant(lib, perturb, nominal.mu)
+    plant, errors = _plant(lib, perturb)
     loop = TwinLoop(lib, what, ClosedLoop(nominal, nominal, mpc=mpc, settings=settings), plant,
                     TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=settings.state,
                                      sensor_errors=errors.sensors, shove=shove),
@@ -103,7 +103,7 @@ class TwinSteerJob:
 
         lib = MotionLibrary.open(self.path)
         nominal = SkateParams.from_library(lib)
-        plant, errors = _plant(lib, self.perturb, nominal.mu)
+        plant, errors = _plant(lib, self.perturb)
         sensors = TwinLoopSettings(sensors=Sensors(errors.noise_std, errors.delay_s), state=self.settings.state,
                                    sensor_errors=errors.sensors)
         with one_blas_thread():
@@ -111,13 +111,14 @@ class TwinSteerJob:
                               self.target_velocity_mps, SteerRun(loop=sensors))
 
 
-def _plant(lib: MotionLibrary, perturb: str | TwinErrors, mu: float) -> tuple[TwinPlant, TwinErrors]:
+def _plant(lib: MotionLibrary, perturb: str | TwinErrors) -> tuple[TwinPlant, TwinErrors]:
     from skatelib.sim.errors import parse_twin_perturbation
     from skatelib.sim.figures import TwinFigures
     from skatelib.sim.plant import TwinPlant
 
-    errors = parse_twin_perturbation(perturb, mu) if isinstance(perturb, str) else perturb
-    return TwinPlant(TwinFigures.from_library(lib), errors), errors
+    figures = TwinFigures.from_library(lib)
+    errors = parse_twin_perturbation(perturb, figures) if isinstance(perturb, str) else perturb
+    return TwinPlant(figures, errors), errors
 
 
 def twin_library(path: Path, kind: str, other_kind: str, modules: Sequence[str]) -> MotionLibrary:
@@ -143,10 +144,10 @@ def check_twin(path: Path, perturb: str) -> MotionLibrary:
                        "(a humanoid library is executed on its own twin by `skatelib track LIB --plant mujoco` or "
                        "skatelib.validate(LIB, closed_loop=True, plant='mujoco')); this library is ",
                        ("skatelib.control.params", "skatelib.sim.errors"))
-    from skatelib.control.params import SkateParams
     from skatelib.sim.errors import parse_twin_perturbation
+    from skatelib.sim.figures import TwinFigures
 
-    parse_twin_perturbation(perturb, SkateParams.from_library(lib).mu)  # refuse a bad --perturb before any work
+    parse_twin_perturbation(perturb, TwinFigures.from_library(lib))  # refuse a bad --perturb before any work
     return lib
 
 
