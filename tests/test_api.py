@@ -262,3 +262,10 @@ def test_a_runtime_only_install_is_told_what_to_install(tmp_path, monkeypatch):
         with pytest.raises(ImportError, match=r"missing: no_such_package_here; pip install 'skatelib\[pipeline\]'"):
             call()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_one_entry_key_as_a_string_is_a_type_error():
+    """``entries="v0.30_s1"`` (one key where a list is asked): a TypeError saying to give a list of
+    one, before any run (it was ridden letter by letter: no entry 'v')."""
+    with pytest.raises(TypeError, match=r"a list of entry keys, not the string 'v0.30_s1'"):
+        skatelib.track(REFERENCE, "v0.30_s1")
