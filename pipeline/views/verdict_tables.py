@@ -41,16 +41,25 @@ def track_table(results: list[Any], perturb: str) -> int:
 
 def ride_table(result: Any, perturb: str) -> bool:
     """Print a ride's stages and its verdict; returns whether it passed."""
+    def reached(s: Any) -> bool:  # the run got to the stage's end (a fall before leaves its speed NaN)
+        return bool(s.momentum_at_end_mps == s.momentum_at_end_mps)
+
     rows = [[f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}", escape(", ".join(s.keys)), f"{s.t_end_s:.2f}",
-             f"{s.momentum_at_end_mps:.3f}", verdict(s.passed)] for s in result.stages]
+             f"{s.momentum_at_end_mps:.3f}" if reached(s) else "not reached", verdict(s.passed)]
+            for s in result.stages]
     print_table(console, f"ride in closed loop, plant: {perturb}",
                 ("stage [m/s]", Col("entries", text=True), "ends at [s]", "momentum speed [m/s]", "verdict"), rows)
     r = result.run
-    late = [f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}" for s in result.stages if not s.passed]
+    name = [f"{s.from_velocity_mps:g} -> {s.target_velocity_mps:g}" for s in result.stages]
+    late = [n for n, s in zip(name, result.stages, strict=True) if not s.passed and reached(s)]
+    unreached = [n for n, s in zip(name, result.stages, strict=True) if not reached(s)]
     outcome = "pass" if result.passed else "FAIL: " + "; ".join(
-        ([f"stage {', '.join(late)} off its target"] if late else []) + ([r.reasons] if r.reasons else []))
+        ([f"stage {', '.join(late)} off its target"] if late else [])
+        + ([f"stage {', '.join(unreached)} not reached (the run stopped)"] if unreached else [])
+        + ([r.reasons] if r.reasons else []))
+    delivered = f"{r.delivered_mps:.3f} m/s" if r.delivered_mps == r.delivered_mps else "not measured"
     console.print(escape(f"{r.key}: {outcome} (each stage within 5 % of its target at its end, a stop below "
-                         f"0.05 m/s); after the last: delivered {r.delivered_mps:.3f} m/s, deck roll max "
+                         f"0.05 m/s); after the last: delivered {delivered}, deck roll max "
                          f"{r.max_deck_roll_rad:.3f} rad"))
     return bool(result.passed)
 
