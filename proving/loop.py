@@ -54,10 +54,10 @@ def simulate(ref: Reference, x_init: np.ndarray, loop: ClosedLoop, keep_trace: b
         PerturbationError: An impulse the run would never apply, before it starts
             (:func:`skatelib.proving.perturb.impulse_checked`).
     """
-    from threadpoolctl import threadpool_limits
+    from skatelib.proving.setup import one_blas_thread
 
     impulse_checked(loop.dist, ref, (loop.mpc.dt, loop.settings.plant_substeps))
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _Loop(ref, x_init, loop, kinematics, keep_trace).run()
 
 
