@@ -53,17 +53,17 @@ def test_the_model_plants_steering_table_keeps_its_units(monkeypatch):
 def test_a_ride_stage_the_run_never_reached_says_so(monkeypatch):
     """A chained ride that fell in its first stage: each stage after the fall reads 'not reached'
     (its speed is NaN), not a speed 'off its target', and the delivered speed 'not measured'."""
-    from types import SimpleNamespace as NS
+    from types import SimpleNamespace as Ns
 
     out = Console(width=300, file=io.StringIO(), record=True)
     monkeypatch.setattr(verdict_tables, "console", out)
-    stages = [NS(from_velocity_mps=0.0, target_velocity_mps=0.5, keys=("v0.50_s2",), t_end_s=2.4,
+    stages = [Ns(from_velocity_mps=0.0, target_velocity_mps=0.5, keys=("v0.50_s2",), t_end_s=2.4,
                  momentum_at_end_mps=float("nan"), passed=False),
-              NS(from_velocity_mps=0.5, target_velocity_mps=0.0, keys=("v0.50-0.00_s1",), t_end_s=3.9,
+              Ns(from_velocity_mps=0.5, target_velocity_mps=0.0, keys=("v0.50-0.00_s1",), t_end_s=3.9,
                  momentum_at_end_mps=float("nan"), passed=False)]
-    run = NS(key="ride", reasons="fall: trunk 0.099 m above the deck at t = 1.92 s", delivered_mps=float("nan"),
+    run = Ns(key="ride", reasons="fall: trunk 0.099 m above the deck at t = 1.92 s", delivered_mps=float("nan"),
              max_deck_roll_rad=0.081)
-    assert verdict_tables.ride_table(NS(stages=stages, run=run, passed=False), "mu=0.3") is False
+    assert verdict_tables.ride_table(Ns(stages=stages, run=run, passed=False), "mu=0.3") is False
     text = " ".join(out.export_text().split())
     assert text.count("not reached") == 3 and "off its target" not in text and "nan" not in text, text
     assert "stage 0 -> 0.5, 0.5 -> 0 not reached (the run stopped)" in text and "delivered not measured" in text
