@@ -48,7 +48,7 @@ class MpcUpdate:
         self.disc = Discretizer(model, dt)
         self.solver = make_solver(cfg.solver)
         self.observer = DisturbanceObserver(cfg.disturbance_gain)
-        self.coast = CoastObserver(cfg.coast_gain)
+        self.coast = CoastObserver(cfg.coast_gain, fit=cfg.coast_fit)
         self.qp: MpcProblem | None = None  # the last update's
         self.keeper: LineKeeper | None = None  # steers the board onto the plan's line (the controller updates it)
 
