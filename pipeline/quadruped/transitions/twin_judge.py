@@ -45,11 +45,14 @@ def check_twin_judge(config: QuadrupedConfig) -> None:
     except ImportError as e:
         raise ConfigError(config.path, FIELD, f"judging on the twin needs MuJoCo and the controller ({e}): "
                                               "pip install 'skatelib[control,sim]', or set twin_judge = []") from e
+    from skatelib.pipeline.twin import twin_figures
+
+    figures = twin_figures(config)  # what a plain number is divided by, as the rides will
     for text in sets:
         if not any(item.strip() for item in text.split(",")):
             raise ConfigError(config.path, FIELD, f"{text!r} names no model error: write 'none' for the board as it is")
         try:
-            parse_twin_perturbation(_errors(text), config.robot.friction_mu)
+            parse_twin_perturbation(_errors(text), figures)
         except ValueError as e:
             raise ConfigError(config.path, FIELD, f"{text!r}: {e}") from e
 
