@@ -133,11 +133,6 @@ def label_error(label: float, speed: float | None, digits: int = 1) -> str:
     return f"{100 * (speed - label) / label:+.{digits}f}"
 
 
-def jsonable(v: Any) -> Any:
-    """A ``json.dumps`` default: numpy scalars and arrays as JSON numbers and lists."""
-    return v.tolist() if hasattr(v, "tolist") else str(v)
-
-
 def json_text(doc: Any) -> str:
     """``doc`` as strict JSON, which every parser reads: a number that is not finite (NaN, an
     infinity) as ``null`` (JSON has no other way to write it), numpy values as numbers and lists,
