@@ -201,11 +201,11 @@ class _Loop:
         run.max_position_error_m = max(run.max_position_error_m, pos_err)
         run.max_attitude_error_rad = max(run.max_attitude_error_rad, float(np.max(np.abs(s[3:6] - x_ref0[3:6]))))
         pts = self.plant.contact_points(s, contact, self.ground)
-        if self.kin is not None:
-            self.q_legs = self.whole_body(self.kin, forces, pts, x_ref0[S_Q])
         reach = max((float(np.linalg.norm(pts[:, i] - s[0:3])) for i in range(4) if contact[i] != SWING),
                     default=0.0)
         run.fall = fall_reason(self.ref, s, x_ref0, reach, self.loop.plant.roll_limit_rad, self.t)
+        if self.kin is not None and not run.fall:  # a fallen body's legs by inverse kinematics measure nothing
+            self.q_legs = self.whole_body(self.kin, forces, pts, x_ref0[S_Q])
 
     def whole_body(self, kin: LegKinematics, forces: np.ndarray, points: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
         """Stance legs by inverse kinematics to where their feet touch the plant's deck or ground,

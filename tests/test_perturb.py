@@ -236,3 +236,18 @@ def test_the_command_refuses_an_impulse_after_the_run_before_riding(ride):
     run = run_cli(["track", str(REFERENCE), *entry, *ride, "-j", "1", "--perturb", "impulse=20,impulse_t=30"])
     assert run.returncode == 2, run.stdout + run.stderr
     assert re.search(r"impulse_t=30: the run (of v0\.30_s1 )?ends at 3\.10 s", " ".join(run.stderr.split())), run.stderr
+
+
+@pytest.mark.parametrize("perturb", ["impulse=20,impulse_t=0.8", "mass=1.1"])
+def test_a_fallen_bodys_legs_are_not_measured(perturb):
+    """A run that falls (shoved off the board; a robot too light for its forces): the fall is the
+    verdict's reason, and the stance legs' figures are those of the updates before it, not of
+    inverse kinematics toward feet the fallen body is metres from (a stance joint 104 rad beyond its
+    limit, a foot 426 mm beyond its leg's reach were reported)."""
+    pytest.importorskip("scipy")
+    import skatelib
+
+    (r,) = skatelib.track(REFERENCE, ["v0.30_s1"], perturb=perturb, jobs=1, progress=False)
+    assert r.fall and not r.passed
+    beyond = re.search(r"a stance joint ([0-9.]+) rad beyond", r.reasons)
+    assert beyond is None or float(beyond.group(1)) < 1.0, r.reasons  # at most one update's excess
