@@ -25,7 +25,7 @@ from skatelib.library.writer import write_library
 from skatelib.pipeline.build.provenance import root_attributes
 from skatelib.pipeline.humanoid.body import BodyMotion
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.motion import node_arrays, plan_json
+from skatelib.pipeline.humanoid.motion import plan_json, served_arrays
 from skatelib.pipeline.humanoid.tasks import EntryOutcome, entry_name
 
 
@@ -34,7 +34,6 @@ def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
     only when every step converged and the independent checks hold."""
     m, steps = o.motion, o.motion.steps
     strides = entry_name(config, m.velocity_mps)[1]
-    nodes_t, nodes_state, nodes_control = node_arrays(m, config.gpm.nodes)
     attrs = {
         schema.A_TARGET_VELOCITY: m.velocity_mps, schema.A_N_STRIDES: strides, "n_phases": len(steps),
         "motion": config.sweep.motion, schema.A_SUCCESS: o.success,
@@ -46,12 +45,7 @@ def entry_from_motion(o: EntryOutcome, config: HumanoidConfig) -> EntryRecord:
                                    schema.A_SOLVE_TIME: r.solve_time_s, "duration_s": r.spec.duration_s,
                                    "terminal": r.spec.terminal} for r in steps]),
     }
-    arrays = {
-        schema.D_T: m.t, schema.D_STATE: m.state, schema.D_CONTROL: m.control, schema.D_ZMP: m.zmp,
-        schema.D_CONTACT_POINT: m.contact_point, schema.D_STEP_INDEX: m.step_index, schema.D_NODES_T: nodes_t,
-        schema.D_NODES_STATE: nodes_state, schema.D_NODES_CONTROL: nodes_control,
-        schema.D_NODES_CONTACT_POINT: np.stack([r.P0 for r in steps]),
-    }
+    arrays = served_arrays(m, config.gpm.nodes)
     columns = {schema.D_STATE: HUMANOID_STATE_NAMES, schema.D_CONTROL: HUMANOID_CONTROL_NAMES,
                schema.D_ZMP: ZMP_NAMES, schema.D_CONTACT_POINT: POINT_NAMES}
     units = {schema.D_STATE: HUMANOID_STATE_UNITS, schema.D_CONTROL: HUMANOID_CONTROL_UNITS,

@@ -225,3 +225,14 @@ def node_arrays(m: Motion, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.nda
                         for r in m.steps])
     nodes_state = np.stack([np.vstack([r.X, r.Xf]) for r in m.steps])
     return nodes_t, nodes_state, np.stack([r.U for r in m.steps])
+
+
+def served_arrays(m: Motion, n_nodes: int) -> dict[str, np.ndarray]:
+    """The datasets of a solved motion that an entry stores and serves (the sampled COM motion, its
+    ZMP, contact points and step index, every step's node values), by their dataset names: what
+    the library writes and the build's judge checks."""
+    nodes_t, nodes_state, nodes_control = node_arrays(m, n_nodes)
+    return {schema.D_T: m.t, schema.D_STATE: m.state, schema.D_CONTROL: m.control, schema.D_ZMP: m.zmp,
+            schema.D_CONTACT_POINT: m.contact_point, schema.D_STEP_INDEX: m.step_index, schema.D_NODES_T: nodes_t,
+            schema.D_NODES_STATE: nodes_state, schema.D_NODES_CONTROL: nodes_control,
+            schema.D_NODES_CONTACT_POINT: np.stack([r.P0 for r in m.steps])}

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator
 from skatelib.pipeline.humanoid.config import HumanoidConfig
-from skatelib.pipeline.humanoid.motion import Motion, node_arrays, step_model
+from skatelib.pipeline.humanoid.motion import Motion, served_arrays, step_model
 from skatelib.pipeline.humanoid.served import TIME_TOL_S, Served, physics_failures, steps_of
 from skatelib.pipeline.humanoid.step import StepModel, StepSpec
 
@@ -110,11 +110,10 @@ def judge(config: HumanoidConfig, motion: Motion) -> tuple[str, ...]:
     arrays the library will serve."""
     if not motion.success:
         return ()
-    nodes_t, nodes_state, nodes_control = node_arrays(motion, config.gpm.nodes)
+    served = Served.of(served_arrays(motion, config.gpm.nodes))
     model = step_model(config)
-    served = Served(motion.t, motion.state, motion.control, motion.zmp, motion.contact_point, motion.step_index,
-                    nodes_t, nodes_state, nodes_control, np.stack([r.P0 for r in motion.steps]))
-    return tuple(failures(check_steps(list(motion.plan), nodes_t, nodes_state, nodes_control, model))
+    return tuple(failures(check_steps(list(motion.plan), served.nodes_t, served.nodes_state, served.nodes_control,
+                                      model))
                  + served_failures(served, list(motion.plan), model.g))
 
 
