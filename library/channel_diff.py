@@ -84,6 +84,14 @@ def _where_unlike(a: list[str], b: list[str], labels: Any) -> tuple[dict[str, st
     return out_a, out_b
 
 
+def deviations(x: np.ndarray, y: np.ndarray, bad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``|x - y|`` where ``bad`` (-1 elsewhere), and its ranking: a NaN deviation (a number against
+    NaN) ranks above every other, so that the largest is found where it is."""
+    with np.errstate(invalid="ignore"):
+        dev = np.where(bad, np.abs(np.asarray(x, np.float64) - np.asarray(y, np.float64)), -1.0)
+    return dev, np.where(np.isnan(dev), np.inf, dev)
+
+
 def channels(name: str, x: np.ndarray, y: np.ndarray, e: EntryRecord, t: np.ndarray,
               tol: Tolerance) -> Iterator[ChannelChange]:
     """Each column of array ``name`` that moved beyond ``tol``: its largest deviation, with the time
@@ -99,10 +107,9 @@ def channels(name: str, x: np.ndarray, y: np.ndarray, e: EntryRecord, t: np.ndar
     if not bad.any():
         return
     names, units = column_names(name, y, e) if nodes is None else nodes[:2]
-    with np.errstate(invalid="ignore"):
-        dev = np.where(bad, np.abs(X.astype(np.float64) - Y.astype(np.float64)), -1.0)
+    dev, rank = deviations(X, Y, bad)
     for j in np.nonzero(bad.any(axis=0))[0]:
-        row = int(np.nanargmax(np.where(np.isnan(dev[:, j]), np.inf, dev[:, j])))
+        row = int(np.argmax(rank[:, j]))
         column, at = names[j], None
         if nodes is not None:
             column, at = f"{column} (step {nodes[2][row][0]}, node {nodes[2][row][1]})", nodes[2][row][2]

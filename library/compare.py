@@ -26,7 +26,7 @@ import numpy as np
 from skatelib.library import schema
 from skatelib.library.attributes import EFFORT, PROVENANCE, VOLATILE, expand, json_figures, split
 from skatelib.library.certificate import certificate_figures
-from skatelib.library.channel_diff import EXACT, ChannelChange, Tolerance, ValueChange, by_name
+from skatelib.library.channel_diff import EXACT, ChannelChange, Tolerance, ValueChange, by_name, deviations
 from skatelib.library.channel_diff import channels as column_changes
 from skatelib.library.reader import LibraryData, read_library
 from skatelib.library.records import EntryRecord, jsonable
@@ -185,9 +185,7 @@ def _arrays_equal(a: Mapping[str, np.ndarray], b: Mapping[str, np.ndarray], tol:
             out.append(ValueChange(f"{k} shape", None if x is None else list(np.shape(x)),
                                    None if y is None else list(np.shape(y))))
         elif (bad := tol.exceeded(x, y)).any():
-            with np.errstate(invalid="ignore"):
-                dev = np.where(bad, np.abs(np.asarray(x, float) - np.asarray(y, float)), -1.0)
-            at = np.unravel_index(int(np.argmax(np.where(np.isnan(dev), np.inf, dev))), np.shape(x))
+            at = np.unravel_index(int(np.argmax(deviations(x, y, bad)[1])), np.shape(x))
             where = "[" + ", ".join(str(int(i)) for i in at) + "]" if np.ndim(x) else ""
             out.append(ValueChange(f"{k}{where}", jsonable(np.asarray(x)[at]), jsonable(np.asarray(y)[at])))
     return out
