@@ -126,7 +126,7 @@ def test_failed_entries_are_left_out_and_named(tmp_path):
     assert {p.name for p in (tmp_path / "csv").iterdir()} == {f"{good.key}.csv"}
     lib = write_library(tmp_path / "g.h5", _root(), model, {}, {}, [bad])
     r = _cli(["export", str(lib), "-f", "csv", "-o", str(tmp_path / "none")])
-    assert r.returncode == 1 and "nothing to export" in r.stdout, r.stdout + r.stderr
+    assert r.returncode == 1 and "nothing to export" in r.stderr, r.stdout + r.stderr
     assert not (tmp_path / "none").exists()
 
 

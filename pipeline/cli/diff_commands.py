@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 from skatelib.pipeline.cli.library_commands import LibArg
-from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_RTOL, finite
+from skatelib.pipeline.cli.option_checks import MAX_ATOL, MAX_RTOL, exit_if_nothing_solved, finite
 from skatelib.pipeline.views.console import json_text
 
 AtolOpt = Annotated[float, typer.Option("--atol", min=0.0, max=MAX_ATOL, callback=finite,
@@ -75,11 +75,8 @@ def export(
         check_output(out, [library], what="mcap")
     else:
         check_folder(out)
+    exit_if_nothing_solved(library, "export")
     from skatelib.runtime import MotionLibrary
-
-    if not any(e.success for e in MotionLibrary.open(library)):
-        console.print(escape(f"{library}: no entry of this library was solved: nothing to export"))
-        raise typer.Exit(1)
 
     written = write(library, fmt.value, out)
     if written:

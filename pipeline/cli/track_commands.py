@@ -18,7 +18,7 @@ from skatelib.pipeline.cli.library_commands import (
     PlantKind,
     QpSolver,
 )
-from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, distinct, finite
+from skatelib.pipeline.cli.option_checks import MAX_JOBS, MAX_SEED, distinct, exit_if_nothing_solved, finite
 from skatelib.pipeline.cli.track_draw import track_draw
 from skatelib.pipeline.cli.track_humanoid import is_humanoid, track_humanoid
 from skatelib.pipeline.cli.track_outputs import recording, report_checked, write_report
@@ -27,7 +27,6 @@ from skatelib.pipeline.track_setup import DEFAULT_TWIN_STATE, plant_errors, run_
 from skatelib.pipeline.views.console import (
     console,
     count,
-    err_console,
     mesh_note,
     viewer_hint,
 )
@@ -163,11 +162,8 @@ def _library_checked(library: Path, all_entries: bool, on_twin: bool, report: tu
     ``report``: the report's path, checked, and the ride or maneuver asked for (a report shows entries'
     runs)."""
     report_checked(library, report[0], report[1] is None)
-    from skatelib.runtime import MotionLibrary
-
-    if all_entries and not any(e.success for e in MotionLibrary.open(library)):
-        err_console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
-        raise typer.Exit(1)
+    if all_entries:
+        exit_if_nothing_solved(library, "track")
     if on_twin:
         mesh_note(library)
 

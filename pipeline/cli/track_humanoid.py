@@ -9,6 +9,7 @@ from typing import Any
 import typer
 from rich.markup import escape
 from skatelib.library.errors import SkatelibError
+from skatelib.pipeline.cli.option_checks import exit_if_nothing_solved
 from skatelib.pipeline.cli.track_outputs import recording
 from skatelib.pipeline.views.console import console, count, run_with_progress, viewer_hint
 
@@ -33,9 +34,8 @@ def track_humanoid(library: Path, entry: list[str] | None, perturb: str | None, 
                             "the quadruped's")
     if not on_twin:
         raise SkatelibError("a humanoid library is executed on its physical twin: add --plant mujoco")
-    if not entry and not _any_solved(library):
-        console.print(escape(f"{library}: no entry of this library was solved: nothing to track"))
-        raise typer.Exit(1)
+    if not entry:
+        exit_if_nothing_solved(library, "track")
     save, video = outputs
     save_runs = _outputs_checked(library, save, video)
     from skatelib.pipeline.views.humanoid_table import humanoid_table
@@ -63,12 +63,6 @@ def track_humanoid(library: Path, entry: list[str] | None, perturb: str | None, 
     if failed:
         console.print(escape(f"{failed} of {count(len(results), 'entry')} failed on the twin"))
         raise typer.Exit(1)
-
-
-def _any_solved(library: Path) -> bool:
-    from skatelib.runtime import MotionLibrary
-
-    return any(e.success for e in MotionLibrary.open(library))
 
 
 def _outputs_checked(library: Path, save: Path | None, video: Path | None) -> Any:
