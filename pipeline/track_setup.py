@@ -43,6 +43,15 @@ def plant_errors(perturb: str, on_twin: bool, state: str, option: str = "--pertu
     return errors
 
 
+def unnamed_errors(perturb: object) -> str | None:
+    """Why ``perturb`` names no model error (an empty text, commas alone, not a text; the command
+    line's ``--perturb`` and the Python functions refuse it alike), or None when it names one."""
+    if isinstance(perturb, str) and any(s.strip() for s in perturb.split(",")):
+        return None
+    what = "names no model error" if isinstance(perturb, str) else "is not a text"
+    return f"{perturb!r} {what}: give KEY=VALUE,... or 'none' for the plant as planned"
+
+
 def named_errors(perturb: object, on_twin: bool, option: str) -> str:
     """``perturb`` when it is a text that names at least one model error, or ``none``: what the
     command line's ``--perturb`` refuses at its edge, checked for the Python functions too (an
@@ -52,10 +61,10 @@ def named_errors(perturb: object, on_twin: bool, option: str) -> str:
         PerturbationError: (TwinPerturbationError on the twin; both a ValueError) naming ``option``,
             the value and the spelling of no error.
     """
-    if isinstance(perturb, str) and any(s.strip() for s in perturb.split(",")):
-        return perturb
-    what = "names no model error" if isinstance(perturb, str) else "is not a text"
-    message = f"{option}: {perturb!r} {what}: give KEY=VALUE,... or 'none' for the plant as planned"
+    why = unnamed_errors(perturb)
+    if why is None:
+        return str(perturb)
+    message = f"{option}: {why}"
     if on_twin:
         from skatelib.sim.errors import TwinPerturbationError
 

@@ -13,6 +13,7 @@ from typing import Any
 import typer
 from rich.markup import escape
 from skatelib.pipeline.limits import MAX_JOBS, MAX_SEED
+from skatelib.pipeline.track_setup import unnamed_errors
 from skatelib.pipeline.views.console import err_console
 
 MAX_ATOL = 1e6  # --atol, in each channel's unit: beyond it every library equals every other
@@ -67,7 +68,6 @@ def perturbation(value: str | None) -> str | None:
     Raises:
         typer.BadParameter: An empty value (or commas alone), with the spelling of no error.
     """
-    if value is not None and not any(s.strip() for s in value.split(",")):
-        raise typer.BadParameter(f"{value!r} names no model error: give KEY=VALUE,... or 'none' for the plant "
-                                 "as planned")
+    if value is not None and (why := unnamed_errors(value)) is not None:
+        raise typer.BadParameter(why)
     return value
