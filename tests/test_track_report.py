@@ -104,6 +104,8 @@ def test_each_margin_takes_its_own_cone():
     assert _mu(plant_cone(lib, twin, "mass=+10%,mu=0.5")) == pytest.approx((0.6, 0.5))
     assert _mu(plant_cone(lib, twin, "mu=0.8")) == pytest.approx((0.8, 0.8))
     assert _mu(plant_cone(lib, twin, "kb=-20%")) == pytest.approx((0.6, 0.6))
+    # a plain number is the key's unit on the twin too (a 9.37 kg robot): read as the rides read it
+    assert _mu(plant_cone(lib, twin, "mass=9.37,mu=0.5")) == pytest.approx((0.6, 0.5))
     assert Cone(0.6, 0.5).label() == "mu 0.60 on the deck, 0.50 on the floor" and Cone(0.5, 0.5).label() == "mu 0.50"
 
 

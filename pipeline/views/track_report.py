@@ -63,8 +63,9 @@ def plant_cone(lib: MotionLibrary, result: Any, errors: str) -> Cone:
         mu = parse_perturbation(text, nominal)[0].mu
         return Cone(mu, mu)
     from skatelib.sim.errors import parse_twin_perturbation
+    from skatelib.sim.figures import TwinFigures
 
-    floor = parse_twin_perturbation(text, nominal.mu).floor_mu
+    floor = parse_twin_perturbation(text, TwinFigures.from_library(lib)).floor_mu  # read as the rides read it
     return Cone(nominal.mu, nominal.mu) if floor is None else Cone(max(nominal.mu, floor), floor)
 
 
