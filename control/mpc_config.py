@@ -28,8 +28,7 @@ class MpcConfig:
         coast_fit: The coast observer fits a line over the coasts and leaves out the changes
             rolling friction cannot make (a shove, a foot on the floor), instead of filtering
             one-update differences: it reads a shove and the feedback's noise far less as friction
-            (docs/closed-loop.md, "How a coast is measured"). Off by default: the documented
-            closed-loop results and the default library's twin judge were measured without it.
+            (docs/closed-loop.md, "How a coast is measured"). False: the low-pass filter.
         torque_steps: Steps of the horizon with torque rows (1: the applied force only; on the
             default library all 10 gave the same verdicts and torques at 0.2 ms more per update).
         coast_compensation: Move each push's speed reference by what the following coast will
@@ -47,7 +46,7 @@ class MpcConfig:
     solver: str = "daqp"
     disturbance_gain: float = 0.3
     coast_gain: float = 0.2
-    coast_fit: bool = False
+    coast_fit: bool = True
     torque_steps: int = 1
     coast_compensation: bool = True
     q_weights: tuple[float, ...] = field(default_factory=lambda: (

@@ -44,18 +44,19 @@ class CoastObserver:
     whatever the masses, the deck's stiffness or the feet on the deck do. Samples only above
     ``min_speed_mps``, where friction has its full size (tanh(k v) ~ 1); None until two in a coast.
 
-    By default the estimate is a low-pass filter (``gain`` per update) of one-update decelerations,
-    which takes a shove's deceleration, and the feedback's noise divided by ``dt``, for friction.
-    With ``fit`` (``MpcConfig.coast_fit``) the estimate is the slope of lines fitted to the coasts'
-    momentum speeds (one slope for all, each stretch of samples its own offset), each earlier coast
-    weighing ``1 - gain`` of the one after it (0: all alike; 1: the latest alone). A fit over a
-    coast's samples averages the feedback's noise, which a difference of two updates divides by
-    ``dt``: ``--perturb noise=0.002`` (1 cm/s on the speeds) spreads one difference at 30 Hz by
-    0.3-0.5 m/s^2, twice the deceleration it measures. A stretch ends at a change between two updates that rolling
-    friction cannot have made (:func:`friction_changes`: a shove, a foot touching the floor),
-    which so weighs nothing in the fit; and the estimate is at least 0, as friction only slows."""
+    With ``fit`` (the default, ``MpcConfig.coast_fit``) the estimate is the slope of lines fitted
+    to the coasts' momentum speeds (one slope for all, each stretch of samples its own offset), each
+    earlier coast weighing ``1 - gain`` of the one after it (0: all alike; 1: the latest alone). A
+    fit over a coast's samples averages the feedback's noise, which a difference of two updates
+    divides by ``dt``: ``--perturb noise=0.002`` (1 cm/s on the speeds) spreads one difference at
+    30 Hz by 0.3-0.5 m/s^2, twice the deceleration it measures. A stretch ends at a change between
+    two updates that rolling friction cannot have made (:func:`friction_changes`: a shove, a foot
+    touching the floor), which so weighs nothing in the fit; and the estimate is at least 0, as
+    friction only slows. Without ``fit`` the estimate is a low-pass filter (``gain`` per update) of
+    one-update decelerations, which takes a shove's deceleration, and the feedback's noise divided
+    by ``dt``, for friction."""
 
-    def __init__(self, gain: float, min_speed_mps: float = 0.05, fit: bool = False):
+    def __init__(self, gain: float, min_speed_mps: float = 0.05, fit: bool = True):
         self.estimate_mps2: float | None = None
         self.gain = gain
         self.min_speed_mps = min_speed_mps

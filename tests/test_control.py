@@ -412,12 +412,13 @@ def test_a_push_moves_the_speed_reference_as_its_foot_can(lib):
     assert abs(just_after) < 0.1 * abs(full)  # a step would be the full move already
 
 
-def test_coast_observer_measures_a_constant_deceleration():
-    """Momentum speeds falling by a dt each update while coasting: the estimate is a; updates
-    outside coasts or below the speed floor leave it alone."""
+@pytest.mark.parametrize("fit", [True, False])
+def test_coast_observer_measures_a_constant_deceleration(fit):
+    """Momentum speeds falling by a dt each update while coasting: the estimate is a, fitted or
+    filtered; updates outside coasts or below the speed floor leave it alone."""
     from skatelib.control.observers import CoastObserver
 
-    obs = CoastObserver(gain=0.2)
+    obs = CoastObserver(gain=0.2, fit=fit)
     assert obs.update(True, 0.8, 1 / 30) is None  # one sample needs two updates
     v, dt = 0.8, 1 / 30
     for _ in range(60):
@@ -428,7 +429,7 @@ def test_coast_observer_measures_a_constant_deceleration():
         obs.update(False, v, dt)
         v -= 5.0 * dt  # a push or anything else: not a coast
     assert obs.estimate_mps2 == pytest.approx(0.25, abs=1e-4)
-    slow = CoastObserver(gain=0.2)
+    slow = CoastObserver(gain=0.2, fit=fit)
     for k in range(20):
         slow.update(True, 0.01 - 0.001 * k, dt)  # below the floor: tanh(k v) is not 1 there
     assert slow.estimate_mps2 is None

@@ -85,13 +85,12 @@ def test_a_shove_in_noise_leaves_the_estimate_unbiased():
     assert abs(mean) < 0.2 * ROLLING, mean
 
 
-def test_the_default_filter_takes_a_shove_for_friction():
-    """Without ``fit`` (the default, which the documented results were measured with), the low-pass
-    filter of one-update differences reads the 0.84 N s backward shove as friction: the first
-    coast's estimate ends 1.7 times the board's deceleration, eight updates after the shove (what
-    ``coast_fit`` removes)."""
+def test_the_filter_takes_a_shove_for_friction():
+    """Without ``fit`` (``MpcConfig(coast_fit=False)``), the low-pass filter of one-update
+    differences reads the 0.84 N s backward shove as friction: the first coast's estimate ends 1.7
+    times the board's deceleration, eight updates after the shove (what the default fit removes)."""
     dv = -0.84 / TOTAL_KG
-    shoved, = ride(CoastObserver(gain=0.2), coasts(STARTS[:1], {(0, COAST // 2): dv}))
+    shoved, = ride(CoastObserver(gain=0.2, fit=False), coasts(STARTS[:1], {(0, COAST // 2): dv}))
     assert shoved is not None and shoved > 1.5 * ROLLING, shoved  # 0.186 against 0.107
-    plain, = ride(CoastObserver(gain=0.2), coasts(STARTS[:1]))
+    plain, = ride(CoastObserver(gain=0.2, fit=False), coasts(STARTS[:1]))
     assert plain == pytest.approx(ROLLING, rel=1e-9)
