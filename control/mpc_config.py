@@ -23,8 +23,8 @@ class MpcConfig:
         solver: ``daqp``, ``proxqp`` or ``osqp`` (:mod:`skatelib.control.mpc_solvers`).
         disturbance_gain: Gain of the board-acceleration disturbance observer per update (0: off).
         coast_gain: The coast observer's gain (:class:`skatelib.control.observers.CoastObserver`):
-            per update of its filter; with ``coast_fit``, each earlier coast weighs ``1 -
-            coast_gain`` of the one after it (0: all alike; 1: the latest alone).
+            each earlier coast weighs ``1 - coast_gain`` of the one after it in the fit (0: all
+            alike; 1: the latest alone); without ``coast_fit``, its filter's gain per update.
         coast_fit: The coast observer fits a line over the coasts and leaves out the changes
             rolling friction cannot make (a shove, a foot on the floor), instead of filtering
             one-update differences: it reads a shove and the feedback's noise far less as friction
