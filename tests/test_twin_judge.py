@@ -60,3 +60,38 @@ def test_the_twin_keeps_what_it_rides_and_refuses_what_it_cannot(tmp_path, monke
         status = str(lib[k].attrs["status"])
         assert not lib[k].success and status.startswith(f"{TWIN_REFUSED}: mu=0.05: "), status
     assert any("the twin refused 1 stride" in o.note for o in slippery.outcomes)
+
+
+def _verdict(target: float, delivered: float):
+    from types import SimpleNamespace
+
+    err = (delivered - target) / target if target else delivered
+    return SimpleNamespace(target_velocity_mps=target, delivered_mps=delivered, speed_error=err)
+
+
+@pytest.mark.parametrize(("target", "delivered", "share", "refused"), [
+    (0.8, 0.8 * (1 - 0.0498), 0.8, True),  # the one-stride 0.3 -> 0.8 of the default build: -4.98 %
+    (0.8, 0.8 * (1 - 0.0378), 0.8, False),  # the one-stride 0.7 -> 1.0's -3.78 %, scaled
+    (0.8, 0.8 * (1 + 0.041), 0.8, True),  # too fast alike
+    (0.8, 0.8 * (1 - 0.0498), 1.0, False),  # the whole tolerance: the verdict's own bound
+    (0.0, 0.045, 0.8, True),  # a stop still riding at 0.045 m/s: within track's 0.05, beyond 0.04
+    (0.0, -0.045, 0.8, True),
+    (0.0, 0.03, 0.8, False),
+])
+def test_the_judge_keeps_a_margin_inside_the_verdicts_speed_bound(target, delivered, share, refused):
+    """A candidate the verdict passes is kept only with its delivered speed within ``twin_speed_share``
+    of the verdict's tolerance (5 % of the label, a stop 0.05 m/s); the refusal says by how much."""
+    from skatelib.pipeline.quadruped.transitions.twin_judge import speed_margin_refusal
+
+    why = speed_margin_refusal(_verdict(target, delivered), share)
+    assert bool(why) == refused, why
+    if refused:
+        assert f"twin_speed_share {share}" in why and "within track's" in why, why
+
+
+@pytest.mark.parametrize("share", [0.0, 1.5])
+def test_a_speed_share_out_of_range_is_refused(tmp_path, share):
+    path = tmp_path / "share.toml"
+    path.write_text(f'extends = "{TINY_RIDE}"\n\n[meta]\nname = "share"\n\n[transitions]\ntwin_speed_share = {share}\n')
+    with pytest.raises(ConfigError, match=r"transitions\.twin_speed_share"):
+        load_config(path)

@@ -161,7 +161,7 @@ class QuadrupedConfig:
         d.pop("meta")
         d.pop("sweep")
         d.pop("certify")
-        for key in ("speeds_mps", "stops", "strides", "twin_judge"):  # what is built and judged, not how it is posed
+        for key in ("speeds_mps", "stops", "strides", "twin_judge", "twin_speed_share"):  # built and judged, not posed
             d["transitions"].pop(key)
         d["optimization"].pop("compile")
         d["optimization"].pop("compile_native")

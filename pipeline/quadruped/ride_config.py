@@ -55,6 +55,10 @@ class TransitionsConfig:
                                      "board as it is) under each of which a transition that passes the physics "
                                      "checks is ridden on the MuJoCo twin; a stride count it fails is not kept (the "
                                      "next is tried). Empty: the physics checks alone.", default=())
+    twin_speed_share: float = _f(0.1, 1.0, "The share of the twin verdict's speed tolerance (5 % of the label; a "
+                                 "stop 0.05 m/s) a judged transition may use: the judge rides each error set once, "
+                                 "and a candidate that passes by less than the rest rides on a coin toss [-].",
+                                 default=0.8)
 
     def pairs(self) -> list[tuple[float, float]]:
         """(from, to) of every transition: each speed to each other, then to rest when ``stops``."""

@@ -3,7 +3,11 @@ that passes the independent physics checks is ridden in closed loop on the MuJoC
 (:func:`skatelib.proving.twin.track.ride_twin`: the MPC over the whole-body controller, the
 transfer and 1.5 s of riding) under each of the configured model-error sets, and judged as
 ``skatelib track --plant mujoco`` judges an entry (:func:`skatelib.proving.twin.verdict.twin_result`).
-A stride count the twin refuses is not kept: the next is tried.
+A stride count the twin refuses is not kept: the next is tried. The judge rides each error set once,
+so a candidate must also keep its delivered speed within ``[transitions] twin_speed_share`` of the
+verdict's tolerance (0.8: within 4 % of its label, a stop below 0.04 m/s): one that passes by less
+passes on one draw of the closed loop, which amplifies even rounding (two rides differing only in
+it end up to 0.7 points apart, docs/estimator.md).
 
 Verdicts are cached beside the solves, under the candidate's cache key, the error sets, the twin's
 code fingerprint (:mod:`skatelib.proving.twin.fingerprint`, which certificates store too) and a
@@ -74,10 +78,28 @@ def judge_fingerprint() -> str:
 def twin_refusals(config: QuadrupedConfig, result: SolveResult, solve_key: str, use_cache: bool) -> str:
     """Why the twin refuses ``result`` (the first error set of ``[transitions] twin_judge`` it fails
     under, and how; '' when it passes under every one); the verdict is cached under ``solve_key``."""
-    sets = tuple(config.transitions.twin_judge)
-    key = cache_key("twin_judge", solve_key, sets, judge_fingerprint())
+    sets, share = tuple(config.transitions.twin_judge), config.transitions.twin_speed_share
+    key = cache_key("twin_judge", solve_key, sets, share, judge_fingerprint())
     payload, _, _ = cached_or_solved(key, ("reasons",), lambda: {"reasons": _ride(config, result, sets)}, use_cache)
     return str(payload["reasons"])
+
+
+def speed_margin_refusal(verdict: Any, share: float) -> str:
+    """Why a passing verdict's delivered speed is too near the verdict's bound for the judge (beyond
+    ``share`` of its tolerance), or ''."""
+    from skatelib.proving.verdict import SPEED_TOLERANCE, STOP_TOLERANCE_MPS
+
+    v, delivered = verdict.target_velocity_mps, verdict.delivered_mps
+    if v:
+        limit = share * SPEED_TOLERANCE
+        if abs(verdict.speed_error) > limit:
+            return (f"delivered speed {delivered:.3f} m/s is {100 * verdict.speed_error:+.1f} % from the label "
+                    f"{v:.2f}: within track's {100 * SPEED_TOLERANCE:.0f} %, beyond the judge's {100 * limit:.1f} % "
+                    f"(twin_speed_share {share})")
+    elif abs(delivered) > share * STOP_TOLERANCE_MPS:
+        return (f"a stop still rides at {delivered:.3f} m/s: within track's {STOP_TOLERANCE_MPS} m/s, beyond the "
+                f"judge's {share * STOP_TOLERANCE_MPS:.3f} (twin_speed_share {share})")
+    return ""
 
 
 def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> str:
@@ -99,6 +121,8 @@ def _ride(config: QuadrupedConfig, result: SolveResult, sets: Sequence[str]) -> 
         for text in sets:
             run, _ = ride_twin(lib, key, _errors(text), (MpcConfig(), TrackSettings()))
             verdict: Any = twin_result(key, result.target_velocity_mps, run)
-            if not verdict.passed:
-                return f"{text}: {verdict.reasons}"
+            why = verdict.reasons if not verdict.passed else speed_margin_refusal(
+                verdict, config.transitions.twin_speed_share)
+            if why:
+                return f"{text}: {why}"
     return ""
