@@ -243,11 +243,15 @@ def test_a_fallen_bodys_legs_are_not_measured(perturb):
     """A run that falls (shoved off the board; a robot too light for its forces): the fall is the
     verdict's reason, and the stance legs' figures are those of the updates before it, not of
     inverse kinematics toward feet the fallen body is metres from (a stance joint 104 rad beyond its
-    limit, a foot 426 mm beyond its leg's reach were reported)."""
+    limit, many turns wound up, and a foot 426 mm beyond its leg's reach were reported). The last
+    update before the fall may find the tipping body's joints well past their limits (0.6-1.1 rad
+    here), but within a half turn, and its feet within a leg's length of where the legs reach."""
     pytest.importorskip("scipy")
     import skatelib
 
     (r,) = skatelib.track(REFERENCE, ["v0.30_s1"], perturb=perturb, jobs=1, progress=False)
     assert r.fall and not r.passed
     beyond = re.search(r"a stance joint ([0-9.]+) rad beyond", r.reasons)
-    assert beyond is None or float(beyond.group(1)) < 1.0, r.reasons  # at most one update's excess
+    assert beyond is None or float(beyond.group(1)) < math.pi, r.reasons
+    reach = re.search(r"a stance foot ([0-9]+) mm beyond", r.reasons)
+    assert reach is None or float(reach.group(1)) < 200, r.reasons
