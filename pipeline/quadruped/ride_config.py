@@ -57,7 +57,7 @@ class TransitionsConfig:
                                      "next is tried). Empty: the physics checks alone.", default=())
     twin_speed_share: float = _f(0.1, 1.0, "The share of the twin verdict's speed tolerance (5 % of the label; a "
                                  "stop 0.05 m/s) a judged transition may use: the judge rides each error set once, "
-                                 "and a candidate that passes by less than the rest rides on a coin toss [-].",
+                                 "and a candidate that uses more passes on one draw of the closed loop [-].",
                                  default=0.8)
 
     def pairs(self) -> list[tuple[float, float]]:
