@@ -67,8 +67,8 @@ def test_a_part_that_hands_on_a_wrong_value_is_seen(tmp_path, monkeypatch):
     whole = _build(fn, tmp_path / "whole", None, monkeypatch)
     real = c_split._part
 
-    def forgetful(name, body, live, slots, helpers):  # the first value handed on is stored one off
-        text = real(name, body, live, slots, helpers)
+    def forgetful(name, body, live, slots, helpers, prelude):  # the first value handed on is stored one off
+        text = real(name, body, live, slots, helpers, prelude)
         return text.replace("  s[0]=", "  s[0]=1+", 1)
 
     monkeypatch.setattr(c_split, "_part", forgetful)

@@ -30,6 +30,7 @@ _KNOWN = {"arg", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "
           "copysign", "hypot", "fmod"}
 
 
+SCALAR_PRELUDE = "#include <math.h>\n#define casadi_real double"  # what a part's file starts with
 # a part is called only from its own library's driver: not exported from it
 _HIDDEN = '#if defined(__GNUC__)\n__attribute__((visibility("hidden")))\n#endif'
 
@@ -95,7 +96,7 @@ def _self_contained(body: list[Stmt], helpers: dict[str, str]) -> bool:
 
 
 def _part(name: str, body: list[Stmt], live: tuple[set[str], set[str]], slots: dict[str, int],
-          helpers: dict[str, str]) -> str:
+          helpers: dict[str, str], prelude: str) -> str:
     """A part's file: its statements, a value from an earlier part read from the buffer where the
     statement reads it, a value a later part reads stored right after its last assignment (each
     local then lives as long as in the one function)."""
@@ -115,21 +116,40 @@ def _part(name: str, body: list[Stmt], live: tuple[set[str], set[str]], slots: d
             out.append(f"  s[{slots[lhs]}]={lhs};")
     names = sorted(assigned, key=lambda v: int(v[1:]))
     decl = [f"  casadi_real {', '.join(names[i:i + 12])};" for i in range(0, len(names), 12)]
-    return "\n".join(["#include <math.h>", "#define casadi_real double", *helpers.values(),
+    return "\n".join([prelude, *helpers.values(),
                       _HIDDEN, f"void {name}(const casadi_real** arg, casadi_real** res, casadi_real* s) {{",
                       *decl, *out, "}", ""])
 
 
-def split_source(text: str, prefix: str, cuts: Sequence[float]) -> SplitSource | None:
-    """``text`` (a CasADi file of one SX function, ``prefix`` its generator's name) with its body cut
-    at the fractions ``cuts`` (increasing, between 0 and 1) of its statements; None when the file is
-    not of the form this module knows (the caller then compiles it whole)."""
+@dataclass(frozen=True)
+class Parsed:
+    """A generated file's lines, its function's head (a line index), statements and ``return 0;`` line."""
+
+    lines: list[str]
+    head: int
+    body: list[Stmt]
+    ret: int
+
+
+def parse(text: str) -> Parsed | None:
+    """The function of ``text`` (a CasADi file of one SX function) as statements; None when the
+    file is not of the form this module knows."""
     lines = text.split("\n")
     head = next((i for i, ln in enumerate(lines) if _HEAD.match(ln)), None)
     parsed = _statements(lines, head) if head is not None else None
-    if head is None or parsed is None:
+    return None if head is None or parsed is None else Parsed(lines, head, *parsed)
+
+
+def split_source(text: str, prefix: str, cuts: Sequence[float], prelude: str = SCALAR_PRELUDE
+                 ) -> SplitSource | None:
+    """``text`` (a CasADi file of one SX function, ``prefix`` its generator's name) with its body cut
+    at the fractions ``cuts`` (increasing, between 0 and 1) of its statements, each part's file
+    starting with ``prelude`` (its includes and ``casadi_real``); None when the file is not of the
+    form this module knows (the caller then compiles it whole)."""
+    parsed = parse(text)
+    if parsed is None:
         return None
-    body, ret = parsed
+    lines, head, body, ret = parsed.lines, parsed.head, parsed.body, parsed.ret
     helpers = _helpers(lines, head)
     if not _self_contained(body, helpers):
         return None
@@ -142,7 +162,7 @@ def split_source(text: str, prefix: str, cuts: Sequence[float]) -> SplitSource |
         slots[v] = len(slots)
     bounds, ins, outs = [0, *at, len(body)], [set(), *live], [*live, set()]
     names = [f"{prefix}_part{k}" for k in range(len(bounds) - 1)]
-    parts = tuple(_part(names[k], body[bounds[k]:bounds[k + 1]], (ins[k], outs[k]), slots, helpers)
+    parts = tuple(_part(names[k], body[bounds[k]:bounds[k + 1]], (ins[k], outs[k]), slots, helpers, prelude)
                   for k in range(len(names)))
     protos = [f"void {n}(const casadi_real** arg, casadi_real** res, casadi_real* s);" for n in names]
     driver = [*protos, lines[head], f"  casadi_real s[{max(len(slots), 1)}];",

@@ -13,12 +13,13 @@ import platform
 import subprocess
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 from skatelib.library.compiled import private_copy, record_and_place
 from skatelib.library.temporaries import remove_stale_temporaries, temporary_folder
-from skatelib.pipeline.ocp.c_split import split_source
+from skatelib.pipeline.ocp.c_split import SCALAR_PRELUDE, split_source
 
 SPLIT_STATEMENTS = 200_000  # a function with more statements than this is compiled in parts
 # Where its body is cut (fractions of its statements): twenty equal parts. gcc's time on a part
@@ -30,18 +31,32 @@ MAX_JOBS = 4  # compilers at once (a part takes gcc up to 1 GB)
 LOG = logging.getLogger("skatelib.compile")
 
 
-def _sources(f: ca.Function, cut: bool) -> list[tuple[str, str]]:
-    """``f``'s C files (name, text): one, or (``cut``) a long function's driver and its parts."""
+@dataclass(frozen=True)
+class CSource:
+    """A function's generated C: its name, the file's text and what each part's file starts with
+    when it is cut (:func:`~skatelib.pipeline.ocp.c_split.split_source`)."""
+
+    name: str
+    text: str
+    prelude: str = SCALAR_PRELUDE
+
+
+def generated(f: ca.Function) -> CSource:
+    """CasADi's C for ``f``, a file of its own."""
     gen = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
     gen.add(f)
-    text = gen.dump()
-    long = cut and text.count("\n") > SPLIT_STATEMENTS
-    split = split_source(text, f.name(), CUTS) if long else None
+    return CSource(f.name(), gen.dump())
+
+
+def _sources(src: CSource, cut: bool) -> list[tuple[str, str]]:
+    """``src``'s C files (name, text): one, or (``cut``) a long function's driver and its parts."""
+    long = cut and src.text.count("\n") > SPLIT_STATEMENTS
+    split = split_source(src.text, src.name, CUTS, src.prelude) if long else None
     if split is None:
         if long:
-            LOG.info("%s: generated code of a form the splitter does not know, compiled whole", f.name())
-        return [(f"{f.name()}.c", text)]
-    return [(f"{f.name()}.c", split.main), *((f"{f.name()}_part{k}.c", p) for k, p in enumerate(split.parts))]
+            LOG.info("%s: generated code of a form the splitter does not know, compiled whole", src.name)
+        return [(f"{src.name}.c", src.text)]
+    return [(f"{src.name}.c", split.main), *((f"{src.name}_part{k}.c", p) for k, p in enumerate(split.parts))]
 
 
 def _cores() -> int:
@@ -61,9 +76,10 @@ def _compile(cc: str, flags: Sequence[str], src: Path) -> Path:
     return obj
 
 
-def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[str], lib: Path) -> bytes:
-    """``functions`` as C, compiled with ``cc flags`` into ``lib`` with its SHA-256 record beside it;
-    returns the compiled bytes (read in this process's private folder, before they are moved). Each
+def compile_library(functions: Sequence[ca.Function | CSource], cc: str, flags: Sequence[str], lib: Path) -> bytes:
+    """``functions`` (CasADi's, or C already generated) compiled with ``cc flags`` into ``lib`` with
+    its SHA-256 record beside it; returns the compiled bytes (read in this process's private folder,
+    before they are moved). Each
     file is compiled as soon as it is written, on as many cores as the machine gives this process
     (the long function last in ``functions`` is cut while the others compile)."""
     remove_stale_temporaries(lib.parent)  # a compile killed earlier left its sources
@@ -71,7 +87,7 @@ def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[s
     with temporary_folder(lib.parent, "compile") as tmp, ThreadPoolExecutor(max_workers=cores) as pool:
         folder, jobs = Path(tmp), []
         for f in functions:  # on one core the parts would only add up to more than the whole
-            for name, text in _sources(f, cores > 1):
+            for name, text in _sources(f if isinstance(f, CSource) else generated(f), cores > 1):
                 (folder / name).write_text(text)
                 jobs.append(pool.submit(_compile, cc, flags, folder / name))
         try:
@@ -84,13 +100,23 @@ def compile_library(functions: Sequence[ca.Function], cc: str, flags: Sequence[s
         return record_and_place(so_tmp, lib)
 
 
-def load_private(code: bytes, folder: Path, names: Sequence[str]) -> list[ca.Function]:
+def load_private(code: bytes, folder: Path, names: Sequence[str | tuple[str, ...]]) -> list[ca.Function]:
     """The functions ``names`` of the compiled library whose bytes are ``code`` (checked by the
     caller), loaded from a private copy: a new file in a new folder of this process (mode 0700) in
     ``folder``, removed once loaded (the loaded code stays mapped). What runs is what was checked,
-    whatever happens to the cached file meanwhile."""
+    whatever happens to the cached file meanwhile. A tuple of names: the first the library has."""
     with private_copy(code, folder, "stage.so") as so:
-        return [ca.external(name, str(so)) for name in names]
+        return [_first(str(so), (name,) if isinstance(name, str) else name) for name in names]
+
+
+def _first(so: str, names: tuple[str, ...]) -> ca.Function:
+    """The first function of ``names`` that the library ``so`` has."""
+    for name in names[:-1]:
+        try:
+            return ca.external(name, so)
+        except RuntimeError:  # not in this library
+            continue
+    return ca.external(names[-1], so)
 
 
 def host_cpu() -> str:

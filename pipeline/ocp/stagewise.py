@@ -26,10 +26,10 @@ import casadi as ca
 import numpy as np
 from skatelib.library import trust
 from skatelib.library.compiled import cached_or_compiled
-from skatelib.pipeline.ocp.codegen import compile_library, host_cpu, load_private
+from skatelib.pipeline.ocp.codegen import CSource, compile_library, generated, host_cpu, load_private
 from skatelib.pipeline.ocp.curvature import lagrangian_hessian
 from skatelib.pipeline.ocp.expressions import StageExpressions
-from skatelib.pipeline.ocp.threads import mapped
+from skatelib.pipeline.ocp.lanes import lane_source, lane_width, one_stage, over_stages, prelude
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,16 @@ class StageFunctions:
     grad: ca.Function  # (z, p) -> dl/dz
     jac: ca.Function  # (z, p) -> dg/dz (sparse)
     hess: ca.Function  # (z, p, sigma, lam) -> triu hessian of sigma l + lam' g (sparse)
+    # Compiled, jac and hess may evaluate several stages at once (:mod:`.lanes`, :func:`.lanes.lanes_of`):
+    # z, p and lam of that many stages side by side, sigma shared, their results side by side.
+
+    def jacobian_at(self, z: Any, p: Any) -> ca.DM:
+        """One stage's constraint Jacobian, in lanes or not."""
+        return one_stage(self.jac, (z, p), ())
+
+    def hessian_at(self, z: Any, p: Any, sigma: float, lam: Any) -> ca.DM:
+        """One stage's Lagrangian Hessian, in lanes or not."""
+        return one_stage(self.hess, (z, p, sigma, lam), (2,))
 
 
 def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunctions:
@@ -61,8 +71,9 @@ def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunction
 
 
 # Bump when stage_functions changes how derivatives are formed: it is part of the cache key.
-_DERIVATIVES_VERSION = "2"
-_NAMES = ("stage_value", "stage_grad", "stage_jac", "stage_hess")
+_DERIVATIVES_VERSION = "3"
+# the Jacobian and the Hessian in lanes where the compiler and their code allow, else one stage at a time
+_NAMES = ("stage_value", "stage_grad", ("stage_jac_lanes", "stage_jac"), ("stage_hess_lanes", "stage_hess"))
 
 
 def c_compiler() -> str | None:
@@ -133,18 +144,28 @@ def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> 
     def compile_now() -> bytes:
         COMPILE_LOG.info("compiling the stage functions with %s (about a minute, once per model and CPU; "
                          "kept in %s)", cc, lib.parent)
-        fns = stage_functions(stage, cse=True)
-        return compile_library((fns.value, fns.grad, fns.jac, fns.hess), cc, _accepted(cc, flags), lib)
+        fns, accepted = stage_functions(stage, cse=True), _accepted(cc, flags)
+        lanes = lane_width(cc, accepted)
+        jac, hess = (_in_lanes(f, lanes, shared) for f, shared in ((fns.jac, ()), (fns.hess, (2,))))
+        return compile_library((fns.value, fns.grad, jac, hess), cc, accepted, lib)
 
     code = cached_or_compiled(lib, trust.compile_advice(), compile_now)
     return StageFunctions(*load_private(code, target.folder, _NAMES))  # the bytes checked, not the path
 
 
+def _in_lanes(f: ca.Function, lanes: int, shared: tuple[int, ...]) -> CSource:
+    """``f``'s C in ``lanes`` (inputs ``shared`` one value for all stages), or as it is where it
+    cannot be (one lane, or code of a kind :func:`~.lanes.lane_source` does not make in lanes)."""
+    plain = generated(f)
+    text = lane_source(f, plain.text, lanes, [i in shared for i in range(f.n_in())]) if lanes > 1 else None
+    return plain if text is None else CSource(f"{f.name()}_lanes", text, prelude(lanes))
+
+
 def _block_diagonal(stacked: ca.MX, block: ca.Sparsity, n_blocks: int) -> ca.MX:
-    """The block-diagonal matrix of the blocks a mapped function returns side by side
-    (``[B_0, ..., B_{N-1}]``, each of sparsity ``block``): in column-major storage both hold the
-    same nonzeros in the same order, so this only reinterprets them."""
-    return ca.MX(ca.diagcat(*[block] * n_blocks), _nonzeros(stacked))
+    """The block-diagonal matrix of the first ``n_blocks`` blocks a mapped function returns side by
+    side (``[B_0, ..., B_{N-1}, ...]``, each of sparsity ``block``): in column-major storage both
+    hold the same nonzeros in the same order, so this only reinterprets them."""
+    return ca.MX(ca.diagcat(*[block] * n_blocks), stacked.nz[0:block.nnz() * n_blocks])
 
 
 def _selection(n_rows: int, n_cols: int, cols: np.ndarray) -> ca.DM:
@@ -208,15 +229,15 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
     grad = ca.mtimes(W.T, ca.vec(fns.grad.map(n_stages, "serial")(Z, P)))
 
     # Constraint Jacobian: the stage blocks on the diagonal, the kept rows, the columns moved onto the knots.
-    J_blocks = mapped(fns.jac, n_stages, threads)(Z, P)
-    J = ca.mtimes(_block_diagonal(J_blocks, fns.jac.sparsity_out(0), n_stages)[kept_rows.tolist(), :], W)
+    J_blocks, J_block = over_stages(fns.jac, n_stages, threads, [Z, P])
+    J = ca.mtimes(_block_diagonal(J_blocks, J_block, n_stages)[kept_rows.tolist(), :], W)
 
     # Hessian of the Lagrangian (upper triangle, which W.T (.) W keeps): dropped rows get zero multipliers.
     sigma = ca.MX.sym("lam_f")
     lam = ca.MX.sym("lam_g", n_g)
     lam_full = ca.reshape(ca.mtimes(_selection(n_g, n_full, kept_rows).T, lam), n_g_stage, n_stages)
-    H_blocks = mapped(fns.hess, n_stages, threads)(Z, P, sigma, lam_full)
-    H = ca.mtimes(W.T, ca.mtimes(_block_diagonal(H_blocks, fns.hess.sparsity_out(0), n_stages), W))
+    H_blocks, H_block = over_stages(fns.hess, n_stages, threads, [Z, P, sigma, lam_full], shared=(2,))
+    H = ca.mtimes(W.T, ca.mtimes(_block_diagonal(H_blocks, H_block, n_stages), W))
 
     grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
     jac_g = ca.Function("nlp_jac_g", [w, p], [g, J], ["x", "p"], ["g", "jac_g_x"])
@@ -226,8 +247,3 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
                         options={"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag,
                                  "no_nlp_grad": True, "calc_lam_p": False},
                         n_w=n_w, n_g=n_g, kept_rows=kept_rows)
-
-
-def _nonzeros(M: ca.MX) -> ca.MX:
-    """The nonzeros of a sparse MX as a column, in storage order."""
-    return M.nz[0:M.nnz()]
