@@ -93,6 +93,27 @@ def test_a_warm_start_is_moved_along_the_guesses(cfg, solved):
     assert warm_point(prob, PushoffSpec(off, 0.4, 1, warm=warm), warm) is warm.w
 
 
+def test_a_warm_start_carries_its_guess_for_its_own_problem_only(cfg, solved, monkeypatch):
+    """The solution carries its problem's cold guess at its speeds: the predictor reads it instead
+    of making it again (the same point to the bit), and makes it again for another problem (a
+    guess carried from another config is not read)."""
+    from skatelib.pipeline.quadruped.problem import pushoff
+
+    warm = solved.warm
+    assert warm.guess is not None and warm.guess_of == pushoff.problem_key(cfg, 1, pushoff.START_UP)
+    prob = problem_for(cfg, 1)
+    np.testing.assert_array_equal(warm.guess, prob.initial_guess(0.0, 0.3, "ramp"))
+    bare = dataclasses.replace(warm, guess=None)
+    spec = PushoffSpec(cfg, 0.4, 1, warm=warm)
+    made = []
+    real = type(prob).initial_guess
+    monkeypatch.setattr(type(prob), "initial_guess", lambda self, *a: made.append(a) or real(self, *a))
+    np.testing.assert_array_equal(warm_point(prob, spec, warm), warm_point(prob, spec, bare))
+    assert made.count((0.0, 0.3, "ramp")) == 1  # only for the solution without its guess
+    other = dataclasses.replace(warm, guess=warm.guess + 1.0, guess_of="another problem")
+    np.testing.assert_array_equal(warm_point(prob, spec, other) - other.w, warm_point(prob, spec, bare) - warm.w)
+
+
 def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch):
     """The stage derivatives on 2 threads (``OMP_NUM_THREADS``) give the serial solve's iterates exactly."""
     from skatelib.pipeline.quadruped.problem import pushoff

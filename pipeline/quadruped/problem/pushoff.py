@@ -10,6 +10,7 @@ solves a chain of velocities builds once.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,13 +26,17 @@ from skatelib.pipeline.quadruped.problem.problem import START_UP, PushoffProblem
 @dataclass(frozen=True)
 class WarmStart:
     """A previous solution to start from: primal w and multipliers of g and of the bounds, and the
-    start and target speeds it was solved for [m/s]."""
+    start and target speeds it was solved for [m/s]. ``guess``: its problem's cold guess at those
+    speeds where its solve made one (``guess_of`` names the problem, :func:`problem_key`), which a
+    warm start's predictor (:func:`warm_point`) then reads instead of making it again."""
 
     w: np.ndarray
     lam_g: np.ndarray
     lam_x: np.ndarray
     from_velocity_mps: float
     target_velocity_mps: float
+    guess: np.ndarray | None = None
+    guess_of: str = ""
 
 
 @dataclass(frozen=True)
@@ -131,6 +136,11 @@ def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     return options
 
 
+def problem_key(config: QuadrupedConfig, n_strides: int, window: Window) -> str:
+    """What a problem's cold guesses are made from: its config, stride count and knot window (hashed)."""
+    return hashlib.sha256(f"{config.resolved_json()}|{n_strides}|{window!r}".encode()).hexdigest()
+
+
 def warm_point(prob: PushoffProblem, spec: PushoffSpec, warm: WarmStart) -> np.ndarray:
     """The primal point a solve of ``spec`` warm-started from ``warm`` starts from: its solution, with
     ``[optimization] warm_predictor`` moved by the difference of the problem's cold guesses at the
@@ -139,7 +149,8 @@ def warm_point(prob: PushoffProblem, spec: PushoffSpec, warm: WarmStart) -> np.n
     if not spec.config.optimization.warm_predictor:
         return warm.w
     here = prob.initial_guess(spec.from_velocity_mps, spec.target_velocity_mps, "ramp")
-    there = prob.initial_guess(warm.from_velocity_mps, warm.target_velocity_mps, "ramp")
+    carried = warm.guess is not None and warm.guess_of == problem_key(spec.config, spec.n_strides, spec.window)
+    there = warm.guess if carried else prob.initial_guess(warm.from_velocity_mps, warm.target_velocity_mps, "ramp")
     return warm.w + (here - there)
 
 
@@ -175,6 +186,16 @@ def solve(spec: PushoffSpec) -> SolveResult:
         solve_time_s=solve_time, objective=float(sol["f"]), max_constraint_violation=viol,
         final_velocity_mps=final_v,
         warm=WarmStart(w=w, lam_g=np.asarray(sol["lam_g"]).reshape(-1), lam_x=np.asarray(sol["lam_x"]).reshape(-1),
-                       from_velocity_mps=v0, target_velocity_mps=v),
+                       from_velocity_mps=v0, target_velocity_mps=v, **_guess_made(prob, spec)),
         ipopt_options=options, from_velocity_mps=v0, **arrays,
     )
+
+
+def _guess_made(prob: PushoffProblem, spec: PushoffSpec) -> dict[str, Any]:
+    """The cold guess at the spec's speeds, for its warm start, where this solve made it (cold from
+    the ramp guess, or warm with the predictor)."""
+    made = spec.guess == "ramp" if spec.warm is None else spec.config.optimization.warm_predictor
+    if not made:
+        return {}
+    guess = prob.initial_guess(spec.from_velocity_mps, spec.target_velocity_mps, "ramp")
+    return {"guess": guess, "guess_of": problem_key(spec.config, spec.n_strides, spec.window)}
