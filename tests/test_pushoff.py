@@ -114,6 +114,18 @@ def test_a_warm_start_carries_its_guess_for_its_own_problem_only(cfg, solved, mo
     np.testing.assert_array_equal(warm_point(prob, spec, other) - other.w, warm_point(prob, spec, bare) - warm.w)
 
 
+def test_mumps_workspace_changes_time_not_iterates(cfg, solved):
+    """MUMPS's workspace (``mumps_mem_percent``: the solver's 100, IPOPT's own 1000, and 1, hardly
+    more than MUMPS's own estimate) leaves every iterate as it is: the same solution to the bit."""
+    from skatelib.pipeline.quadruped.problem.pushoff import MUMPS_MEM_PERCENT, solver_options
+
+    assert solver_options(PushoffSpec(cfg, 0.3, 1))["mumps_mem_percent"] == MUMPS_MEM_PERCENT == 100
+    for percent in (1000, 1):
+        other = solve(PushoffSpec(cfg, 0.3, 1, ipopt=(("mumps_mem_percent", percent),)))
+        assert other.iterations == solved.iterations
+        np.testing.assert_array_equal(other.warm.w, solved.warm.w)
+
+
 def test_a_solve_on_two_threads_is_the_serial_solve_to_the_bit(cfg, monkeypatch):
     """The stage derivatives on 2 threads (``OMP_NUM_THREADS``) give the serial solve's iterates exactly."""
     from skatelib.pipeline.quadruped.problem import pushoff

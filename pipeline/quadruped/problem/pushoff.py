@@ -121,11 +121,17 @@ def _cached_problem(config: QuadrupedConfig, n_strides: int, window: Window) -> 
     return _PROBLEMS[key], built
 
 
+# MUMPS's workspace: its own estimate and 100 % more. IPOPT's 1000 % has MUMPS allocate some 108 MB for
+# the push-off's 25 MB, pages the kernel clears at every factorization: the push-off 7 % slower, the same
+# iterates (docs/design-notes.md). Where the estimate falls short IPOPT enlarges it and factorizes again.
+MUMPS_MEM_PERCENT = 100
+
+
 def solver_options(spec: PushoffSpec) -> dict[str, Any]:
     """The IPOPT options a solve of ``spec`` uses: the config's, warm-start settings, then ``spec.ipopt``."""
     opt = spec.config.optimization
     options: dict[str, Any] = {"max_iter": opt.max_iter, "tol": opt.tol, "mu_strategy": opt.mu_strategy,
-                               "mu_init": opt.mu_init, "mu_min": opt.mu_min}
+                               "mu_init": opt.mu_init, "mu_min": opt.mu_min, "mumps_mem_percent": MUMPS_MEM_PERCENT}
     if spec.warm is None:
         options.update({"bound_mult_init_val": opt.bound_mult_init, "mu_max": opt.mu_max})
     else:
