@@ -16,11 +16,14 @@ import stat
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any, TypeVar, cast
 
 from skatelib.library import trust
 from skatelib.library.errors import OutputError
 from skatelib.library.temporaries import temporary_folder
 
+T = TypeVar("T")
+_HELD: dict[Path, tuple[tuple[int, ...], Any]] = {}  # held_or_loaded's: by library, its status and what was loaded
 _OPEN = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)  # a fifo does not block
 
 
@@ -123,6 +126,32 @@ def cached_or_compiled(lib: Path, advice: str, compile: Callable[[], bytes]) -> 
             if code is None:
                 code = compile()
     return code
+
+
+def held_or_loaded(lib: Path, load: Callable[[], T]) -> T:
+    """What ``load()`` gives (it checks the compiled library ``lib`` and loads its bytes), once per
+    process while ``lib`` and its SHA-256 record are the files they were when it ran: another
+    problem of the same model in this process reads and checks nothing from the disk again. A hit
+    reads nothing from the disk, so what runs is still what was checked; a file changed or replaced
+    since (a new status: inode, size, times) is checked and loaded anew."""
+    before = _status(lib)
+    held = _HELD.get(lib)
+    if held is not None and before is not None and held[0] == before:
+        return cast(T, held[1])
+    value = load()
+    after = _status(lib)
+    if after is not None and before in (None, after):  # not replaced while it was loaded
+        _HELD[lib] = (after, value)
+    return value
+
+
+def _status(lib: Path) -> tuple[int, ...] | None:
+    try:
+        st, rec = os.lstat(lib), os.lstat(trust.digest_record(lib))
+    except OSError:
+        return None
+    fields = ("st_dev", "st_ino", "st_size", "st_mtime_ns", "st_ctime_ns")
+    return tuple(getattr(s, f) for s in (st, rec) for f in fields)
 
 
 def record_and_place(code_file: Path, lib: Path) -> bytes:

@@ -1,6 +1,7 @@
 """What was checked is what is loaded: a compiled stage library replaced after its SHA-256 check
 does not run (the loader gets a private copy of the bytes checked); a symlinked library, and a
-cache inside a folder others can write, are refused."""
+cache inside a folder others can write, are refused; a process loads a library once, until it
+changes."""
 
 from __future__ import annotations
 
@@ -79,6 +80,7 @@ def test_a_library_swapped_after_the_check_is_not_what_runs(tmp_path, monkeypatc
         return real_external(name, path)
 
     monkeypatch.setattr(ca, "external", swap_then_load)
+    monkeypatch.setattr(compiled, "_HELD", {})  # not the functions this process loaded: load them again
     fns = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
     assert swaps, "the library was not loaded"
     assert not marker.exists(), "the planted library's constructor ran"
@@ -143,3 +145,23 @@ def test_the_private_copy_is_in_memory_where_the_system_allows(tmp_path, monkeyp
     with compiled.private_copy(code, folder, "x.so") as so:
         assert not so.is_symlink() and so.read_bytes() == code
     assert not list(folder.iterdir())
+
+
+def test_a_second_problem_in_a_process_reads_nothing_until_the_library_changes(tmp_path, monkeypatch):
+    """The stage functions loaded once are served again in the same process without reading or
+    checking the library; a library replaced since (a new inode) is checked again, and refused."""
+    folder = _private(tmp_path)
+    monkeypatch.setattr(compiled, "_HELD", {})
+    first = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
+    reads = []
+    real = compiled.read_nofollow
+    monkeypatch.setattr(compiled, "read_nofollow", lambda path: reads.append(path) or real(path))
+    again = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
+    assert again is first and not reads
+    (lib,) = folder.glob("stage_*.so")
+    replaced = tmp_path / "replaced.so"
+    replaced.write_bytes(lib.read_bytes() + b"\0")
+    os.replace(replaced, lib)
+    with pytest.warns(trust.CacheNote, match="changed after it was built"):
+        third = compiled_stage_functions(_stage(), CompileTarget(folder, FLAGS))
+    assert reads and third is not first and _value(third) == pytest.approx(4.25)

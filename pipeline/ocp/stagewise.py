@@ -25,7 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 from skatelib.library import trust
-from skatelib.library.compiled import cached_or_compiled
+from skatelib.library.compiled import cached_or_compiled, held_or_loaded
 from skatelib.pipeline.ocp.codegen import CSource, compile_library, generated, host_cpu, load_private
 from skatelib.pipeline.ocp.curvature import lagrangian_hessian
 from skatelib.pipeline.ocp.expressions import StageExpressions
@@ -121,14 +121,13 @@ class CompileTarget:
 def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> StageFunctions:
     """The four stage functions compiled to C in one shared library in ``target.folder``, cached by
     content hash, with its SHA-256 recorded beside it. A cached library is read once and checked (a
-    symlink, a library that changed, or one that others can write, is compiled again with a
-    :class:`~skatelib.library.trust.CacheNote`; :mod:`skatelib.library.compiled`), and
-    the bytes checked are what is loaded, from a private copy.
-
-    The key is the stage's :attr:`~StageExpressions.key` (its serialized text and the rows with a
-    given Hessian), the flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`; so a
-    cache hit costs
-    neither differentiation nor code generation. Without a C compiler, returns the symbolic functions.
+    symlink, a library that changed, or one others can write, is compiled again with a
+    :class:`~skatelib.library.trust.CacheNote`), and the bytes checked are what is loaded, from a
+    private copy (:mod:`skatelib.library.compiled`). The key is the stage's
+    :attr:`~StageExpressions.key` (its serialized text and the rows with a given Hessian), the
+    flags, CasADi's version and, for ``-march=native``, :func:`host_cpu`: a cache hit costs neither
+    differentiation nor code generation, and a second hit in this process reads nothing
+    (:func:`~skatelib.library.compiled.held_or_loaded`). Without a C compiler, the symbolic functions.
 
     Raises:
         OutputError: ``target.folder``, or a folder above it, can be changed by someone else.
@@ -149,8 +148,8 @@ def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> 
         jac, hess = (_in_lanes(f, lanes, shared) for f, shared in ((fns.jac, ()), (fns.hess, (2,))))
         return compile_library((fns.value, fns.grad, jac, hess), cc, accepted, lib)
 
-    code = cached_or_compiled(lib, trust.compile_advice(), compile_now)
-    return StageFunctions(*load_private(code, target.folder, _NAMES))  # the bytes checked, not the path
+    return held_or_loaded(lib, lambda: StageFunctions(*load_private(  # the bytes checked, not the path
+        cached_or_compiled(lib, trust.compile_advice(), compile_now), target.folder, _NAMES)))
 
 
 def _in_lanes(f: ca.Function, lanes: int, shared: tuple[int, ...]) -> CSource:
