@@ -108,3 +108,26 @@ def test_the_nlp_from_lanes_equals_the_nlp_stage_by_stage(tmp_path, monkeypatch,
         x, y = (x[-1], y[-1]) if isinstance(x, list | tuple) else (x, y)
         assert x.sparsity() == y.sparsity() and np.array_equal(np.asarray(x.nonzeros()), np.asarray(y.nonzeros()))
 
+
+
+def test_a_compiler_without_vector_extensions_compiles_one_stage_at_a_time(tmp_path, monkeypatch):
+    """A compiler that refuses the vector code (as one without gcc's vector extensions would) gives
+    lane width 1, and the stage functions are compiled scalar, with the right values."""
+    fake = tmp_path / "cc-without-vectors"
+    fake.write_text('#!/bin/sh\nstdin=no\nfor a in "$@"; do [ "$a" = - ] && stdin=yes\n'
+                    '  [ -f "$a" ] && grep -q vector_size "$a" && exit 1; done\n'
+                    f'[ $stdin = no ] && exec {CC} "$@"\n'
+                    'input=$(cat)\necho "$input" | grep -q vector_size && exit 1\n'
+                    f'echo "$input" | exec {CC} "$@"\n')
+    fake.chmod(0o755)
+    flags = stagewise._accepted(str(fake), stagewise._FLAGS)
+    assert lanes.lane_width(str(fake), flags) == 1 and lanes.lane_width(CC or "cc", flags) > 1
+    monkeypatch.setenv("CC", str(fake))
+    z, p = ca.SX.sym("z", 3), ca.SX.sym("p", 1)
+    stage = StageExpressions(z, p, p[0] * ca.sumsqr(z), ca.vertcat(ca.sin(z[0]) * z[1], z[1] * z[2]))
+    comp = stagewise.compiled_stage_functions(stage, stagewise.CompileTarget(tmp_path / "cache"))
+    assert lanes.lanes_of(comp.hess) == lanes.lanes_of(comp.jac) == 1
+    sym = stagewise.stage_functions(stage)
+    zv, pv, lam = np.array([0.7, -0.2, 0.4]), np.array([2.0]), np.array([1.5, -0.5])
+    assert np.allclose(np.asarray(ca.densify(comp.hessian_at(zv, pv, 1.0, lam))),
+                       np.asarray(ca.densify(sym.hess(zv, pv, 1.0, lam))), atol=1e-14)

@@ -38,7 +38,6 @@ _TOKEN = re.compile(r"arg\[\d+\]\[\d+\]|a\d+|\d+\.?\d*(?:e[-+]?\d+)?|[A-Za-z_]\w
 _OUTPUT = re.compile(r"^  if \(res\[\d+\]!=0\) res\[\d+\]\[\d+\]=a\d+;$")
 _HELPERS = {"casadi_sq": "casadi_real casadi_sq(casadi_real x) { return x*x;}"}  # those made in lanes
 _SPREAD = "casadi_real casadi_spread(double x) { casadi_real v = {0}; return v + x;}"  # a constant in every lane
-_PROBE = "typedef double v __attribute__((vector_size(32)));\nv f(v a) { return 2.0 * a + a / a; }\n"
 _WIDE = "#ifndef __AVX512F__\n#error narrow\n#endif\n"
 
 
@@ -57,15 +56,26 @@ def prelude(lanes: int) -> str:
 def lane_width(cc: str, flags: Sequence[str]) -> int:
     """The stages a lane function evaluates at once with ``cc flags``: 8 where the code may use
     AVX-512, 4 where the compiler takes the vector extensions (SSE, AVX2, NEON and the like split
-    a vector in as many instructions as they need), 1 (no lanes) where it does not."""
+    a vector in as many instructions as they need), 1 (no lanes) where it does not compile a small
+    function's lane file."""
     def compiles(text: str) -> bool:
-        run = subprocess.run([cc, *flags, "-Werror", "-x", "c", "-c", "-", "-o", os.devnull], input=text.encode(),
-                             capture_output=True)
+        run = subprocess.run([cc, *flags, "-Werror=implicit-function-declaration", "-x", "c", "-c", "-", "-o",
+                              os.devnull], input=text.encode(), capture_output=True)  # as the build compiles
         return run.returncode == 0
 
-    if not compiles(_PROBE):
-        return 1
-    return 8 if compiles(_WIDE) else 4
+    lanes = 8 if compiles(_WIDE) else 4
+    return lanes if compiles(_probe(lanes)) else 1
+
+
+def _probe(lanes: int) -> str:
+    """A small function's lane file: every kind of statement and the whole interface a compiler
+    must take for the stage functions to be compiled in lanes."""
+    x, s = ca.SX.sym("x", 2), ca.SX.sym("s")
+    f = ca.Function("probe", [x, s], [ca.vertcat(ca.sin(x[0]) * s + 2.0, ca.atan2(x[1] ** 2, x[0]) / x[0])])
+    gen = ca.CodeGenerator("probe.c", {"with_header": False})
+    gen.add(f)
+    text = lane_source(f, gen.dump(), lanes, [False, True])
+    return prelude(lanes) if text is None else text
 
 
 def _lane_statement(text: str, helpers: set[str]) -> str | None:
