@@ -43,7 +43,7 @@ def _scalar_and_lanes(fn: ca.Function, n_lanes: int, folder: Path, monkeypatch, 
     return ca.external(fn.name(), str(lib)), ca.external(f"{fn.name()}_lanes", str(lib))
 
 
-@pytest.mark.parametrize(("n_lanes", "cut"), [(4, False), (8, False), (4, True)])
+@pytest.mark.parametrize(("n_lanes", "cut"), [(2, False), (4, False), (8, False), (4, True)])
 def test_every_lane_gives_the_scalar_codes_values_to_the_bit(tmp_path, monkeypatch, n_lanes, cut):
     fn = _function()
     scalar, in_lanes = _scalar_and_lanes(fn, n_lanes, tmp_path / "lib", monkeypatch, cut)

@@ -71,7 +71,7 @@ def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunction
 
 
 # Bump when stage_functions changes how derivatives are formed: it is part of the cache key.
-_DERIVATIVES_VERSION = "4"
+_DERIVATIVES_VERSION = "5"
 # the Jacobian and the Hessian in lanes where the compiler and their code allow, else one stage at a time
 _NAMES = ("stage_value", "stage_grad", ("stage_jac_lanes", "stage_jac"), ("stage_hess_lanes", "stage_hess"))
 
