@@ -11,6 +11,7 @@ import contextlib
 import errno
 import fcntl
 import hashlib
+import mmap
 import os
 import stat
 import warnings
@@ -209,14 +210,16 @@ def private_copy(code: bytes, folder: Path, name: str = "lib.so") -> Iterator[Pa
 @contextlib.contextmanager
 def _in_memory(code: bytes, name: str) -> Iterator[str | None]:
     """The path of an anonymous memory file of this process holding ``code`` while the block runs,
-    or None where there is none (no ``memfd_create``, no ``/proc``, or the system refuses one)."""
+    or None where there is none (no ``memfd_create``, no ``/proc``, or the system refuses one, or
+    refuses to execute it: Linux's ``vm.memfd_noexec``)."""
     fd = -1
     if hasattr(os, "memfd_create") and os.path.isdir("/proc/self/fd"):
         try:
             fd = os.memfd_create(name, os.MFD_CLOEXEC)
             with os.fdopen(os.dup(fd), "wb") as f:
                 f.write(code)
-        except OSError:
+            mmap.mmap(fd, len(code), prot=mmap.PROT_READ | mmap.PROT_EXEC).close()  # as the loader maps it
+        except (OSError, ValueError):  # ValueError: empty code cannot be mapped
             if fd >= 0:
                 os.close(fd)
             fd = -1

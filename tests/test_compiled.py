@@ -133,18 +133,26 @@ def test_a_cache_inside_a_folder_others_can_write_is_refused(tmp_path):
 
 def test_the_private_copy_is_in_memory_where_the_system_allows(tmp_path, monkeypatch):
     """Where there are anonymous memory files (Linux) the loader's copy is one: its folder holds a
-    link to it with the code's bytes, nothing written to the disk; without them the copy is a file
-    of its own with those bytes. Either is gone when the block ends."""
+    link to it with the code's bytes, nothing written to the disk; without them, or where they may
+    not be executed, the copy is a file of its own with those bytes. Either is gone when the block
+    ends."""
     code = b"\x7fELF" + os.urandom(4096)
     folder = _private(tmp_path)
     with compiled.private_copy(code, folder, "x.so") as so:
         if hasattr(os, "memfd_create") and os.path.isdir("/proc/self/fd"):
             assert so.is_symlink() and os.readlink(so).startswith("/proc/self/fd/")
         assert so.read_bytes() == code
+    monkeypatch.setattr(compiled.mmap, "mmap", _refused)  # a system that does not execute memory files
+    with compiled.private_copy(code, folder, "x.so") as so:
+        assert not so.is_symlink() and so.read_bytes() == code
     monkeypatch.delattr(os, "memfd_create", raising=False)
     with compiled.private_copy(code, folder, "x.so") as so:
         assert not so.is_symlink() and so.read_bytes() == code
     assert not list(folder.iterdir())
+
+
+def _refused(*args, **kwargs):
+    raise PermissionError(1, "Operation not permitted")
 
 
 def test_a_second_problem_in_a_process_reads_nothing_until_the_library_changes(tmp_path, monkeypatch):
