@@ -183,9 +183,8 @@ def private_copy(code: bytes, folder: Path, name: str = "lib.so") -> Iterator[Pa
     """``code`` (checked by the caller) as a file of this process's own, named ``name`` in a new
     folder of this process (mode 0700) in ``folder``, for the block to load; removed when it ends
     (loaded code stays mapped). What runs is what was checked, whatever happens to the cached file
-    meanwhile. Where the system has anonymous memory files (Linux's ``memfd_create``) the code is
-    one of them and the name a link to it: nothing is written to the disk, whose writes of a few
-    megabytes here took up to 70 ms at times.
+    meanwhile. Where the system has anonymous memory files (Linux's ``memfd_create``) and executes
+    them, the code is one of them and the name a link to it: nothing is written to the disk.
 
     Raises:
         OutputError: The copy cannot be written (a full disk, a file-size limit), naming ``folder``.

@@ -34,7 +34,7 @@ def _scalar_and_lanes(fn: ca.Function, n_lanes: int, folder: Path, monkeypatch, 
     monkeypatch.setattr(codegen, "SPLIT_STATEMENTS", 0 if cut else 10**9)
     monkeypatch.setattr(codegen, "_cores", lambda: 2)
     plain = codegen.generated(fn)
-    text = lanes.lane_source(fn, plain.text, n_lanes, [False, False, True])
+    text = lanes.lane_source(fn, plain.text, n_lanes, (2,))
     assert text is not None
     folder.mkdir()
     lib = folder / "lib.so"
@@ -79,7 +79,7 @@ def test_a_function_that_is_not_arithmetic_is_kept_scalar(tmp_path):
     cons = ca.vertcat(ca.if_else(z[0] > 0, z[0] ** 3, -z[0] ** 2), z[1] * z[2])
     stage = StageExpressions(z, p, p[0] * ca.sumsqr(z), cons)
     fns = stagewise.stage_functions(stage, cse=True)
-    assert lanes.lane_source(fns.hess, codegen.generated(fns.hess).text, 4, [False, False, True, False]) is None
+    assert lanes.lane_source(fns.hess, codegen.generated(fns.hess).text, 4, stagewise.HESS_SHARED) is None
     comp = stagewise.compiled_stage_functions(stage, stagewise.CompileTarget(tmp_path))
     assert lanes.lanes_of(comp.hess) == 1 and lanes.lanes_of(comp.jac) == 1
     zv, pv, lam = np.array([0.7, -0.2, 0.4]), np.array([2.0]), np.array([1.5, -0.5])

@@ -130,6 +130,14 @@ class Parsed:
     body: list[Stmt]
     ret: int
 
+    @property
+    def declarations(self) -> list[str]:
+        """The lines declaring the function's variables, right after its head."""
+        end = self.head + 1
+        while _DECL.match(self.lines[end]):
+            end += 1
+        return self.lines[self.head + 1:end]
+
 
 def parse(text: str) -> Parsed | None:
     """The function of ``text`` (a CasADi file of one SX function) as statements; None when the

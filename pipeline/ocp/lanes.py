@@ -28,6 +28,7 @@ from typing import Any
 
 import casadi as ca
 from skatelib.pipeline.ocp.c_split import parse
+from skatelib.pipeline.ocp.codegen import generated
 from skatelib.pipeline.ocp.threads import mapped
 
 UNARY = ("sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "asinh", "acosh", "atanh", "exp",
@@ -75,9 +76,7 @@ def _probe(lanes: int) -> str:
     must take for the stage functions to be compiled in lanes."""
     x, s = ca.SX.sym("x", 2), ca.SX.sym("s")
     f = ca.Function("probe", [x, s], [ca.vertcat(ca.sin(x[0]) * s + 2.0, ca.atan2(x[1] ** 2, x[0]) / x[0])])
-    gen = ca.CodeGenerator("probe.c", {"with_header": False})
-    gen.add(f)
-    text = lane_source(f, gen.dump(), lanes, [False, True])
+    text = lane_source(f, generated(f).text, lanes, (1,))
     return prelude(lanes) if text is None else text
 
 
@@ -98,18 +97,18 @@ def _array(name: str, values: Sequence[int]) -> str:
     return f"static const long long int {name}[{len(values)}] = {{{', '.join(map(str, values))}}};"
 
 
-def _interface(name: str, f: ca.Function, lanes: int, shared: Sequence[bool]) -> list[str]:
+def _interface(name: str, f: ca.Function, lanes: int, shared: tuple[int, ...]) -> list[str]:
     """The lane function's CasADi external interface (double arguments): inputs and outputs moved
     between the stages side by side and the vectors the lane code computes on."""
     sizes_in, sizes_out = [f.nnz_in(i) for i in range(f.n_in())], [f.nnz_out(j) for j in range(f.n_out())]
-    out = [_array(f"{name}_in{i}", ca.Sparsity.dense(f.size1_in(i), 1 if shared[i] else lanes).compress())
+    out = [_array(f"{name}_in{i}", ca.Sparsity.dense(f.size1_in(i), 1 if i in shared else lanes).compress())
            for i in range(f.n_in())]
     out += [_array(f"{name}_out{j}", ca.horzcat(*[f.sparsity_out(j)] * lanes).compress()) for j in range(f.n_out())]
     body = [f"int {name}(const double** arg, double** res, long long int* iw, double* w, int mem) {{"]
     body += [f"  casadi_real x{i}[{n}];" for i, n in enumerate(sizes_in)]
     body += [f"  casadi_real y{j}[{n}];" for j, n in enumerate(sizes_out)]
     for i, n in enumerate(sizes_in):
-        at = "k" if shared[i] else f"l * {n} + k"
+        at = "k" if i in shared else f"l * {n} + k"
         body.append(f"  for (int k = 0; k < {n}; ++k) for (int l = 0; l < {lanes}; ++l) "
                     f"x{i}[k][l] = arg[{i}] ? arg[{i}][{at}] : 0;")
     body.append(f"  const casadi_real* a[{f.n_in()}] = {{{', '.join(f'x{i}' for i in range(f.n_in()))}}};")
@@ -133,10 +132,10 @@ def _interface(name: str, f: ca.Function, lanes: int, shared: Sequence[bool]) ->
             "if (sz_w) *sz_w = 0; return 0; }"]
 
 
-def lane_source(f: ca.Function, text: str, lanes: int, shared: Sequence[bool]) -> str | None:
+def lane_source(f: ca.Function, text: str, lanes: int, shared: tuple[int, ...]) -> str | None:
     """The C file of ``f`` (an SX function, ``text`` its CasADi-generated C) evaluating ``lanes``
-    stages at once, as the external function ``{name}_lanes``; ``shared[i]``: input i is one value
-    for all stages. None when a statement is of a kind not made in lanes, or an input is not a
+    stages at once, as the external function ``{name}_lanes``; ``shared``: the inputs that are one
+    value for all stages. None when a statement is of a kind not made in lanes, or an input is not a
     dense column: the caller keeps the scalar function."""
     parsed = parse(text)
     if parsed is None or any(not f.sparsity_in(i).is_dense() or f.size2_in(i) != 1 for i in range(f.n_in())):
@@ -153,20 +152,11 @@ def lane_source(f: ca.Function, text: str, lanes: int, shared: Sequence[bool]) -
         if lane is None:
             return None
         statements.append(f"  {lhs}={lane};")
-    decls = parsed.lines[parsed.head + 1:parsed.head + 1 + _declarations(parsed.lines, parsed.head)]
     name = f"{f.name()}_lanes"
     own = [f"#define {h} {name}_{h}" for h in (*sorted(known), "casadi_spread")]  # not exported as they are
     return "\n".join([prelude(lanes), "#define casadi_int long long int", *own, *(_HELPERS[h] for h in sorted(known)),
                       _SPREAD, parsed.lines[parsed.head],
-                      *decls, *statements, "  return 0;", "}", *_interface(name, f, lanes, shared), ""])
-
-
-def _declarations(lines: list[str], head: int) -> int:
-    """How many declaration lines follow the function's head."""
-    n = 0
-    while lines[head + 1 + n].startswith("  casadi_real a"):
-        n += 1
-    return n
+                      *parsed.declarations, *statements, "  return 0;", "}", *_interface(name, f, lanes, shared), ""])
 
 
 def lanes_of(fn: ca.Function) -> int:

@@ -49,7 +49,7 @@ class StageFunctions:
 
     def hessian_at(self, z: Any, p: Any, sigma: float, lam: Any) -> ca.DM:
         """One stage's Lagrangian Hessian, in lanes or not."""
-        return one_stage(self.hess, (z, p, sigma, lam), (2,))
+        return one_stage(self.hess, (z, p, sigma, lam), HESS_SHARED)
 
 
 def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunctions:
@@ -74,6 +74,7 @@ def stage_functions(stage: StageExpressions, cse: bool = False) -> StageFunction
 _DERIVATIVES_VERSION = "5"
 # the Jacobian and the Hessian in lanes where the compiler and their code allow, else one stage at a time
 _NAMES = ("stage_value", "stage_grad", ("stage_jac_lanes", "stage_jac"), ("stage_hess_lanes", "stage_hess"))
+HESS_SHARED = (2,)  # the Hessian's input that is one value for all stages: sigma
 
 
 def c_compiler() -> str | None:
@@ -145,7 +146,7 @@ def compiled_stage_functions(stage: StageExpressions, target: CompileTarget) -> 
                          "kept in %s)", cc, lib.parent)
         fns, accepted = stage_functions(stage, cse=True), _accepted(cc, flags)
         lanes = lane_width(cc, accepted)
-        jac, hess = (_in_lanes(f, lanes, shared) for f, shared in ((fns.jac, ()), (fns.hess, (2,))))
+        jac, hess = (_in_lanes(f, lanes, shared) for f, shared in ((fns.jac, ()), (fns.hess, HESS_SHARED)))
         return compile_library((fns.value, fns.grad, jac, hess), cc, accepted, lib)
 
     return held_or_loaded(lib, lambda: StageFunctions(*load_private(  # the bytes checked, not the path
@@ -156,7 +157,7 @@ def _in_lanes(f: ca.Function, lanes: int, shared: tuple[int, ...]) -> CSource:
     """``f``'s C in ``lanes`` (inputs ``shared`` one value for all stages), or as it is where it
     cannot be (one lane, or code of a kind :func:`~.lanes.lane_source` does not make in lanes)."""
     plain = generated(f)
-    text = lane_source(f, plain.text, lanes, [i in shared for i in range(f.n_in())]) if lanes > 1 else None
+    text = lane_source(f, plain.text, lanes, shared) if lanes > 1 else None
     return plain if text is None else CSource(f"{f.name()}_lanes", text, prelude(lanes))
 
 
@@ -235,7 +236,7 @@ def build_stagewise_nlp(fns: StageFunctions, n_stages: int, keep: np.ndarray | N
     sigma = ca.MX.sym("lam_f")
     lam = ca.MX.sym("lam_g", n_g)
     lam_full = ca.reshape(ca.mtimes(_selection(n_g, n_full, kept_rows).T, lam), n_g_stage, n_stages)
-    H_blocks, H_block = over_stages(fns.hess, n_stages, threads, [Z, P, sigma, lam_full], shared=(2,))
+    H_blocks, H_block = over_stages(fns.hess, n_stages, threads, [Z, P, sigma, lam_full], shared=HESS_SHARED)
     H = ca.mtimes(W.T, ca.mtimes(_block_diagonal(H_blocks, H_block, n_stages), W))
 
     grad_f = ca.Function("nlp_grad_f", [w, p], [f, grad], ["x", "p"], ["f", "grad_f_x"])
